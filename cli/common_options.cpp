@@ -1,0 +1,90 @@
+#include "common_options.h"
+
+#include <iostream>
+
+#include "command.h"
+
+namespace battsim {
+namespace cli {
+
+void add_input_options(CLI::App& sub, InputArgs& a) {
+    sub.add_option("-c,--config", a.config, "Battery and monitor config JSON (default: built-in reference 4S, modified set)");
+    sub.add_option("--format", a.format, "Log format: auto, raw, csv, dataflash-text, dataflash-bin, ulog")
+        ->capture_default_str();
+    sub.add_option("--current-source", a.current_source, "Raw logs: current from 'current' (logged mA) or 'shunt' (shunt mV through the config's calibration)")
+        ->capture_default_str();
+    sub.add_option("--time-col", a.time_col, "CSV: name of the time column");
+    sub.add_option("--time-unit", a.time_unit, "CSV: unit of the time column (s, ms, us) when its name has no suffix");
+    sub.add_option("--voltage-col", a.voltage_col, "CSV: name of the pack voltage column (V)");
+    sub.add_option("--current-col", a.current_col, "CSV: name of the current column");
+    sub.add_option("--current-unit", a.current_unit, "CSV: unit of the current column (A, mA) when its name has no suffix");
+    sub.add_option("--cell-cols", a.cell_cols, "CSV: names of the cell voltage columns, cell 1 first")->delimiter(',');
+    sub.add_option("--temperature-col", a.temperature_col, "CSV: name of the temperature column (degC)");
+    sub.add_flag("--negative-discharge", a.negative_discharge, "CSV: the log's current is negative while discharging");
+}
+
+int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedConfig& config) {
+    try {
+        reader.format = host::parse_log_format(a.format);
+    } catch (const std::exception& e) {
+        std::cerr << "battsim: " << e.what() << "\n";
+        return kExitUsage;
+    }
+    if (a.current_source == "auto") {
+        reader.current_source = host::CurrentSource::Auto;
+    } else if (a.current_source == "current") {
+        reader.current_source = host::CurrentSource::Current;
+    } else if (a.current_source == "shunt") {
+        reader.current_source = host::CurrentSource::Shunt;
+    } else {
+        std::cerr << "battsim: --current-source: expected auto, current or shunt, found \"" << a.current_source << "\"\n";
+        return kExitUsage;
+    }
+    auto unit_scale = [](const std::string& unit, const char* what, double& out) -> bool {
+        if (unit.empty()) return true;
+        if (unit == "s" || unit == "A") out = 1.0;
+        else if (unit == "ms" || unit == "mA") out = 1e-3;
+        else if (unit == "us") out = 1e-6;
+        else {
+            std::cerr << "battsim: " << what << ": unknown unit \"" << unit << "\"\n";
+            return false;
+        }
+        return true;
+    };
+    host::ColumnMapping& m = reader.columns;
+    m.time = a.time_col;
+    m.voltage = a.voltage_col;
+    m.current = a.current_col;
+    m.temperature = a.temperature_col;
+    m.cells = a.cell_cols;
+    m.current_negative_is_discharge = a.negative_discharge;
+    if (!unit_scale(a.time_unit, "--time-unit", m.time_scale_to_s)) return kExitUsage;
+    if (!unit_scale(a.current_unit, "--current-unit", m.current_scale_to_a)) return kExitUsage;
+    try {
+        config = a.config.empty() ? host::default_config() : host::load_config_file(a.config);
+    } catch (const host::ConfigError& e) {
+        std::cerr << "battsim: config: " << e.what() << "\n";
+        return kExitConfigError;
+    }
+    return kExitOk;
+}
+
+void print_brief(const nlohmann::json& s, std::ostream& out) {
+    out << s["input"]["path"].get<std::string>() << ": " << s["samples"]["total"] << " samples, "
+        << s["duration_s"] << " s\n";
+    const auto& f = s["flight"];
+    if (f.is_null()) {
+        out << "  no flight (current never reached the flying threshold)\n";
+        return;
+    }
+    out << "  flight " << f["duration_s"] << " s; capacity mean " << f["capacity_ah"]["mean"] << " Ah (first 20 %: "
+        << f["capacity_ah"]["first20_mean"] << "); resistance mean " << f["resistance_ohm"]["mean"]
+        << " ohm; model MAE " << f["voltage_error_v"]["model"]["mean_abs"] << " V\n";
+    out << "  remaining time at 20 %: " << f["remaining_time_s"]["at20"] << " s; warnings:";
+    if (s["warnings"].empty()) out << " none";
+    for (const auto& w : s["warnings"]) out << " " << w["name"].get<std::string>() << "@" << w["first_time_s"] << "s";
+    out << "\n";
+}
+
+}  // namespace cli
+}  // namespace battsim

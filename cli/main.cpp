@@ -1,0 +1,49 @@
+// battsim: replay, evaluate and fit drone battery logs through the same core the
+// firmware runs.
+#include <algorithm>
+#include <iostream>
+
+#include "command.h"
+
+namespace battsim {
+namespace cli {
+std::vector<Command>& command_registry() {
+    static std::vector<Command> registry;
+    return registry;
+}
+}  // namespace cli
+}  // namespace battsim
+
+int main(int argc, char** argv) {
+    using namespace battsim::cli;
+    CLI::App app{"battsim: model-based drone battery monitoring, replayed and evaluated on the host"};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", std::string("battsim ") + BATTSIM_VERSION);
+
+    // Registration order depends on link order; sort so --help is stable.
+    auto& commands = command_registry();
+    std::sort(commands.begin(), commands.end(),
+              [](const Command& a, const Command& b) { return a.name < b.name; });
+    std::vector<std::pair<CLI::App*, std::function<int()>>> actions;
+    for (auto& c : commands) {
+        CLI::App* sub = app.add_subcommand(c.name, c.description);
+        actions.emplace_back(sub, c.setup(*sub));
+    }
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        int code = app.exit(e);
+        return code == 0 ? kExitOk : kExitUsage;
+    }
+    for (auto& a : actions) {
+        if (a.first->parsed()) {
+            try {
+                return a.second();
+            } catch (const std::exception& e) {
+                std::cerr << "battsim " << a.first->get_name() << ": error: " << e.what() << "\n";
+                return kExitFailure;
+            }
+        }
+    }
+    return kExitUsage;
+}

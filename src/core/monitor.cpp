@@ -1,0 +1,161 @@
+#include "core/monitor.h"
+
+#include "core/numeric.h"
+
+namespace battsim {
+namespace core {
+
+const char* warning_name(Warning w) {
+    switch (w) {
+        case kWarnLowCapacity: return "low_capacity";
+        case kWarnHighResistance: return "high_resistance";
+        case kWarnCellOutlier: return "cell_outlier";
+        case kWarnSensorFault: return "sensor_fault";
+        default: return "unknown";
+    }
+}
+
+void Monitor::configure(const MonitorConfig& config) {
+    config_ = config;
+    status_ = MonitorStatus{};
+    current_filter_ = LowPassFilter{};
+    current_filter_.configure(config.current_filter);
+    counter_.reset(0.0f, 0.0f);
+    resistance_.configure(config.resistance);
+    capacity_.configure(config.capacity, config.battery);
+    flight_time_.configure(config.flight_time, capacity_.adapted_model().capacity_ah());
+    current_average_.configure(config.current_average);
+    power_average_.configure(config.power_average);
+    flying_.configure(config.flying);
+    initial_.configure(config.initial);
+    cells_.configure(config.cells);
+    have_time_ = false;
+    last_time_us_ = 0;
+    status_.capacity_ah = capacity_.status().capacity_ah;
+    status_.usable_capacity_ah = flight_time_.status().usable_capacity_ah;
+}
+
+bool Monitor::validate(const Sample& s, bool& cells_ok) const {
+    const SensorLimits& lim = config_.sensor;
+    cells_ok = false;
+    if (!finitef(s.voltage_v) || !finitef(s.current_a)) return false;
+    if (s.voltage_v < lim.min_pack_voltage_v || s.voltage_v > lim.max_pack_voltage_v) return false;
+    if (s.current_a < lim.min_current_a || s.current_a > lim.max_current_a) return false;
+    if (s.cell_count >= 2 && s.cell_count <= kMaxCells) {
+        float sum = 0.0f;
+        bool ok = true;
+        for (int c = 0; c < s.cell_count; ++c) {
+            const float v = s.cell_voltage_v[c];
+            if (!finitef(v) || v < lim.min_cell_voltage_v || v > lim.max_cell_voltage_v) ok = false;
+            sum += v;
+        }
+        cells_ok = ok && fabsf(sum - s.voltage_v) <= lim.max_cell_sum_error_v;
+    }
+    return true;
+}
+
+void Monitor::raise(Warning w, bool condition) {
+    const uint8_t bit = static_cast<uint8_t>(1u << w);
+    if (condition) {
+        if (!(status_.warnings_raised & bit)) status_.warning_time_us[w] = status_.time_us;
+        status_.warnings |= bit;
+        status_.warnings_raised |= bit;
+    } else {
+        status_.warnings &= static_cast<uint8_t>(~bit);
+    }
+}
+
+const MonitorStatus& Monitor::update(const Sample& sample) {
+    // dt from the samples' own time stamps, in one place; time never runs backwards here.
+    float dt_s = 0.0f;
+    if (have_time_ && sample.time_us > last_time_us_) {
+        dt_s = static_cast<float>(sample.time_us - last_time_us_) * 1.0e-6f;
+    }
+    status_.time_us = sample.time_us;
+
+    bool cells_ok = false;
+    const bool valid = validate(sample, cells_ok);
+    const bool cells_present = sample.cell_count >= 2;
+    status_.sample_valid = valid;
+    status_.cells_valid = valid && cells_ok;
+    raise(kWarnSensorFault, !valid || (cells_present && !cells_ok));
+    if (!valid || (cells_present && !cells_ok)) ++status_.sensor_fault_samples;
+    if (!valid) {
+        // Keep last_time_us_: the next good sample's dt spans the gap, so its charge counts.
+        return status_;
+    }
+    have_time_ = true;
+    last_time_us_ = sample.time_us;
+    status_.dt_s = dt_s;
+    status_.voltage_v = sample.voltage_v;
+    status_.current_a = sample.current_a;
+
+    const bool flying = flying_.update(sample.current_a, dt_s);
+    status_.flying = flying;
+    const float filtered_a = current_filter_.update(sample.current_a, dt_s);
+    status_.filtered_current_a = filtered_a;
+    // Only under load: at ground idle the current steps are noise-sized and would make
+    // −ΔV/ΔI meaningless (the reference monitor also ran it only while flying).
+    if (flying) resistance_.update(sample.voltage_v, sample.current_a, dt_s);
+    status_.resistance_ohm = resistance_.status().resistance_ohm;
+
+    if (!status_.initialised) {
+        const TremblayModel& model = capacity_.fixed_model();
+        initial_.update(model, sample.voltage_v, sample.current_a, dt_s);
+        if (!initial_.status().done && flying) initial_.force(model, sample.voltage_v, sample.current_a);
+        if (!initial_.status().done) return status_;
+        status_.initialised = true;
+        status_.initial_forced = initial_.status().forced;
+        counter_.reset(initial_.status().used_ah * 1000.0f, initial_.status().used_wh * 1000.0f);
+    } else {
+        counter_.update(sample.current_a, sample.voltage_v, dt_s);
+    }
+    const CoulombCounter::Status counted = counter_.status();
+    status_.consumed_mah = counted.consumed_mah;
+    status_.consumed_mwh = counted.consumed_mwh;
+    const float used_ah = counted.consumed_mah * 0.001f;
+
+    if (flying) {
+        capacity_.update(used_ah, sample.current_a, filtered_a, sample.voltage_v, status_.resistance_ohm);
+        current_average_.update(sample.current_a, dt_s);
+        power_average_.update(sample.current_a * sample.voltage_v, dt_s);
+        flight_time_.track(capacity_.adapted_model(), power_average_.status().short_avg);
+        if (status_.cells_valid) cells_.update(sample.cell_voltage_v, sample.cell_count);
+    } else {
+        capacity_.evaluate(used_ah, sample.current_a, filtered_a);
+    }
+    const ReferenceCapacityEstimator::Status& cap = capacity_.status();
+    status_.model_voltage_v = cap.fixed_model_voltage_v;
+    status_.adapted_model_voltage_v = cap.adapted_model_voltage_v;
+    status_.capacity_ah = cap.capacity_ah;
+    status_.soc = cap.capacity_ah > 0.0f ? clampf(1.0f - used_ah / cap.capacity_ah, 0.0f, 1.0f) : 0.0f;
+
+    status_.avg_current_a = current_average_.status().short_avg;
+    status_.avg_power_w = power_average_.status().short_avg;
+    status_.long_avg_power_w = power_average_.status().long_avg;
+    flight_time_.compute(counted.consumed_mwh * 0.001f, status_.avg_power_w);
+    const FlightTimeEstimator::Status& ft = flight_time_.status();
+    status_.usable_capacity_ah = ft.usable_capacity_ah;
+    status_.remaining_time_s = ft.remaining_time_s;
+    status_.total_time_s = ft.total_time_s;
+    status_.time_valid = ft.valid;
+
+    const PiaoCellScorer::Status& cs = cells_.status();
+    status_.cell_count = cs.cell_count;
+    for (int c = 0; c < kMaxCells; ++c) status_.cell_score[c] = cs.score[c];
+
+    const WarningConfig& wc = config_.warnings;
+    const float rated_ah = config_.battery.capacity_ah;
+    raise(kWarnLowCapacity, status_.capacity_ah < wc.low_capacity_fraction * rated_ah);
+    raise(kWarnHighResistance, resistance_.status().updates >= wc.min_resistance_updates &&
+                                   status_.resistance_ohm >
+                                       wc.high_resistance_factor * config_.battery.internal_resistance_ohm);
+    const bool outlier = cs.worst_cell >= 0 && cs.outlier_samples >= wc.min_cell_outlier_samples &&
+                         fabsf(cs.score[cs.worst_cell]) >= wc.cell_outlier_score;
+    raise(kWarnCellOutlier, outlier);
+    status_.outlier_cell = outlier ? cs.worst_cell : static_cast<int8_t>(-1);
+    return status_;
+}
+
+}  // namespace core
+}  // namespace battsim

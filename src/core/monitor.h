@@ -1,0 +1,89 @@
+// The monitor: composes the model, the estimators and the cell scorer per sample behind
+// one status struct. The same object runs on the ESP8266 and in `battsim replay`; it
+// sees only samples and their time stamps.
+#pragma once
+#include <stdint.h>
+
+#include "core/cells/piao.h"
+#include "core/config.h"
+#include "core/estimate/coulomb_counter.h"
+#include "core/sample.h"
+
+namespace battsim {
+namespace core {
+
+enum Warning : uint8_t {
+    kWarnLowCapacity = 0,
+    kWarnHighResistance = 1,
+    kWarnCellOutlier = 2,
+    kWarnSensorFault = 3,
+    kWarnCount = 4,
+};
+const char* warning_name(Warning w);
+
+struct MonitorStatus {
+    uint64_t time_us = 0;
+    float dt_s = 0.0f;
+    float voltage_v = 0.0f;
+    float current_a = 0.0f;
+    float filtered_current_a = 0.0f;
+    bool sample_valid = false;  // false: sensor fault, sample kept out of the estimators
+    bool cells_valid = false;
+    bool initialised = false;   // initial state of charge known
+    bool initial_forced = false;
+    bool flying = false;
+
+    float consumed_mah = 0.0f;  // since full, including the initial estimate
+    float consumed_mwh = 0.0f;
+    float model_voltage_v = 0.0f;          // fixed (configured) model
+    float adapted_model_voltage_v = 0.0f;  // adapted model
+    float soc = 0.0f;                      // 1 − consumed / estimated capacity
+    float capacity_ah = 0.0f;              // estimated pack capacity
+    float resistance_ohm = 0.0f;           // online resistance estimate
+    float usable_capacity_ah = 0.0f;
+    float remaining_time_s = 0.0f;
+    float total_time_s = 0.0f;
+    bool time_valid = false;
+    float avg_current_a = 0.0f;
+    float avg_power_w = 0.0f;
+    float long_avg_power_w = 0.0f;
+
+    uint8_t cell_count = 0;
+    float cell_score[kMaxCells] = {};
+    int8_t outlier_cell = -1;
+
+    uint8_t warnings = 0;                       // bit per Warning, currently active
+    uint8_t warnings_raised = 0;                // bit per Warning, ever raised
+    uint64_t warning_time_us[kWarnCount] = {};  // first time each was raised
+    uint32_t sensor_fault_samples = 0;
+};
+
+class Monitor {
+public:
+    void configure(const MonitorConfig& config);
+    const MonitorStatus& update(const Sample& sample);
+    const MonitorStatus& status() const { return status_; }
+    const MonitorConfig& config() const { return config_; }
+
+private:
+    bool validate(const Sample& s, bool& cells_ok) const;
+    void raise(Warning w, bool condition);
+
+    MonitorConfig config_;
+    MonitorStatus status_;
+    LowPassFilter current_filter_;
+    CoulombCounter counter_;
+    ResistanceEstimator resistance_;
+    ReferenceCapacityEstimator capacity_;
+    FlightTimeEstimator flight_time_;
+    RollingAverage current_average_;
+    RollingAverage power_average_;
+    FlyingState flying_;
+    InitialState initial_;
+    PiaoCellScorer cells_;
+    bool have_time_ = false;
+    uint64_t last_time_us_ = 0;
+};
+
+}  // namespace core
+}  // namespace battsim

@@ -1,0 +1,238 @@
+#include "host/config_json.h"
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace battsim {
+namespace host {
+
+namespace {
+
+using nlohmann::json;
+
+constexpr const char* kSchema = "battsim.config";
+constexpr int kVersion = 1;
+
+// Reads an object's members, remembering which keys were consumed so that leftovers can
+// be reported as unknown.
+class ObjectReader {
+public:
+    ObjectReader(const json& j, std::string path, const std::string& origin)
+        : j_(j), path_(std::move(path)), origin_(origin) {
+        if (!j.is_object()) fail(path_, "expected an object");
+    }
+    ~ObjectReader() noexcept(false) {
+        if (std::uncaught_exceptions() > 0) return;
+        for (auto it = j_.begin(); it != j_.end(); ++it) {
+            if (!used_.count(it.key())) fail(path_ + "." + it.key(), "unknown key");
+        }
+    }
+    template <typename T>
+    void number(const char* key, T& out, double lo, double hi) {
+        used_.insert(key);
+        auto it = j_.find(key);
+        if (it == j_.end()) return;  // keep the default
+        const std::string p = path_ + "." + key;
+        if (!it->is_number()) fail(p, "expected a number");
+        const double v = it->get<double>();
+        if (!std::isfinite(v) || v < lo || v > hi) {
+            std::ostringstream m;
+            m << "value " << v << " out of range [" << lo << ", " << hi << "]";
+            fail(p, m.str());
+        }
+        out = static_cast<T>(v);
+    }
+    void string(const char* key, std::string& out) {
+        used_.insert(key);
+        auto it = j_.find(key);
+        if (it == j_.end()) return;
+        if (!it->is_string()) fail(path_ + "." + key, "expected a string");
+        out = it->get<std::string>();
+    }
+    const json* object(const char* key) {
+        used_.insert(key);
+        auto it = j_.find(key);
+        return it == j_.end() ? nullptr : &*it;
+    }
+    std::string child(const char* key) const { return path_ + "." + key; }
+    [[noreturn]] void fail(const std::string& where, const std::string& what) const {
+        throw ConfigError(origin_ + ": " + where + ": " + what);
+    }
+
+private:
+    const json& j_;
+    std::string path_;
+    const std::string& origin_;
+    std::set<std::string> used_;
+};
+
+constexpr double kBig = 1e9;
+
+}  // namespace
+
+LoadedConfig default_config() {
+    LoadedConfig c;
+    c.name = "reference-4s-modified";
+    return c;
+}
+
+LoadedConfig config_from_json(const json& j, const std::string& origin) {
+    LoadedConfig out = default_config();
+    core::MonitorConfig& m = out.monitor;
+    ObjectReader root(j, "$", origin);
+    std::string schema = kSchema;
+    int version = kVersion;
+    root.string("schema", schema);
+    root.number("version", version, 1, 1000);
+    if (schema != kSchema) root.fail("$.schema", "expected \"" + std::string(kSchema) + "\", found \"" + schema + "\"");
+    if (version != kVersion) root.fail("$.version", "unsupported version " + std::to_string(version));
+    root.string("name", out.name);
+    root.string("description", out.description);
+
+    if (const json* b = root.object("battery")) {
+        ObjectReader r(*b, root.child("battery"), origin);
+        core::TremblayParams& p = m.battery;
+        r.number("cells_in_series", m.cells_in_series, 1, core::kMaxCells);
+        r.number("full_voltage_v", p.full_voltage_v, 0.1, 1000);
+        r.number("exponential_voltage_v", p.exponential_voltage_v, 0.1, 1000);
+        r.number("exponential_capacity_ah", p.exponential_capacity_ah, 1e-6, 10000);
+        r.number("nominal_zone_voltage_v", p.nominal_zone_voltage_v, 0.1, 1000);
+        r.number("nominal_zone_capacity_ah", p.nominal_zone_capacity_ah, 1e-6, 10000);
+        r.number("capacity_ah", p.capacity_ah, 1e-3, 10000);
+        r.number("internal_resistance_ohm", p.internal_resistance_ohm, 0, 100);
+        r.number("curve_current_a", p.curve_current_a, 0, 10000);
+        r.number("nominal_voltage_v", m.flight_time.nominal_voltage_v, 0.1, 1000);
+        r.number("max_voltage_v", m.max_voltage_v, 0.1, 1000);
+        r.number("min_voltage_v", m.min_voltage_v, 0.1, 1000);
+        if (!(p.exponential_voltage_v < p.full_voltage_v))
+            r.fail(r.child("exponential_voltage_v"), "must be below full_voltage_v");
+        if (!(p.exponential_capacity_ah < p.capacity_ah))
+            r.fail(r.child("exponential_capacity_ah"), "must be below capacity_ah");
+    }
+    if (const json* s = root.object("monitor")) {
+        ObjectReader r(*s, root.child("monitor"), origin);
+        r.number("reaction_time_s", m.current_filter.time_constant_s, 0, kBig);
+        r.number("min_flight_voltage_v", m.flight_time.min_flight_voltage_v, 0, 1000);
+        r.number("capacity_step_fraction", m.capacity.capacity_step_fraction, 1e-6, 1);
+        m.flight_time.step_fraction = m.capacity.capacity_step_fraction;
+        r.number("max_voltage_variance_v", m.capacity.max_voltage_variance_v, 0, 100);
+        r.number("variance_persistence_updates", m.capacity.persistence_updates, 1, 1e6);
+        r.number("short_average_time_s", m.power_average.short_time_s, 0, kBig);
+        r.number("long_average_time_s", m.power_average.long_time_s, 0, kBig);
+        m.current_average.short_time_s = m.power_average.short_time_s;
+        m.current_average.long_time_s = m.power_average.long_time_s;
+        r.number("remembered_average_power_w", m.power_average.initial_value, 0, kBig);
+        r.number("min_flying_current_a", m.flying.min_flying_current_a, 0, kBig);
+        r.number("landed_hold_s", m.flying.landed_hold_s, 0, kBig);
+        r.number("takeoff_confirm_s", m.flying.takeoff_confirm_s, 0, kBig);
+        r.number("max_resting_current_a", m.initial.max_resting_current_a, 0, kBig);
+        r.number("stabilisation_time_s", m.initial.stabilisation_time_s, 0, kBig);
+        if (const json* e = r.object("resistance")) {
+            ObjectReader rr(*e, r.child("resistance"), origin);
+            rr.number("filter_time_constant_s", m.resistance.filter_time_constant_s, 0, kBig);
+            rr.number("max_filter_alpha", m.resistance.max_filter_alpha, 0, 1);
+            rr.number("blend_gain", m.resistance.blend_gain, 0, kBig);
+            rr.number("initial_resistance_ohm", m.resistance.initial_resistance_ohm, 0, 100);
+        }
+        if (const json* w = r.object("warnings")) {
+            ObjectReader rw(*w, r.child("warnings"), origin);
+            rw.number("low_capacity_fraction", m.warnings.low_capacity_fraction, 0, 10);
+            rw.number("high_resistance_factor", m.warnings.high_resistance_factor, 0, 1000);
+            rw.number("min_resistance_updates", m.warnings.min_resistance_updates, 0, 1e9);
+            rw.number("cell_outlier_score", m.warnings.cell_outlier_score, 0, 1);
+            rw.number("min_cell_outlier_samples", m.warnings.min_cell_outlier_samples, 0, 1e9);
+        }
+    }
+    if (const json* s = root.object("sensor")) {
+        ObjectReader r(*s, root.child("sensor"), origin);
+        r.number("shunt_offset_ma", m.shunt.offset_ma, -kBig, kBig);
+        r.number("shunt_scale_mv_per_10a", m.shunt.scale_mv_per_10a, 1e-9, kBig);
+        r.number("max_pack_voltage_v", m.sensor.max_pack_voltage_v, 0, 10000);
+        r.number("min_pack_voltage_v", m.sensor.min_pack_voltage_v, 0, 10000);
+        r.number("max_current_a", m.sensor.max_current_a, -kBig, kBig);
+        r.number("min_current_a", m.sensor.min_current_a, -kBig, kBig);
+        r.number("min_cell_voltage_v", m.sensor.min_cell_voltage_v, 0, 100);
+        r.number("max_cell_voltage_v", m.sensor.max_cell_voltage_v, 0, 100);
+        r.number("max_cell_sum_error_v", m.sensor.max_cell_sum_error_v, 0, 100);
+    }
+    return out;
+}
+
+LoadedConfig load_config_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw ConfigError(path + ": cannot open config file");
+    json j;
+    try {
+        j = json::parse(in);
+    } catch (const json::parse_error& e) {
+        throw ConfigError(path + ": not valid JSON (" + std::string(e.what()) + ")");
+    }
+    return config_from_json(j, path);
+}
+
+json config_to_json(const LoadedConfig& c) {
+    const core::MonitorConfig& m = c.monitor;
+    const core::TremblayParams& p = m.battery;
+    json j;
+    j["schema"] = kSchema;
+    j["version"] = kVersion;
+    j["name"] = c.name;
+    if (!c.description.empty()) j["description"] = c.description;
+    j["battery"] = {
+        {"cells_in_series", m.cells_in_series},
+        {"full_voltage_v", p.full_voltage_v},
+        {"exponential_voltage_v", p.exponential_voltage_v},
+        {"exponential_capacity_ah", p.exponential_capacity_ah},
+        {"nominal_zone_voltage_v", p.nominal_zone_voltage_v},
+        {"nominal_zone_capacity_ah", p.nominal_zone_capacity_ah},
+        {"capacity_ah", p.capacity_ah},
+        {"internal_resistance_ohm", p.internal_resistance_ohm},
+        {"curve_current_a", p.curve_current_a},
+        {"nominal_voltage_v", m.flight_time.nominal_voltage_v},
+        {"max_voltage_v", m.max_voltage_v},
+        {"min_voltage_v", m.min_voltage_v},
+    };
+    j["monitor"] = {
+        {"reaction_time_s", m.current_filter.time_constant_s},
+        {"min_flight_voltage_v", m.flight_time.min_flight_voltage_v},
+        {"capacity_step_fraction", m.capacity.capacity_step_fraction},
+        {"max_voltage_variance_v", m.capacity.max_voltage_variance_v},
+        {"variance_persistence_updates", m.capacity.persistence_updates},
+        {"short_average_time_s", m.power_average.short_time_s},
+        {"long_average_time_s", m.power_average.long_time_s},
+        {"remembered_average_power_w", m.power_average.initial_value},
+        {"min_flying_current_a", m.flying.min_flying_current_a},
+        {"landed_hold_s", m.flying.landed_hold_s},
+        {"takeoff_confirm_s", m.flying.takeoff_confirm_s},
+        {"max_resting_current_a", m.initial.max_resting_current_a},
+        {"stabilisation_time_s", m.initial.stabilisation_time_s},
+        {"resistance",
+         {{"filter_time_constant_s", m.resistance.filter_time_constant_s},
+          {"max_filter_alpha", m.resistance.max_filter_alpha},
+          {"blend_gain", m.resistance.blend_gain},
+          {"initial_resistance_ohm", m.resistance.initial_resistance_ohm}}},
+        {"warnings",
+         {{"low_capacity_fraction", m.warnings.low_capacity_fraction},
+          {"high_resistance_factor", m.warnings.high_resistance_factor},
+          {"min_resistance_updates", m.warnings.min_resistance_updates},
+          {"cell_outlier_score", m.warnings.cell_outlier_score},
+          {"min_cell_outlier_samples", m.warnings.min_cell_outlier_samples}}},
+    };
+    j["sensor"] = {
+        {"shunt_offset_ma", m.shunt.offset_ma},
+        {"shunt_scale_mv_per_10a", m.shunt.scale_mv_per_10a},
+        {"max_pack_voltage_v", m.sensor.max_pack_voltage_v},
+        {"min_pack_voltage_v", m.sensor.min_pack_voltage_v},
+        {"max_current_a", m.sensor.max_current_a},
+        {"min_current_a", m.sensor.min_current_a},
+        {"min_cell_voltage_v", m.sensor.min_cell_voltage_v},
+        {"max_cell_voltage_v", m.sensor.max_cell_voltage_v},
+        {"max_cell_sum_error_v", m.sensor.max_cell_sum_error_v},
+    };
+    return j;
+}
+
+}  // namespace host
+}  // namespace battsim

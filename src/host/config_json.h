@@ -1,0 +1,33 @@
+// Monitor configuration from and to JSON (schema "battsim.config", version 1). Unknown
+// keys are errors, so a typo never silently falls back to a default.
+#pragma once
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "core/config.h"
+
+namespace battsim {
+namespace host {
+
+class ConfigError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+struct LoadedConfig {
+    std::string name;
+    std::string description;
+    core::MonitorConfig monitor;
+};
+
+// `origin` names the source in messages (a file path).
+LoadedConfig config_from_json(const nlohmann::json& j, const std::string& origin);
+LoadedConfig load_config_file(const std::string& path);
+nlohmann::json config_to_json(const LoadedConfig& config);
+// The defaults (reference 4S pack, hand-modified parameters).
+LoadedConfig default_config();
+
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,751 @@
+// CSV-family readers. Rules for bad input (every one has a unit test in
+// tests/unit/test_io_csv.cpp):
+//  * wrong field count, a field that is not a number, NaN/inf, a negative time or a time
+//    earlier than the row before: InputError with line and field number;
+//  * the last line of the file, when it has no newline and is visibly cut off (fewer
+//    fields, or its last field does not parse, or it lacks the trailing comma every
+//    earlier row had): skipped, with a note in SourceInfo::notes;
+//  * repeated time stamps and blank lines: kept / skipped, one note each with a count
+//    (added when the reader reaches the end of the file);
+//  * no data rows at all: InputError when the reader is opened.
+#include "host/io/csv_reader.h"
+
+#include <algorithm>
+#include <cfloat>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "core/sensor.h"
+#include "host/io/line_reader.h"
+
+namespace battsim {
+namespace host {
+
+namespace text {
+
+NumberStatus parse_number(std::string_view field, double& out) {
+    if (field.empty()) return NumberStatus::Empty;
+    const char* b = field.data();
+    const char* e = b + field.size();
+    if (*b == '+') {
+        ++b;
+        if (b == e || *b == '+' || *b == '-') return NumberStatus::NotANumber;
+    }
+    double v = 0.0;
+    const std::from_chars_result r = std::from_chars(b, e, v, std::chars_format::general);
+    if (r.ec == std::errc::invalid_argument || r.ptr != e) return NumberStatus::NotANumber;
+    if (r.ec == std::errc::result_out_of_range) return NumberStatus::OutOfRange;
+    if (!std::isfinite(v)) return NumberStatus::NotFinite;
+    out = v;
+    return NumberStatus::Ok;
+}
+
+namespace {
+inline std::string_view trim(std::string_view s) {
+    std::size_t b = 0;
+    std::size_t e = s.size();
+    while (b < e && (s[b] == ' ' || s[b] == '\t')) ++b;
+    while (e > b && (s[e - 1] == ' ' || s[e - 1] == '\t')) --e;
+    return s.substr(b, e - b);
+}
+}  // namespace
+
+bool split_fields(std::string_view line, std::vector<std::string_view>& fields, long& bad_field) {
+    fields.clear();
+    const std::size_t n = line.size();
+    const char* data = line.data();
+    if (n == 0 || std::memchr(data, '"', n) == nullptr) {
+        // Fast path: no quotes anywhere on the line.
+        std::size_t start = 0;
+        for (;;) {
+            const void* hit = start < n ? std::memchr(data + start, ',', n - start) : nullptr;
+            const std::size_t stop = hit ? static_cast<std::size_t>(static_cast<const char*>(hit) - data) : n;
+            fields.push_back(trim(line.substr(start, stop - start)));
+            if (hit == nullptr) return true;
+            start = stop + 1;
+        }
+    }
+    std::size_t i = 0;
+    for (;;) {
+        while (i < n && (line[i] == ' ' || line[i] == '\t')) ++i;
+        if (i < n && line[i] == '"') {
+            const std::size_t open = i + 1;
+            std::size_t j = open;
+            for (;;) {
+                if (j >= n) {
+                    bad_field = static_cast<long>(fields.size()) + 1;
+                    return false;
+                }
+                if (line[j] == '"') {
+                    if (j + 1 < n && line[j + 1] == '"') {
+                        j += 2;
+                        continue;
+                    }
+                    break;
+                }
+                ++j;
+            }
+            fields.push_back(line.substr(open, j - open));
+            i = j + 1;
+            while (i < n && (line[i] == ' ' || line[i] == '\t')) ++i;
+            if (i == n) return true;
+            if (line[i] != ',') {
+                bad_field = static_cast<long>(fields.size());
+                return false;
+            }
+            ++i;
+            if (i == n) {
+                fields.push_back(std::string_view());
+                return true;
+            }
+            continue;
+        }
+        const std::size_t comma = line.find(',', i);
+        const std::size_t stop = comma == std::string_view::npos ? n : comma;
+        fields.push_back(trim(line.substr(i, stop - i)));
+        if (comma == std::string_view::npos) return true;
+        i = stop + 1;
+        if (i == n) {
+            fields.push_back(std::string_view());
+            return true;
+        }
+    }
+}
+
+std::string unquote(std::string_view field) {
+    std::string s;
+    s.reserve(field.size());
+    for (std::size_t i = 0; i < field.size(); ++i) {
+        s += field[i];
+        if (field[i] == '"' && i + 1 < field.size() && field[i + 1] == '"') ++i;
+    }
+    return s;
+}
+
+std::string quote_for_message(std::string_view t) {
+    constexpr std::size_t kMax = 60;
+    std::string s = "\"";
+    const std::size_t shown = std::min(t.size(), kMax);
+    for (std::size_t i = 0; i < shown; ++i) {
+        const unsigned char c = static_cast<unsigned char>(t[i]);
+        if (c == '"' || c == '\\') {
+            s += '\\';
+            s += static_cast<char>(c);
+        } else if (c == '\r') {
+            s += "\\r";
+        } else if (c == '\t') {
+            s += "\\t";
+        } else if (c < 0x20 || c >= 0x7F) {
+            char hex[8];
+            std::snprintf(hex, sizeof hex, "\\x%02X", c);
+            s += hex;
+        } else {
+            s += static_cast<char>(c);
+        }
+    }
+    if (t.size() > kMax) s += "...";
+    s += '"';
+    return s;
+}
+
+std::string number_error_message(NumberStatus status, std::string_view t) {
+    switch (status) {
+        case NumberStatus::NotFinite:
+            return "expected a finite number, found " + quote_for_message(t);
+        case NumberStatus::OutOfRange:
+            return "expected a number within range, found " + quote_for_message(t);
+        case NumberStatus::Ok:
+        case NumberStatus::Empty:
+        case NumberStatus::NotANumber:
+            break;
+    }
+    return "expected a number, found " + quote_for_message(t);
+}
+
+}  // namespace text
+
+namespace {
+
+using text::NumberStatus;
+
+// Largest time we accept, in microseconds (just under 2^63).
+constexpr double kMaxTimeUs = 9.2e18;
+
+std::string seconds_text(std::uint64_t us) {
+    char buf[48];
+    std::snprintf(buf, sizeof buf, "%llu.%06llu s", static_cast<unsigned long long>(us / 1000000u),
+                  static_cast<unsigned long long>(us % 1000000u));
+    return buf;
+}
+
+std::string number_text(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return buf;
+}
+
+std::string lower(std::string_view s) {
+    std::string r(s);
+    for (char& c : r) {
+        if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+    }
+    return r;
+}
+
+bool ends_with(const std::string& s, const char* suffix) {
+    const std::size_t n = std::strlen(suffix);
+    return s.size() >= n && s.compare(s.size() - n, n, suffix) == 0;
+}
+
+// Shared line loop of both CSV readers: blank lines, field count, trailing comma,
+// cut-off last line, time order and the notes.
+class TextSampleReader : public SampleReader {
+public:
+    const SourceInfo& info() const override { return info_; }
+
+    bool next(core::Sample& out) override {
+        if (has_pending_) {
+            out = pending_;
+            has_pending_ = false;
+            return true;
+        }
+        if (finished_) return false;
+        if (read_row(out)) return true;
+        finish();
+        return false;
+    }
+
+protected:
+    TextSampleReader(const std::string& path, LogFormat format) : lines_(path) {
+        info_.path = path;
+        info_.format = format;
+    }
+
+    // Reads the first data row, so a file without data fails when it is opened.
+    void prime(const std::string& no_data_message) {
+        has_pending_ = read_row(pending_);
+        if (!has_pending_) {
+            if (cut_line_ > 0) {
+                throw InputError(info_.path, cut_line_, 0,
+                                 "no complete data rows: the only data line is cut off (no newline at the end)");
+            }
+            throw InputError(info_.path, 0, 0, lines_.line_number() == 0 ? "file is empty" : no_data_message);
+        }
+    }
+
+    // Next line that is not blank; false at the end of the file.
+    bool next_nonblank(std::string_view& line) {
+        for (;;) {
+            if (!lines_.next(line)) return false;
+            std::size_t i = 0;
+            while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+            if (i < line.size()) return true;
+            if (blank_count_ == 0) first_blank_line_ = lines_.line_number();
+            ++blank_count_;
+        }
+    }
+
+    // Parses fields_ (count already checked) into `out`; false to skip a cut-off last
+    // line (after get_number/get_time_us returned false). Must set out.time_us.
+    virtual bool parse_row(core::Sample& out) = 0;
+
+    // Field `idx` (0-based) as a number. Throws InputError for a bad field, except for the
+    // last field of a last line without newline, which returns false (cut off).
+    bool get_number(std::size_t idx, double& v) {
+        const std::string_view t = fields_[idx];
+        const NumberStatus st = text::parse_number(t, v);
+        if (st == NumberStatus::Ok) return true;
+        if (idx + 1 == cut_field_ && (st == NumberStatus::NotANumber || st == NumberStatus::Empty)) {
+            add_cut_note("its last field " + text::quote_for_message(t) + " is incomplete");
+            return false;
+        }
+        throw InputError(info_.path, lines_.line_number(), static_cast<long>(idx) + 1,
+                         text::number_error_message(st, t));
+    }
+
+    float to_float(double v, std::size_t idx) const {
+        if (!(std::fabs(v) <= static_cast<double>(FLT_MAX))) {
+            throw InputError(info_.path, lines_.line_number(), static_cast<long>(idx) + 1,
+                             "expected a number that fits a 32-bit float, found " +
+                                 text::quote_for_message(fields_[idx]));
+        }
+        return static_cast<float>(v);
+    }
+
+    // Field `idx` as a time: value * factor_us microseconds. When factor_int > 0 the factor is
+    // that exact integer and plain integer fields are converted exactly.
+    bool get_time_us(std::size_t idx, double factor_us, std::uint64_t factor_int, std::uint64_t& out) {
+        const std::string_view t = fields_[idx];
+        if (factor_int > 0 && !t.empty() && t.size() <= 19 && t.front() >= '0' && t.front() <= '9') {
+            std::uint64_t n = 0;
+            const auto r = std::from_chars(t.data(), t.data() + t.size(), n);
+            if (r.ec == std::errc() && r.ptr == t.data() + t.size()) {
+                if (n <= static_cast<std::uint64_t>(kMaxTimeUs) / factor_int) {
+                    out = n * factor_int;
+                    return true;
+                }
+                throw InputError(info_.path, lines_.line_number(), static_cast<long>(idx) + 1,
+                                 "expected a time below 2^63 microseconds, found " + text::quote_for_message(t));
+            }
+        }
+        double v = 0.0;
+        if (!get_number(idx, v)) return false;
+        if (v < 0.0) {
+            throw InputError(info_.path, lines_.line_number(), static_cast<long>(idx) + 1,
+                             "expected a time that is not negative, found " + text::quote_for_message(t));
+        }
+        const double us = v * factor_us;
+        if (!(us < kMaxTimeUs)) {
+            throw InputError(info_.path, lines_.line_number(), static_cast<long>(idx) + 1,
+                             "expected a time below 2^63 microseconds, found " + text::quote_for_message(t));
+        }
+        out = static_cast<std::uint64_t>(std::llround(us));
+        return true;
+    }
+
+    LineReader lines_;
+    SourceInfo info_;
+    std::vector<std::string_view> fields_;
+    std::size_t expected_fields_ = 0;  // without a trailing comma
+    std::string count_text_;           // "8 fields (...)" for the wrong-count message
+    std::size_t time_field_ = 0;
+
+private:
+    bool read_row(core::Sample& out) {
+        std::string_view line;
+        while (next_nonblank(line)) {
+            const long ln = lines_.line_number();
+            const bool at_eof_no_newline = !lines_.line_had_newline();
+            long bad = 0;
+            if (!text::split_fields(line, fields_, bad)) {
+                if (at_eof_no_newline) {
+                    add_cut_note("a quoted field is not closed");
+                    return false;
+                }
+                throw InputError(info_.path, ln, bad,
+                                 "expected a closing '\"' and then a comma or the end of the line");
+            }
+            std::size_t n = fields_.size();
+            const bool trailing = n == expected_fields_ + 1 && fields_[n - 1].empty();
+            if (trailing) {
+                n = expected_fields_;
+            } else if (n != expected_fields_) {
+                if (at_eof_no_newline && n < expected_fields_) {
+                    add_cut_note("it has " + std::to_string(n) + " of " + std::to_string(expected_fields_) +
+                                 " fields");
+                    return false;
+                }
+                throw InputError(info_.path, ln, 0,
+                                 "expected " + count_text_ + ", found " + std::to_string(fields_.size()));
+            }
+            if (at_eof_no_newline && !trailing && rows_ > 0 && all_trailing_) {
+                add_cut_note("it lacks the trailing comma every earlier row has, so its last number may be cut off");
+                return false;
+            }
+            cut_field_ = at_eof_no_newline && !trailing ? n : 0;
+            if (!parse_row(out)) return false;
+            if (!trailing) all_trailing_ = false;
+            if (rows_ > 0) {
+                if (out.time_us < last_time_us_) {
+                    throw InputError(info_.path, ln, static_cast<long>(time_field_) + 1,
+                                     "time goes backwards: " + seconds_text(out.time_us) + " is earlier than " +
+                                         seconds_text(last_time_us_) + " on line " + std::to_string(last_time_line_));
+                }
+                if (out.time_us == last_time_us_) {
+                    if (dup_count_ == 0) first_dup_line_ = ln;
+                    ++dup_count_;
+                }
+            }
+            last_time_us_ = out.time_us;
+            last_time_line_ = ln;
+            ++rows_;
+            return true;
+        }
+        return false;
+    }
+
+    void add_cut_note(const std::string& why) {
+        cut_line_ = lines_.line_number();
+        info_.notes.push_back("line " + std::to_string(cut_line_) +
+                              ": last line is cut off (no newline at the end, " + why + "); skipped");
+    }
+
+    void finish() {
+        finished_ = true;
+        if (dup_count_ > 0) {
+            info_.notes.push_back(std::to_string(dup_count_) +
+                                  (dup_count_ == 1 ? " row repeats" : " rows repeat") +
+                                  " the time stamp of the row before (first on line " +
+                                  std::to_string(first_dup_line_) + "); kept");
+        }
+        if (blank_count_ > 0) {
+            info_.notes.push_back(std::to_string(blank_count_) + (blank_count_ == 1 ? " blank line" : " blank lines") +
+                                  " skipped (first on line " + std::to_string(first_blank_line_) + ")");
+        }
+    }
+
+    core::Sample pending_;
+    bool has_pending_ = false;
+    bool finished_ = false;
+    bool all_trailing_ = true;
+    std::size_t cut_field_ = 0;  // 1-based field whose failure means "cut off"; 0 = none
+    long cut_line_ = 0;
+    long rows_ = 0;
+    std::uint64_t last_time_us_ = 0;
+    long last_time_line_ = 0;
+    long dup_count_ = 0;
+    long first_dup_line_ = 0;
+    long blank_count_ = 0;
+    long first_blank_line_ = 0;
+};
+
+// ---------------------------------------------------------------------------------------
+// predictive-bms raw log
+
+class RawPbmsReader final : public TextSampleReader {
+public:
+    RawPbmsReader(const std::string& path, const ReaderOptions& options)
+        : TextSampleReader(path, LogFormat::RawPbms),
+          use_shunt_(options.current_source == CurrentSource::Shunt),
+          cal_(options.shunt) {
+        if (use_shunt_ && !(std::isfinite(cal_.scale_mv_per_10a) && cal_.scale_mv_per_10a != 0.0f &&
+                            std::isfinite(cal_.offset_ma))) {
+            throw InputError(path, 0, 0, "shunt calibration needs a finite, non-zero scale and a finite offset");
+        }
+        expected_fields_ = kFields;
+        count_text_ = "8 fields (9 with a trailing comma): time_ms, bus_voltage_v, cell1_v..cell4_v, current_ma, shunt_mv";
+        time_field_ = 0;
+        info_.cell_count = 4;
+        info_.has_temperature = false;
+        prime("no data rows (the file holds only blank lines)");
+    }
+
+private:
+    static constexpr std::size_t kFields = 8;
+
+    bool parse_row(core::Sample& out) override {
+        out = core::Sample{};
+        if (!get_time_us(0, 1000.0, 1000u, out.time_us)) return false;
+        double v[kFields];
+        for (std::size_t i = 1; i < kFields; ++i) {
+            if (!get_number(i, v[i])) return false;
+        }
+        out.voltage_v = to_float(v[1], 1);
+        out.cell_count = 4;
+        for (int c = 0; c < 4; ++c) out.cell_voltage_v[c] = to_float(v[2 + c], 2 + static_cast<std::size_t>(c));
+        const float current_ma = to_float(v[6], 6);  // range-checked even when the shunt is used
+        const float shunt_mv = to_float(v[7], 7);
+        if (use_shunt_) {
+            const float ma = core::current_ma_from_shunt_mv(shunt_mv, cal_);
+            if (!std::isfinite(ma)) {
+                throw InputError(info_.path, lines_.line_number(), 8,
+                                 "shunt voltage " + text::quote_for_message(fields_[7]) +
+                                     " gives a current out of range");
+            }
+            out.current_a = ma / 1000.0f;
+        } else {
+            (void)current_ma;
+            out.current_a = static_cast<float>(v[6] / 1000.0);
+        }
+        return true;
+    }
+
+    bool use_shunt_;
+    core::ShuntCalibration cal_;
+};
+
+// ---------------------------------------------------------------------------------------
+// Headered CSV
+
+class HeaderedCsvReader final : public TextSampleReader {
+public:
+    HeaderedCsvReader(const std::string& path, const ReaderOptions& options)
+        : TextSampleReader(path, LogFormat::Csv) {
+        std::string_view line;
+        const bool any = next_nonblank(line);
+        if (!any) {
+            throw InputError(path, 0, 0,
+                             lines_.line_number() == 0 ? "file is empty"
+                                                       : "file holds only blank lines; expected a header row");
+        }
+        header_line_ = lines_.line_number();
+        if (line.find('\r') != std::string_view::npos) {
+            throw InputError(path, header_line_, 0,
+                             "the header contains a bare carriage return; expected \"\\n\" or \"\\r\\n\" line ends");
+        }
+        long bad = 0;
+        if (!text::split_fields(line, fields_, bad)) {
+            throw InputError(path, header_line_, bad, "expected a closing '\"' and then a comma or the end of the line");
+        }
+        for (std::string_view f : fields_) names_.push_back(text::unquote(f));
+        for (std::string& n : names_) {
+            // Quoted names may carry inner spaces; trim them too.
+            const std::size_t b = n.find_first_not_of(" \t");
+            const std::size_t e = n.find_last_not_of(" \t");
+            n = b == std::string::npos ? std::string() : n.substr(b, e - b + 1);
+        }
+        if (names_.size() > 1 && names_.back().empty()) names_.pop_back();  // header with a trailing comma
+        for (const std::string& n : names_) lower_names_.push_back(lower(n));
+        expected_fields_ = names_.size();
+        count_text_ = std::to_string(expected_fields_) + " fields (as in the header on line " +
+                      std::to_string(header_line_) + ")";
+
+        resolve(options);
+        time_field_ = static_cast<std::size_t>(time_col_);
+        prime("no data rows after the header on line " + std::to_string(header_line_));
+    }
+
+private:
+    // Index of the column named `name` (case-insensitive), -1 if absent; throws if it
+    // appears twice.
+    int find(const std::string& name) const {
+        const std::string want = lower(name);
+        int found = -1;
+        for (std::size_t i = 0; i < lower_names_.size(); ++i) {
+            if (lower_names_[i] != want) continue;
+            if (found >= 0) {
+                throw InputError(info_.path, header_line_, static_cast<long>(i) + 1,
+                                 "column \"" + name + "\" appears twice in the header (fields " +
+                                     std::to_string(found + 1) + " and " + std::to_string(i + 1) +
+                                     "); expected unique column names");
+            }
+            found = static_cast<int>(i);
+        }
+        return found;
+    }
+
+    std::string columns_found() const {
+        std::string s;
+        const std::size_t shown = std::min<std::size_t>(names_.size(), 60);
+        for (std::size_t i = 0; i < shown; ++i) {
+            if (i > 0) s += ", ";
+            s += names_[i].empty() ? std::string("(empty)") : names_[i];
+        }
+        if (names_.size() > shown) s += ", ... (" + std::to_string(names_.size()) + " in all)";
+        bool all_numbers = true;
+        for (const std::string& n : names_) {
+            double d = 0.0;
+            if (text::parse_number(n, d) == NumberStatus::Ok) continue;
+            if (!(n.empty() && &n == &names_.back())) all_numbers = false;
+        }
+        if (all_numbers) s += " (the first line looks like data, not a header row)";
+        return s;
+    }
+
+    [[noreturn]] void missing(const std::string& what, const std::string& expected) const {
+        throw InputError(info_.path, header_line_, 0,
+                         "missing " + what + " column " + expected + "; columns found: " + columns_found());
+    }
+
+    int require(const std::string& what, const std::string& name) const {
+        const int i = find(name);
+        if (i < 0) missing(what, "\"" + name + "\"");
+        return i;
+    }
+
+    void resolve(const ReaderOptions& options) {
+        const ColumnMapping& m = options.columns;
+
+        // Time.
+        std::string time_name;
+        if (!m.time.empty()) {
+            time_col_ = require("time", m.time);
+            time_name = lower_names_[static_cast<std::size_t>(time_col_)];
+        } else {
+            for (const char* cand : {"time_s", "time_ms", "time_us"}) {
+                time_col_ = find(cand);
+                if (time_col_ >= 0) break;
+            }
+            if (time_col_ < 0) missing("time", "(expected time_s, time_ms or time_us)");
+            time_name = lower_names_[static_cast<std::size_t>(time_col_)];
+        }
+        if (m.time_scale_to_s != 0.0) {
+            if (!(std::isfinite(m.time_scale_to_s) && m.time_scale_to_s > 0.0)) {
+                throw InputError(info_.path, 0, 0,
+                                 "time scale must be a positive number of seconds per unit, got " +
+                                     number_text(m.time_scale_to_s));
+            }
+            time_factor_us_ = m.time_scale_to_s * 1e6;
+            time_factor_int_ = 0;
+            if (m.time_scale_to_s == 1.0) time_factor_int_ = 1000000u;
+        } else if (ends_with(time_name, "_us")) {
+            time_factor_us_ = 1.0;
+            time_factor_int_ = 1u;
+        } else if (ends_with(time_name, "_ms")) {
+            time_factor_us_ = 1000.0;
+            time_factor_int_ = 1000u;
+        } else if (ends_with(time_name, "_s")) {
+            time_factor_us_ = 1e6;
+            time_factor_int_ = 1000000u;
+        } else {
+            throw InputError(info_.path, header_line_, time_col_ + 1,
+                             "cannot tell the unit of time column \"" + names_[static_cast<std::size_t>(time_col_)] +
+                                 "\": expected a name ending in _s, _ms or _us, or a time scale (seconds per unit)");
+        }
+
+        // Voltage (volts unless the name ends in _mv).
+        voltage_col_ = m.voltage.empty() ? require("voltage", "voltage_v") : require("voltage", m.voltage);
+        voltage_scale_ = ends_with(lower_names_[static_cast<std::size_t>(voltage_col_)], "_mv") ? 1e-3 : 1.0;
+
+        // Current.
+        if (options.current_source == CurrentSource::Shunt) {
+            shunt_col_ = find("shunt_mv");
+            if (shunt_col_ < 0) {
+                throw InputError(info_.path, header_line_, 0,
+                                 "current source \"shunt\" needs a shunt_mv column; columns found: " + columns_found());
+            }
+            cal_ = options.shunt;
+            if (!(std::isfinite(cal_.scale_mv_per_10a) && cal_.scale_mv_per_10a != 0.0f &&
+                  std::isfinite(cal_.offset_ma))) {
+                throw InputError(info_.path, 0, 0, "shunt calibration needs a finite, non-zero scale and a finite offset");
+            }
+        } else {
+            if (!m.current.empty()) {
+                current_col_ = require("current", m.current);
+            } else {
+                current_col_ = find("current_a");
+                if (current_col_ < 0) current_col_ = find("current_ma");
+                if (current_col_ < 0) missing("current", "(expected current_a or current_ma)");
+            }
+            const std::string& cname = lower_names_[static_cast<std::size_t>(current_col_)];
+            if (m.current_scale_to_a != 0.0) {
+                if (!std::isfinite(m.current_scale_to_a)) {
+                    throw InputError(info_.path, 0, 0, "current scale must be a finite, non-zero number of amps per unit");
+                }
+                current_scale_ = m.current_scale_to_a;
+            } else if (ends_with(cname, "_ma")) {
+                current_scale_ = 1e-3;
+            } else if (ends_with(cname, "_a")) {
+                current_scale_ = 1.0;
+            } else {
+                throw InputError(info_.path, header_line_, current_col_ + 1,
+                                 "cannot tell the unit of current column \"" +
+                                     names_[static_cast<std::size_t>(current_col_)] +
+                                     "\": expected a name ending in _a or _ma, or a current scale (amps per unit)");
+            }
+            if (m.current_negative_is_discharge) current_scale_ = -current_scale_;
+        }
+
+        // Cells.
+        std::vector<int> cells;
+        std::vector<std::string> cell_names;
+        if (!m.cells.empty()) {
+            for (const std::string& c : m.cells) {
+                cells.push_back(require("cell voltage", c));
+                cell_names.push_back(c);
+            }
+        } else {
+            // cell1_v, cell2_v, ... numbered 1..N without gaps.
+            std::vector<std::pair<long, int>> numbered;
+            for (std::size_t i = 0; i < lower_names_.size(); ++i) {
+                const std::string& n = lower_names_[i];
+                if (n.size() < 7 || n.compare(0, 4, "cell") != 0 || !ends_with(n, "_v")) continue;
+                const std::string digits = n.substr(4, n.size() - 6);
+                if (digits.empty() || digits.size() > 3 ||
+                    digits.find_first_not_of("0123456789") != std::string::npos)
+                    continue;
+                numbered.emplace_back(std::stol(digits), static_cast<int>(i));
+            }
+            std::sort(numbered.begin(), numbered.end());
+            for (std::size_t k = 0; k < numbered.size(); ++k) {
+                const long want = static_cast<long>(k) + 1;
+                if (k > 0 && numbered[k].first == numbered[k - 1].first) {
+                    throw InputError(info_.path, header_line_, numbered[k].second + 1,
+                                     "column cell" + std::to_string(numbered[k].first) +
+                                         "_v appears twice in the header; expected unique column names");
+                }
+                if (numbered[k].first != want) {
+                    throw InputError(info_.path, header_line_, 0,
+                                     "cell voltage columns must be numbered cell1_v..cellN_v without gaps; cell" +
+                                         std::to_string(want) + "_v is missing; columns found: " + columns_found());
+                }
+                cells.push_back(numbered[k].second);
+                cell_names.push_back(names_[static_cast<std::size_t>(numbered[k].second)]);
+            }
+        }
+        if (cells.size() > static_cast<std::size_t>(core::kMaxCells)) {
+            info_.notes.push_back("columns " + cell_names[core::kMaxCells] + ".." + cell_names.back() +
+                                  " dropped: at most " + std::to_string(core::kMaxCells) +
+                                  " cell voltages are supported");
+            cells.resize(core::kMaxCells);
+        }
+        for (int c : cells) {
+            cell_cols_.push_back(c);
+            cell_scales_.push_back(ends_with(lower_names_[static_cast<std::size_t>(c)], "_mv") ? 1e-3 : 1.0);
+        }
+        info_.cell_count = static_cast<int>(cell_cols_.size());
+
+        // Temperature (optional unless named explicitly).
+        temp_col_ = m.temperature.empty() ? find("temperature_c") : require("temperature", m.temperature);
+        info_.has_temperature = temp_col_ >= 0;
+    }
+
+    bool parse_row(core::Sample& out) override {
+        out = core::Sample{};
+        if (!get_time_us(static_cast<std::size_t>(time_col_), time_factor_us_, time_factor_int_, out.time_us))
+            return false;
+        double v = 0.0;
+        const std::size_t vc = static_cast<std::size_t>(voltage_col_);
+        if (!get_number(vc, v)) return false;
+        out.voltage_v = to_float(v * voltage_scale_, vc);
+        if (shunt_col_ >= 0) {
+            const std::size_t sc = static_cast<std::size_t>(shunt_col_);
+            if (!get_number(sc, v)) return false;
+            const float ma = core::current_ma_from_shunt_mv(to_float(v, sc), cal_);
+            if (!std::isfinite(ma)) {
+                throw InputError(info_.path, lines_.line_number(), shunt_col_ + 1,
+                                 "shunt voltage " + text::quote_for_message(fields_[sc]) +
+                                     " gives a current out of range");
+            }
+            out.current_a = ma / 1000.0f;
+        } else {
+            const std::size_t cc = static_cast<std::size_t>(current_col_);
+            if (!get_number(cc, v)) return false;
+            out.current_a = to_float(v * current_scale_, cc);
+        }
+        out.cell_count = static_cast<std::uint8_t>(cell_cols_.size());
+        for (std::size_t k = 0; k < cell_cols_.size(); ++k) {
+            const std::size_t c = static_cast<std::size_t>(cell_cols_[k]);
+            if (!get_number(c, v)) return false;
+            out.cell_voltage_v[k] = to_float(v * cell_scales_[k], c);
+        }
+        if (temp_col_ >= 0) {
+            const std::size_t tc = static_cast<std::size_t>(temp_col_);
+            if (!get_number(tc, v)) return false;
+            out.temperature_c = to_float(v, tc);
+            out.has_temperature = true;
+        }
+        return true;
+    }
+
+    long header_line_ = 0;
+    std::vector<std::string> names_;
+    std::vector<std::string> lower_names_;
+    int time_col_ = -1;
+    double time_factor_us_ = 1e6;
+    std::uint64_t time_factor_int_ = 0;
+    int voltage_col_ = -1;
+    double voltage_scale_ = 1.0;
+    int current_col_ = -1;
+    double current_scale_ = 1.0;
+    int shunt_col_ = -1;
+    core::ShuntCalibration cal_;
+    std::vector<int> cell_cols_;
+    std::vector<double> cell_scales_;
+    int temp_col_ = -1;
+};
+
+}  // namespace
+
+std::unique_ptr<SampleReader> open_raw_pbms(const std::string& path, const ReaderOptions& options) {
+    return std::unique_ptr<SampleReader>(new RawPbmsReader(path, options));
+}
+
+std::unique_ptr<SampleReader> open_csv(const std::string& path, const ReaderOptions& options) {
+    return std::unique_ptr<SampleReader>(new HeaderedCsvReader(path, options));
+}
+
+}  // namespace host
+}  // namespace battsim

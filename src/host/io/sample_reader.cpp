@@ -1,0 +1,152 @@
+// Format names and open_reader(): opens a log and picks its reader from the content.
+#include "host/io/sample_reader.h"
+
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <string_view>
+#include <vector>
+
+#include "host/io/csv_reader.h"
+#include "host/io/dataflash_reader.h"
+#include "host/io/ulog_reader.h"
+
+namespace battsim {
+namespace host {
+
+const char* to_string(LogFormat f) {
+    switch (f) {
+        case LogFormat::Auto: return "auto";
+        case LogFormat::RawPbms: return "raw";
+        case LogFormat::Csv: return "csv";
+        case LogFormat::DataflashText: return "dataflash-text";
+        case LogFormat::DataflashBinary: return "dataflash-bin";
+        case LogFormat::Ulog: return "ulog";
+    }
+    return "unknown";
+}
+
+LogFormat parse_log_format(const std::string& name) {
+    for (LogFormat f : {LogFormat::Auto, LogFormat::RawPbms, LogFormat::Csv, LogFormat::DataflashText,
+                        LogFormat::DataflashBinary, LogFormat::Ulog}) {
+        if (name == to_string(f)) return f;
+    }
+    throw std::invalid_argument("unknown log format \"" + name +
+                                "\"; expected one of auto, raw, csv, dataflash-text, dataflash-bin, ulog");
+}
+
+namespace {
+
+constexpr std::size_t kPeekBytes = 64 * 1024;
+constexpr int kFmtSearchLines = 100;
+
+// Reads up to kPeekBytes from the start of the file; throws InputError if the file cannot
+// be read or is empty.
+std::vector<unsigned char> peek(const std::string& path) {
+    errno = 0;
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (f == nullptr) {
+        const int err = errno;
+        throw InputError(path, 0, 0, std::string("cannot open file: ") + (err ? std::strerror(err) : "unknown error"));
+    }
+    struct stat st;
+    if (::fstat(::fileno(f), &st) == 0 && S_ISDIR(st.st_mode)) {
+        std::fclose(f);
+        throw InputError(path, 0, 0, "cannot open file: it is a directory, expected a log file");
+    }
+    std::vector<unsigned char> buf(kPeekBytes);
+    errno = 0;
+    const std::size_t got = std::fread(buf.data(), 1, buf.size(), f);
+    const bool failed = std::ferror(f) != 0;
+    const int err = errno;
+    std::fclose(f);
+    if (failed) {
+        throw InputError(path, 0, 0, std::string("read error: ") + (err ? std::strerror(err) : "unknown error"));
+    }
+    if (got == 0) throw InputError(path, 0, 0, "file is empty");
+    buf.resize(got);
+    return buf;
+}
+
+LogFormat detect(const std::string& path, const std::vector<unsigned char>& head) {
+    static const unsigned char kUlogMagic[7] = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35};
+    if (head.size() >= sizeof kUlogMagic && std::memcmp(head.data(), kUlogMagic, sizeof kUlogMagic) == 0)
+        return LogFormat::Ulog;
+    if (head.size() >= 2 && head[0] == 0xA3 && head[1] == 0x95) return LogFormat::DataflashBinary;
+
+    std::string_view txt(reinterpret_cast<const char*>(head.data()), head.size());
+    if (txt.size() >= 3 && txt.compare(0, 3, "\xEF\xBB\xBF") == 0) txt.remove_prefix(3);
+
+    // Split the peeked text into lines (the last one may be incomplete).
+    std::vector<std::string_view> lines;
+    {
+        std::size_t start = 0;
+        while (start < txt.size() && lines.size() < static_cast<std::size_t>(kFmtSearchLines)) {
+            std::size_t nl = txt.find('\n', start);
+            if (nl == std::string_view::npos) nl = txt.size();
+            std::string_view l = txt.substr(start, nl - start);
+            if (!l.empty() && l.back() == '\r') l.remove_suffix(1);
+            lines.push_back(l);
+            start = nl + 1;
+        }
+    }
+    for (std::string_view l : lines) {
+        const std::size_t b = l.find_first_not_of(" \t");
+        if (b != std::string_view::npos && l.compare(b, 4, "FMT,") == 0) return LogFormat::DataflashText;
+    }
+    if (txt.find('\0') != std::string_view::npos) {
+        throw InputError(path, 0, 0,
+                         "unrecognised binary file: expected a ULog (.ulg), DataFlash (.bin) or text (CSV) log");
+    }
+
+    // First non-blank line: all numbers means no header row.
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+        if (lines[i].find_first_not_of(" \t") == std::string_view::npos) continue;
+        std::vector<std::string_view> fields;
+        long bad = 0;
+        if (!text::split_fields(lines[i], fields, bad)) return LogFormat::Csv;
+        bool numeric = true;
+        for (std::size_t k = 0; k < fields.size(); ++k) {
+            double v = 0.0;
+            const text::NumberStatus st = text::parse_number(fields[k], v);
+            if (st == text::NumberStatus::NotANumber ||
+                (st == text::NumberStatus::Empty && !(k + 1 == fields.size() && k > 0))) {
+                numeric = false;
+                break;
+            }
+        }
+        if (!numeric) return LogFormat::Csv;
+        const std::size_t n = fields.size();
+        if (n == 8 || (n == 9 && fields[8].empty())) return LogFormat::RawPbms;
+        throw InputError(path, static_cast<long>(i) + 1, 0,
+                         "cannot detect the log format: the first line holds " + std::to_string(n) +
+                             " fields of numbers and no header; expected a header row (CSV) or the 8 fields "
+                             "of a predictive-bms log (time_ms, bus_voltage_v, cell1_v..cell4_v, current_ma, "
+                             "shunt_mv)");
+    }
+    return LogFormat::Csv;
+}
+
+}  // namespace
+
+LogFormat detect_log_format(const std::string& path) { return detect(path, peek(path)); }
+
+std::unique_ptr<SampleReader> open_reader(const std::string& path, const ReaderOptions& options) {
+    const std::vector<unsigned char> head = peek(path);
+    LogFormat format = options.format;
+    if (format == LogFormat::Auto) format = detect(path, head);
+    switch (format) {
+        case LogFormat::RawPbms: return open_raw_pbms(path, options);
+        case LogFormat::Csv: return open_csv(path, options);
+        case LogFormat::DataflashText: return open_dataflash_text(path, options);
+        case LogFormat::DataflashBinary: return open_dataflash_binary(path, options);
+        case LogFormat::Ulog: return open_ulog(path, options);
+        case LogFormat::Auto: break;
+    }
+    throw InputError(path, 0, 0, "cannot detect the log format");
+}
+
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,96 @@
+// Streaming readers: every supported log format becomes a sequence of core::Sample.
+// Host only (exceptions allowed). A reader never loads the whole file.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/sample.h"
+#include "core/sensor.h"
+
+namespace battsim {
+namespace host {
+
+// Bad input: carries where it happened and what was expected, so the CLI can print
+// "file:line:column: message" and exit non-zero.
+class InputError : public std::runtime_error {
+public:
+    InputError(std::string file, long line, long column, const std::string& message)
+        : std::runtime_error(format(file, line, column, message)),
+          file_(std::move(file)), line_(line), column_(column), message_(message) {}
+    const std::string& file() const { return file_; }
+    long line() const { return line_; }      // 1-based; 0 = not applicable (binary: see message)
+    long column() const { return column_; }  // 1-based field number; 0 = not applicable
+    const std::string& message() const { return message_; }
+
+private:
+    static std::string format(const std::string& file, long line, long column, const std::string& msg) {
+        std::string s = file;
+        if (line > 0) s += ":" + std::to_string(line);
+        if (column > 0) s += ":" + std::to_string(column);
+        return s + ": " + msg;
+    }
+    std::string file_;
+    long line_;
+    long column_;
+    std::string message_;
+};
+
+enum class LogFormat { Auto, RawPbms, Csv, DataflashText, DataflashBinary, Ulog };
+
+const char* to_string(LogFormat f);
+// Accepts "auto", "raw", "csv", "dataflash-text", "dataflash-bin", "ulog"; throws std::invalid_argument.
+LogFormat parse_log_format(const std::string& name);
+
+enum class CurrentSource { Auto, Current, Shunt };
+
+// How headered CSV columns map to sample fields. Empty = use the default names
+// (time_s|time_ms|time_us, voltage_v, current_a|current_ma, cellN_v, temperature_c).
+struct ColumnMapping {
+    std::string time;            // column name
+    double time_scale_to_s = 0;  // 0 = infer from the name suffix (_s, _ms, _us); else multiply
+    std::string voltage;
+    std::string current;
+    double current_scale_to_a = 0;  // 0 = infer (_a, _ma); else multiply
+    bool current_negative_is_discharge = false;
+    std::vector<std::string> cells;  // in order cell 1..N
+    std::string temperature;
+};
+
+struct ReaderOptions {
+    LogFormat format = LogFormat::Auto;
+    CurrentSource current_source = CurrentSource::Auto;  // raw logs: Auto = logged current_ma
+    core::ShuntCalibration shunt;
+    ColumnMapping columns;
+};
+
+// What the reader found out about the log, for summaries and the README tables.
+struct SourceInfo {
+    std::string path;
+    LogFormat format = LogFormat::Auto;
+    int cell_count = 0;
+    bool has_temperature = false;
+    std::vector<std::string> notes;  // repairs and skipped lines, human readable, with line numbers
+};
+
+class SampleReader {
+public:
+    virtual ~SampleReader() = default;
+    // Fills `out` with the next sample; false at the end of the log. Throws InputError
+    // for input it cannot read or repair.
+    virtual bool next(core::Sample& out) = 0;
+    virtual const SourceInfo& info() const = 0;
+};
+
+// Opens `path` (throws InputError if missing/unreadable/empty) and detects the format
+// from the content unless options.format says otherwise.
+std::unique_ptr<SampleReader> open_reader(const std::string& path, const ReaderOptions& options);
+
+// The format open_reader() would pick for `path` with options.format == Auto (never
+// returns Auto). Reads only the first 64 KiB. Throws InputError like open_reader().
+LogFormat detect_log_format(const std::string& path);
+
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,211 @@
+#include "host/report/summary.h"
+
+#include <cmath>
+
+namespace battsim {
+namespace host {
+
+using nlohmann::json;
+
+double round_sig(double x, int digits) {
+    if (!std::isfinite(x) || x == 0.0) return std::isfinite(x) ? 0.0 : x;
+    const double mag = std::floor(std::log10(std::fabs(x)));
+    const double scale = std::pow(10.0, digits - 1 - mag);
+    return std::round(x * scale) / scale;
+}
+
+void SummaryAccumulator::Totals::add(const Totals& o) {
+    n += o.n;
+    capacity_ah += o.capacity_ah;
+    resistance_ohm += o.resistance_ohm;
+    error_v += o.error_v;
+    abs_error_v += o.abs_error_v;
+    sq_error_v += o.sq_error_v;
+    adapted_error_v += o.adapted_error_v;
+    adapted_abs_error_v += o.adapted_abs_error_v;
+    adapted_sq_error_v += o.adapted_sq_error_v;
+}
+
+SummaryAccumulator::SummaryAccumulator(size_t max_buckets) : max_buckets_(max_buckets < 16 ? 16 : max_buckets) {
+    buckets_.reserve(max_buckets_);
+}
+
+void SummaryAccumulator::push(const Bucket& b) {
+    if (buckets_.size() == max_buckets_) {
+        // Halve the resolution: merge neighbours, double the samples per bucket.
+        size_t w = 0;
+        for (size_t r = 0; r + 1 < buckets_.size(); r += 2) {
+            Bucket m = buckets_[r];
+            m.last_us = buckets_[r + 1].last_us;
+            m.totals.add(buckets_[r + 1].totals);
+            buckets_[w++] = m;
+        }
+        buckets_.resize(w);
+        per_bucket_ *= 2;
+    }
+    buckets_.push_back(b);
+}
+
+void SummaryAccumulator::add(const core::MonitorStatus& s) {
+    ++samples_;
+    latest_ = s;
+    have_latest_ = true;
+    if (!s.sample_valid) return;
+    ++valid_samples_;
+    if (!have_time_) first_time_us_ = s.time_us;
+    have_time_ = true;
+    last_time_us_ = s.time_us;
+    last_ = s;
+    have_last_ = true;
+    if (!s.initialised) return;
+    if (!have_initial_) {
+        have_initial_ = true;
+        initial_time_us_ = s.time_us;
+        initial_consumed_mah_ = s.consumed_mah;
+        initial_consumed_mwh_ = s.consumed_mwh;
+        initial_forced_ = s.initial_forced;
+    }
+    if (s.flying) ++flying_samples_;
+    if (!have_flight_ && !s.flying) return;  // before take-off
+    if (!have_flight_) {
+        have_flight_ = true;
+        flight_first_us_ = s.time_us;
+        first_flying_ = s;
+    }
+
+    Totals t;
+    t.n = 1;
+    t.capacity_ah = s.capacity_ah;
+    t.resistance_ohm = s.resistance_ohm;
+    const double e = static_cast<double>(s.voltage_v) - s.model_voltage_v;
+    const double ea = static_cast<double>(s.voltage_v) - s.adapted_model_voltage_v;
+    t.error_v = e;
+    t.abs_error_v = std::fabs(e);
+    t.sq_error_v = e * e;
+    t.adapted_error_v = ea;
+    t.adapted_abs_error_v = std::fabs(ea);
+    t.adapted_sq_error_v = ea * ea;
+    running_.add(t);
+
+    if (open_count_ == 0) {
+        open_ = Bucket{};
+        open_.first_us = s.time_us;
+        open_.remaining_time_s = s.remaining_time_s;
+        open_.time_valid = s.time_valid;
+    }
+    open_.last_us = s.time_us;
+    open_.totals.add(t);
+    if (++open_count_ >= per_bucket_) {
+        push(open_);
+        open_count_ = 0;
+    }
+    if (s.flying) {
+        flight_last_us_ = s.time_us;
+        at_last_flying_ = running_;
+        last_flying_ = s;
+    }
+}
+
+namespace {
+json mean_or_null(double sum, double n) { return n > 0 ? json(round_sig(sum / n)) : json(nullptr); }
+}  // namespace
+
+json SummaryAccumulator::to_json(int cells) const {
+    json j;
+    j["samples"] = {{"total", samples_}, {"valid", valid_samples_}, {"flying", flying_samples_}};
+    j["duration_s"] = have_time_ ? round_sig((last_time_us_ - first_time_us_) * 1e-6, 7) : 0.0;
+
+    if (!have_flight_) {
+        j["flight"] = nullptr;
+    } else {
+        const double start_s = flight_first_us_ * 1e-6;
+        const double dur_s = (flight_last_us_ - flight_first_us_) * 1e-6;
+        const uint64_t cut20_us = flight_first_us_ + static_cast<uint64_t>(0.2 * (flight_last_us_ - flight_first_us_));
+
+        // Buckets inside the flight (the open one too), for the 20 % means and time points.
+        std::vector<Bucket> all = buckets_;
+        if (open_count_ > 0) all.push_back(open_);
+        Totals first20;
+        for (const Bucket& b : all) {
+            if (b.first_us > cut20_us) break;
+            first20.add(b.totals);
+        }
+        auto remaining_at = [&](double fraction) -> json {
+            const uint64_t t = flight_first_us_ + static_cast<uint64_t>(fraction * (flight_last_us_ - flight_first_us_));
+            for (const Bucket& b : all) {
+                if (b.first_us >= t) return b.time_valid ? json(round_sig(b.remaining_time_s)) : json(nullptr);
+            }
+            return nullptr;
+        };
+        const Totals& f = at_last_flying_;
+        json flight;
+        flight["start_s"] = round_sig(start_s, 9);
+        flight["end_s"] = round_sig(flight_last_us_ * 1e-6, 9);
+        flight["duration_s"] = round_sig(dur_s, 7);
+        flight["samples"] = static_cast<uint64_t>(f.n);
+        flight["capacity_ah"] = {{"mean", mean_or_null(f.capacity_ah, f.n)},
+                                 {"first20_mean", mean_or_null(first20.capacity_ah, first20.n)},
+                                 {"final", round_sig(last_flying_.capacity_ah)}};
+        flight["resistance_ohm"] = {{"mean", mean_or_null(f.resistance_ohm, f.n)},
+                                    {"first20_mean", mean_or_null(first20.resistance_ohm, first20.n)},
+                                    {"final", round_sig(last_flying_.resistance_ohm)}};
+        flight["voltage_error_v"] = {
+            {"model", {{"mean", mean_or_null(f.error_v, f.n)},
+                       {"mean_abs", mean_or_null(f.abs_error_v, f.n)},
+                       {"rms", f.n > 0 ? json(round_sig(std::sqrt(f.sq_error_v / f.n))) : json(nullptr)}}},
+            {"adapted", {{"mean", mean_or_null(f.adapted_error_v, f.n)},
+                         {"mean_abs", mean_or_null(f.adapted_abs_error_v, f.n)},
+                         {"rms", f.n > 0 ? json(round_sig(std::sqrt(f.adapted_sq_error_v / f.n))) : json(nullptr)}}}};
+        flight["consumed"] = {
+            {"ah", round_sig((last_flying_.consumed_mah - first_flying_.consumed_mah) * 1e-3)},
+            {"wh", round_sig((last_flying_.consumed_mwh - first_flying_.consumed_mwh) * 1e-3)}};
+        flight["remaining_time_s"] = {{"at10", remaining_at(0.1)}, {"at20", remaining_at(0.2)}, {"at50", remaining_at(0.5)}};
+        flight["total_time_s"] = {{"final", last_flying_.time_valid ? json(round_sig(last_flying_.total_time_s)) : json(nullptr)}};
+        json scores = json::array();
+        for (int c = 0; c < cells && c < core::kMaxCells; ++c) scores.push_back(round_sig(last_flying_.cell_score[c], 4));
+        flight["cell_scores"] = scores;
+        j["flight"] = flight;
+    }
+
+    // Totals at the end of the log, including the initial estimate of charge drawn.
+    if (have_last_ && last_.initialised) {
+        j["consumed"] = {{"ah", round_sig(last_.consumed_mah * 1e-3)}, {"wh", round_sig(last_.consumed_mwh * 1e-3)}};
+    } else {
+        j["consumed"] = nullptr;
+    }
+
+    if (have_initial_) {
+        j["initial_state"] = {{"time_s", round_sig(initial_time_us_ * 1e-6, 9)},
+                              {"consumed_mah", round_sig(initial_consumed_mah_)},
+                              {"consumed_mwh", round_sig(initial_consumed_mwh_)},
+                              {"from_rest", !initial_forced_}};
+    } else {
+        j["initial_state"] = nullptr;
+    }
+
+    json warnings = json::array();
+    if (have_latest_) {
+        const core::MonitorStatus& last_ = latest_;
+        for (int w = 0; w < core::kWarnCount; ++w) {
+            const uint8_t bit = static_cast<uint8_t>(1u << w);
+            if (!(last_.warnings_raised & bit)) continue;
+            json e;
+            e["name"] = core::warning_name(static_cast<core::Warning>(w));
+            e["first_time_s"] = round_sig(last_.warning_time_us[w] * 1e-6, 9);
+            if (have_flight_) {
+                e["flight_time_s"] = last_.warning_time_us[w] >= flight_first_us_
+                                         ? json(round_sig((last_.warning_time_us[w] - flight_first_us_) * 1e-6, 7))
+                                         : json(nullptr);
+            }
+            e["active_at_end"] = (last_.warnings & bit) != 0;
+            if (w == core::kWarnCellOutlier && last_flying_.outlier_cell >= 0) e["cell"] = last_flying_.outlier_cell + 1;
+            warnings.push_back(e);
+        }
+        j["sensor_fault_samples"] = last_.sensor_fault_samples;
+    }
+    j["warnings"] = warnings;
+    return j;
+}
+
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,73 @@
+// Per-log summary: the quantities of the dissertation's appendix table and more,
+// accumulated sample by sample in memory that does not grow with the log's length.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/monitor.h"
+
+namespace battsim {
+namespace host {
+
+constexpr const char* kSummarySchema = "battsim.summary";
+constexpr int kSummaryVersion = 1;
+
+// Rounds to `digits` significant digits so summaries print short, stable numbers.
+double round_sig(double x, int digits = 6);
+
+class SummaryAccumulator {
+public:
+    // Bucket count before neighbouring buckets merge; flights shorter than this are
+    // summarised exactly, longer ones to within one bucket of the 20 % boundary.
+    explicit SummaryAccumulator(size_t max_buckets = 16384);
+
+    void add(const core::MonitorStatus& s);
+
+    struct Totals {
+        double n = 0;
+        double capacity_ah = 0, resistance_ohm = 0;
+        double error_v = 0, abs_error_v = 0, sq_error_v = 0;
+        double adapted_error_v = 0, adapted_abs_error_v = 0, adapted_sq_error_v = 0;
+        void add(const Totals& o);
+    };
+    struct Bucket {
+        uint64_t first_us = 0, last_us = 0;
+        float remaining_time_s = 0;  // at the bucket's first sample
+        bool time_valid = false;
+        Totals totals;
+    };
+
+    // Everything except the input description; `cells` = pack cell count.
+    nlohmann::json to_json(int cells) const;
+
+    uint64_t samples() const { return samples_; }
+
+private:
+    void push(const Bucket& b);
+
+    size_t max_buckets_;
+    size_t per_bucket_ = 1;
+    std::vector<Bucket> buckets_;
+    Bucket open_;
+    size_t open_count_ = 0;
+
+    uint64_t samples_ = 0, valid_samples_ = 0, flying_samples_ = 0;
+    bool have_time_ = false, have_flight_ = false;
+    uint64_t first_time_us_ = 0, last_time_us_ = 0;
+    uint64_t flight_first_us_ = 0, flight_last_us_ = 0;
+    Totals running_;        // from the first flying sample
+    Totals at_last_flying_; // snapshot of running_ at the last flying sample
+    core::MonitorStatus first_flying_, last_flying_, last_;
+    core::MonitorStatus latest_;  // any sample, valid or not: warnings and fault counts
+    bool have_last_ = false, have_latest_ = false;
+    bool have_initial_ = false;
+    uint64_t initial_time_us_ = 0;
+    float initial_consumed_mah_ = 0, initial_consumed_mwh_ = 0;
+    bool initial_forced_ = false;
+};
+
+}  // namespace host
+}  // namespace battsim

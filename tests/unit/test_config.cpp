@@ -1,0 +1,40 @@
+#include <catch2/catch.hpp>
+
+#include "host/config_json.h"
+
+using namespace battsim::host;
+using nlohmann::json;
+
+TEST_CASE("Config JSON round-trips", "[config]") {
+    LoadedConfig c = default_config();
+    c.monitor.battery.capacity_ah = 2.2f;
+    c.monitor.warnings.cell_outlier_score = 0.7f;
+    LoadedConfig back = config_from_json(config_to_json(c), "test");
+    CHECK(back.monitor.battery.capacity_ah == 2.2f);
+    CHECK(back.monitor.warnings.cell_outlier_score == 0.7f);
+    CHECK(config_to_json(back) == config_to_json(c));
+}
+
+TEST_CASE("Config errors name the key", "[config]") {
+    json j = config_to_json(default_config());
+    j["battery"]["capacity_ahh"] = 1.0;
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("x.json: $.battery.capacity_ahh: unknown key"));
+
+    j = config_to_json(default_config());
+    j["battery"]["capacity_ah"] = "big";
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("$.battery.capacity_ah: expected a number"));
+
+    j = config_to_json(default_config());
+    j["battery"]["capacity_ah"] = -3;
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("out of range"));
+
+    j = config_to_json(default_config());
+    j["battery"]["exponential_capacity_ah"] = 5;
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("must be below capacity_ah"));
+
+    j = config_to_json(default_config());
+    j["schema"] = "other";
+    CHECK_THROWS_AS(config_from_json(j, "x.json"), ConfigError);
+
+    CHECK_THROWS_WITH(load_config_file("/nonexistent/c.json"), Catch::Contains("cannot open"));
+}

@@ -1,0 +1,558 @@
+// CSV-family readers: raw predictive-bms logs, headered CSV, format detection, and
+// every bad-input rule (each writes its own small file under a temp dir).
+#include <catch2/catch.hpp>
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "host/io/csv_reader.h"
+#include "host/io/line_reader.h"
+#include "host/io/sample_reader.h"
+
+using namespace battsim;
+using namespace battsim::host;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A fresh directory under the system temp dir, removed with everything in it.
+class TempDir {
+public:
+    TempDir() {
+        static std::atomic<int> counter{0};
+        dir_ = fs::temp_directory_path() /
+               ("battsim_io_csv_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+        fs::create_directories(dir_);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        fs::remove_all(dir_, ec);
+    }
+    // Writes `content` byte for byte and returns the path.
+    std::string write(const std::string& name, const std::string& content) const {
+        const fs::path p = dir_ / name;
+        std::ofstream out(p, std::ios::binary);
+        out.write(content.data(), static_cast<std::streamsize>(content.size()));
+        return p.string();
+    }
+    std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+private:
+    fs::path dir_;
+};
+
+// Message of the InputError thrown by opening `path` and reading it to the end; "" if none.
+std::string read_error(const std::string& path, const ReaderOptions& opt = ReaderOptions()) {
+    try {
+        auto r = open_reader(path, opt);
+        core::Sample s;
+        while (r->next(s)) {
+        }
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+std::vector<core::Sample> read_all(const std::string& path, const ReaderOptions& opt, SourceInfo* info = nullptr) {
+    auto r = open_reader(path, opt);
+    std::vector<core::Sample> v;
+    core::Sample s;
+    while (r->next(s)) v.push_back(s);
+    if (info) *info = r->info();
+    return v;
+}
+
+bool data_dir_present() { return fs::is_directory(std::string(BATTSIM_DATA_DIR)); }
+
+const char* kRawRow1 = "627,16.57,4.14,4.14,4.14,4.16,47.99,0.39,\n";
+const char* kRawRow2 = "694,16.57,4.14,4.14,4.14,4.16,173.53,0.44,\n";
+const char* kRawRow3 = "760,16.57,4.14,4.14,4.14,4.16,67.81,0.40,\n";
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// Format names and detection
+
+TEST_CASE("log format names round-trip and reject unknown names", "[io]") {
+    for (LogFormat f : {LogFormat::Auto, LogFormat::RawPbms, LogFormat::Csv, LogFormat::DataflashText,
+                        LogFormat::DataflashBinary, LogFormat::Ulog}) {
+        CHECK(parse_log_format(to_string(f)) == f);
+    }
+    CHECK(std::string(to_string(LogFormat::RawPbms)) == "raw");
+    CHECK(std::string(to_string(LogFormat::DataflashBinary)) == "dataflash-bin");
+    CHECK_THROWS_AS(parse_log_format("excel"), std::invalid_argument);
+    CHECK_THROWS_WITH(parse_log_format("excel"), Catch::Contains("expected one of auto, raw, csv"));
+}
+
+TEST_CASE("format is detected from content, not the extension", "[io]") {
+    TempDir t;
+    CHECK(detect_log_format(t.write("a.log", std::string(kRawRow1) + kRawRow2)) == LogFormat::RawPbms);
+    CHECK(detect_log_format(t.write("b.bin", "627,16.57,4.14,4.14,4.14,4.16,47.99,0.39\n")) == LogFormat::RawPbms);
+    CHECK(detect_log_format(t.write("c.ulg", "time_s,voltage_v,current_a\n0,1,2\n")) == LogFormat::Csv);
+    CHECK(detect_log_format(t.write("d.csv", std::string("ULog\x01\x12\x35\x01", 8) + "xxxx")) == LogFormat::Ulog);
+    CHECK(detect_log_format(t.write("e.csv", std::string("\xA3\x95\x80\x80\x59", 5))) == LogFormat::DataflashBinary);
+    CHECK(detect_log_format(t.write("f.csv", "1\n\nArduCopter V3.0.1\nAPM 2\nFMT, 128, 89, FMT, BBnNZ, Type\n")) ==
+          LogFormat::DataflashText);
+    // BOM and CRLF do not hide a raw log.
+    CHECK(detect_log_format(t.write("g.txt", "\xEF\xBB\xBF" "627,16.57,4.14,4.14,4.14,4.16,47.99,0.39,\r\n")) ==
+          LogFormat::RawPbms);
+    // A NaN in the first raw row is still a raw row (the reader then reports it).
+    CHECK(detect_log_format(t.write("h.txt", "627,nan,4.14,4.14,4.14,4.16,47.99,0.39,\n")) == LogFormat::RawPbms);
+}
+
+TEST_CASE("numbers without a header in an unknown layout are rejected", "[io]") {
+    TempDir t;
+    const std::string p = t.write("five.csv", "1,2,3,4,5\n6,7,8,9,10\n");
+    CHECK(read_error(p) == p + ":1: cannot detect the log format: the first line holds 5 fields of numbers and no "
+                               "header; expected a header row (CSV) or the 8 fields of a predictive-bms log "
+                               "(time_ms, bus_voltage_v, cell1_v..cell4_v, current_ma, shunt_mv)");
+}
+
+TEST_CASE("unknown binary content is rejected", "[io]") {
+    TempDir t;
+    const std::string p = t.write("junk.bin", std::string("\x7F" "ELF\x02\x01\x01\x00\x00\x00", 10));
+    CHECK(read_error(p) ==
+          p + ": unrecognised binary file: expected a ULog (.ulg), DataFlash (.bin) or text (CSV) log");
+}
+
+// ---------------------------------------------------------------------------------------
+// Raw predictive-bms reader
+
+TEST_CASE("raw reader: fields, units and trailing comma", "[io]") {
+    TempDir t;
+    const std::string p = t.write("raw.csv", std::string(kRawRow1) + kRawRow2 + "826,16.56,4.13,4.14,4.14,4.15,67.81,0.40\n");
+    SourceInfo info;
+    const auto s = read_all(p, ReaderOptions(), &info);
+    REQUIRE(s.size() == 3);
+    CHECK(info.format == LogFormat::RawPbms);
+    CHECK(info.cell_count == 4);
+    CHECK_FALSE(info.has_temperature);
+    CHECK(info.notes.empty());
+    CHECK(s[0].time_us == 627000u);
+    CHECK(s[0].voltage_v == 16.57f);
+    CHECK(s[0].current_a == Approx(0.04799).epsilon(1e-6));
+    CHECK(s[0].cell_count == 4);
+    CHECK(s[0].cell_voltage_v[3] == 4.16f);
+    CHECK(s[1].current_a == Approx(0.17353).epsilon(1e-6));
+    CHECK(s[2].time_us == 826000u);  // 8 fields, no trailing comma
+    CHECK(s[2].cell_voltage_v[0] == 4.13f);
+    CHECK_FALSE(s[0].has_temperature);
+}
+
+TEST_CASE("raw reader: current from the shunt voltage", "[io]") {
+    TempDir t;
+    const std::string p = t.write("raw.csv", std::string(kRawRow1) + kRawRow2);
+    ReaderOptions opt;
+    opt.current_source = CurrentSource::Shunt;
+    const auto s = read_all(p, opt);
+    REQUIRE(s.size() == 2);
+    CHECK(s[0].current_a == Approx((0.39 / 3.7834625 * 10000 - 982.8158579) / 1000).margin(1e-5));
+    CHECK(s[1].current_a == Approx((0.44 / 3.7834625 * 10000 - 982.8158579) / 1000).margin(1e-5));
+    opt.format = LogFormat::RawPbms;
+    opt.shunt.scale_mv_per_10a = 0.0f;
+    CHECK(read_error(p, opt) == p + ": shunt calibration needs a finite, non-zero scale and a finite offset");
+}
+
+TEST_CASE("raw reader: CRLF, BOM, spaces and blank lines", "[io]") {
+    TempDir t;
+    const std::string p = t.write("crlf.csv",
+                                  "\xEF\xBB\xBF" "627, 16.57 ,4.14,4.14,4.14,4.16,47.99,0.39,\r\n"
+                                  "\r\n"
+                                  "694,16.57,4.14,4.14,4.14,4.16,+173.53,0.44,\r\n");
+    SourceInfo info;
+    const auto s = read_all(p, ReaderOptions(), &info);
+    REQUIRE(s.size() == 2);
+    CHECK(s[0].voltage_v == 16.57f);
+    CHECK(s[1].time_us == 694000u);
+    CHECK(s[1].current_a == Approx(0.17353));
+    REQUIRE(info.notes.size() == 1);
+    CHECK(info.notes[0] == "1 blank line skipped (first on line 2)");
+}
+
+// ---------------------------------------------------------------------------------------
+// Bad input: each rule with its exact message
+
+TEST_CASE("bad input: missing file", "[io]") {
+    TempDir t;
+    const std::string p = t.path("does_not_exist.csv");
+    CHECK(read_error(p) == p + ": cannot open file: No such file or directory");
+    CHECK_THROWS_AS(open_raw_pbms(p, ReaderOptions()), InputError);
+    CHECK_THROWS_AS(open_csv(p, ReaderOptions()), InputError);
+}
+
+TEST_CASE("bad input: a directory", "[io]") {
+    TempDir t;
+    const std::string p = t.path("");
+    CHECK(read_error(p) == p + ": cannot open file: it is a directory, expected a log file");
+}
+
+TEST_CASE("bad input: empty file", "[io]") {
+    TempDir t;
+    const std::string p = t.write("empty.csv", "");
+    CHECK(read_error(p) == p + ": file is empty");
+    CHECK_THROWS_WITH(open_raw_pbms(p, ReaderOptions()), p + ": file is empty");
+    CHECK_THROWS_WITH(open_csv(p, ReaderOptions()), p + ": file is empty");
+    const std::string b = t.write("blank.csv", "\n  \n\n");
+    CHECK_THROWS_WITH(open_csv(b, ReaderOptions()), b + ": file holds only blank lines; expected a header row");
+    CHECK_THROWS_WITH(open_raw_pbms(b, ReaderOptions()), b + ": no data rows (the file holds only blank lines)");
+}
+
+TEST_CASE("bad input: header only", "[io]") {
+    TempDir t;
+    const std::string p = t.write("hdr.csv", "time_s,voltage_v,current_a\n");
+    CHECK(read_error(p) == p + ": no data rows after the header on line 1");
+    const std::string q = t.write("hdr2.csv", "time_s,voltage_v,current_a\n\n\n");
+    CHECK(read_error(q) == q + ": no data rows after the header on line 1");
+}
+
+TEST_CASE("bad input: wrong column count", "[io]") {
+    TempDir t;
+    const std::string p = t.write("raw.csv", std::string(kRawRow1) + "694,16.57,4.14,4.14,4.14,4.16,173.53\n" + kRawRow3);
+    CHECK(read_error(p) == p + ":2: expected 8 fields (9 with a trailing comma): time_ms, bus_voltage_v, "
+                               "cell1_v..cell4_v, current_ma, shunt_mv, found 7");
+    const std::string q = t.write("raw10.csv", std::string(kRawRow1) + "694,16.57,4.14,4.14,4.14,4.16,173.53,0.44,1,\n");
+    CHECK(read_error(q) == q + ":2: expected 8 fields (9 with a trailing comma): time_ms, bus_voltage_v, "
+                               "cell1_v..cell4_v, current_ma, shunt_mv, found 10");
+    const std::string c = t.write("hdr.csv", "time_s,voltage_v,current_a\n0,12.0,1.0\n0.1,12.0,1.0,5\n");
+    CHECK(read_error(c) == c + ":3: expected 3 fields (as in the header on line 1), found 4");
+}
+
+TEST_CASE("bad input: non-numeric field", "[io]") {
+    TempDir t;
+    const std::string p = t.write("raw.csv", std::string(kRawRow1) + kRawRow2 + "760,abc,4.14,4.14,4.14,4.16,67.81,0.40,\n");
+    CHECK(read_error(p) == p + ":3:2: expected a number, found \"abc\"");
+    const std::string e = t.write("emptyfield.csv", std::string(kRawRow1) + "694,16.57,,4.14,4.14,4.16,173.53,0.44,\n");
+    CHECK(read_error(e) == e + ":2:3: expected a number, found \"\"");
+    // Locale-style decimal comma and a number with junk after it.
+    const std::string c = t.write("hdr.csv", "time_s,voltage_v,current_a\n0,12.5V,1.0\n");
+    CHECK(read_error(c) == c + ":2:2: expected a number, found \"12.5V\"");
+    const std::string h = t.write("hex.csv", "time_s,voltage_v,current_a\n0,0x10,1.0\n");
+    CHECK(read_error(h) == h + ":2:2: expected a number, found \"0x10\"");
+}
+
+TEST_CASE("bad input: NaN and infinity in any field", "[io]") {
+    TempDir t;
+    const std::string p = t.write("raw.csv", std::string(kRawRow1) + "694,16.57,nan,4.14,4.14,4.16,173.53,0.44,\n");
+    CHECK(read_error(p) == p + ":2:3: expected a finite number, found \"nan\"");
+    const std::string q = t.write("raw2.csv", std::string(kRawRow1) + "694,16.57,4.14,4.14,4.14,4.16,173.53,-inf,\n");
+    CHECK(read_error(q) == q + ":2:8: expected a finite number, found \"-inf\"");
+    const std::string r = t.write("raw3.csv", "inf,16.57,4.14,4.14,4.14,4.16,173.53,0.44,\n");
+    CHECK(read_error(r) == r + ":1:1: expected a finite number, found \"inf\"");
+    const std::string c = t.write("hdr.csv", "time_s,voltage_v,current_a,temperature_c\n0,12,1,NaN\n");
+    CHECK(read_error(c) == c + ":2:4: expected a finite number, found \"NaN\"");
+    const std::string big = t.write("big.csv", "time_s,voltage_v,current_a\n0,1e999,1\n");
+    CHECK(read_error(big) == big + ":2:2: expected a number within range, found \"1e999\"");
+    const std::string fl = t.write("float.csv", "time_s,voltage_v,current_a\n0,1e300,1\n");
+    CHECK(read_error(fl) == fl + ":2:2: expected a number that fits a 32-bit float, found \"1e300\"");
+}
+
+TEST_CASE("bad input: time going backwards and negative time", "[io]") {
+    TempDir t;
+    const std::string p = t.write("raw.csv", std::string(kRawRow1) + kRawRow3 + kRawRow2);
+    CHECK(read_error(p) == p + ":3:1: time goes backwards: 0.694000 s is earlier than 0.760000 s on line 2");
+    const std::string c = t.write("hdr.csv", "voltage_v,current_a,time_ms\n12,1,5\n12,1,4\n");
+    CHECK(read_error(c) == c + ":3:3: time goes backwards: 0.004000 s is earlier than 0.005000 s on line 2");
+    const std::string n = t.write("neg.csv", "time_s,voltage_v,current_a\n-0.5,12,1\n");
+    CHECK(read_error(n) == n + ":2:1: expected a time that is not negative, found \"-0.5\"");
+    const std::string huge = t.write("huge.csv", "time_s,voltage_v,current_a\n1e20,12,1\n");
+    CHECK(read_error(huge) == huge + ":2:1: expected a time below 2^63 microseconds, found \"1e20\"");
+    const std::string huge2 = t.write("huge2.csv", "time_ms,voltage_v,current_a\n9999999999999999999,12,1\n");
+    CHECK(read_error(huge2) == huge2 + ":2:1: expected a time below 2^63 microseconds, found \"9999999999999999999\"");
+}
+
+TEST_CASE("bad input: truncated last line is skipped with a note", "[io]") {
+    TempDir t;
+    ReaderOptions opt;
+    SECTION("fewer fields, no newline") {
+        const std::string p = t.write("a.csv", std::string(kRawRow1) + kRawRow2 + "760,16.57,4.1");
+        SourceInfo info;
+        const auto s = read_all(p, opt, &info);
+        CHECK(s.size() == 2);
+        REQUIRE(info.notes.size() == 1);
+        CHECK(info.notes[0] == "line 3: last line is cut off (no newline at the end, it has 3 of 8 fields); skipped");
+    }
+    SECTION("a number cut off") {
+        const std::string p = t.write("b.csv", std::string(kRawRow1) + kRawRow2 + "760,16.57,4.14,4.14,4.14,4.16,67.81,0.4");
+        SourceInfo info;
+        CHECK(read_all(p, opt, &info).size() == 2);
+        REQUIRE(info.notes.size() == 1);
+        CHECK(info.notes[0] == "line 3: last line is cut off (no newline at the end, it lacks the trailing comma "
+                               "every earlier row has, so its last number may be cut off); skipped");
+    }
+    SECTION("an exponent cut off in a headered CSV") {
+        const std::string p = t.write("c.csv", "time_s,voltage_v,current_a\n0,12,1\n0.1,12,1e");
+        SourceInfo info;
+        CHECK(read_all(p, opt, &info).size() == 1);
+        REQUIRE(info.notes.size() == 1);
+        CHECK(info.notes[0] == "line 3: last line is cut off (no newline at the end, its last field \"1e\" is "
+                               "incomplete); skipped");
+    }
+    SECTION("a complete last line without newline is kept") {
+        const std::string p = t.write("d.csv", "time_s,voltage_v,current_a\n0,12,1\n0.1,12,1.5");
+        SourceInfo info;
+        const auto s = read_all(p, opt, &info);
+        REQUIRE(s.size() == 2);
+        CHECK(s[1].current_a == 1.5f);
+        CHECK(info.notes.empty());
+        const std::string r = t.write("e.csv", std::string(kRawRow1) + "694,16.57,4.14,4.14,4.14,4.16,173.53,0.44,");
+        CHECK(read_all(r, opt).size() == 2);
+    }
+    SECTION("the same short line WITH a newline is an error") {
+        const std::string p = t.write("f.csv", std::string(kRawRow1) + kRawRow2 + "760,16.57,4.1\n");
+        CHECK(read_error(p) == p + ":3: expected 8 fields (9 with a trailing comma): time_ms, bus_voltage_v, "
+                                   "cell1_v..cell4_v, current_ma, shunt_mv, found 3");
+    }
+    SECTION("a bad number in the middle of the last line is still an error") {
+        const std::string p = t.write("g.csv", "time_s,voltage_v,current_a\n0,12,1\n0.1,x,1");
+        CHECK(read_error(p) == p + ":3:2: expected a number, found \"x\"");
+    }
+    SECTION("a file whose only data line is cut off has no data") {
+        const std::string p = t.write("h.csv", "time_s,voltage_v,current_a\n0,12");
+        CHECK(read_error(p) == p + ":2: no complete data rows: the only data line is cut off (no newline at the end)");
+    }
+}
+
+TEST_CASE("bad input: duplicate time stamps are kept and noted once", "[io]") {
+    TempDir t;
+    const std::string p = t.write("dup.csv", "time_ms,voltage_v,current_a\n1,12,1\n2,12,1\n2,12,2\n2,12,3\n3,12,1\n3,12,1\n");
+    SourceInfo info;
+    const auto s = read_all(p, ReaderOptions(), &info);
+    REQUIRE(s.size() == 6);
+    CHECK(s[3].current_a == 3.0f);
+    REQUIRE(info.notes.size() == 1);
+    CHECK(info.notes[0] == "3 rows repeat the time stamp of the row before (first on line 4); kept");
+}
+
+TEST_CASE("bad input: headered CSV missing the voltage or current column", "[io]") {
+    TempDir t;
+    const std::string p = t.write("nov.csv", "time_s,current_a,temp\n0,1,2\n");
+    CHECK(read_error(p) == p + ":1: missing voltage column \"voltage_v\"; columns found: time_s, current_a, temp");
+    const std::string q = t.write("noi.csv", "time_s,voltage_v\n0,1\n");
+    CHECK(read_error(q) ==
+          q + ":1: missing current column (expected current_a or current_ma); columns found: time_s, voltage_v");
+    const std::string r = t.write("not.csv", "t,voltage_v,current_a\n0,1,2\n");
+    CHECK(read_error(r) == r + ":1: missing time column (expected time_s, time_ms or time_us); columns found: t, "
+                               "voltage_v, current_a");
+    ReaderOptions opt;
+    opt.columns.voltage = "battery_voltage";
+    CHECK(read_error(p, opt) ==
+          p + ":1: missing voltage column \"battery_voltage\"; columns found: time_s, current_a, temp");
+    // Forcing CSV on a header-less file says what the first line looks like.
+    const std::string raw = t.write("raw.csv", kRawRow1);
+    opt = ReaderOptions();
+    opt.format = LogFormat::Csv;
+    CHECK_THROWS_WITH(read_all(raw, opt), Catch::Contains("(the first line looks like data, not a header row)"));
+}
+
+TEST_CASE("bad input: unit of a mapped column cannot be inferred", "[io]") {
+    TempDir t;
+    const std::string p = t.write("m.csv", "time,battery_voltage,battery_current\n0,24,1\n");
+    ReaderOptions opt;
+    opt.columns.time = "time";
+    opt.columns.voltage = "battery_voltage";
+    opt.columns.current = "battery_current";
+    opt.columns.current_scale_to_a = 1.0;
+    CHECK(read_error(p, opt) == p + ":1:1: cannot tell the unit of time column \"time\": expected a name ending in "
+                                    "_s, _ms or _us, or a time scale (seconds per unit)");
+    opt.columns.time_scale_to_s = 1.0;
+    opt.columns.current_scale_to_a = 0.0;
+    CHECK(read_error(p, opt) == p + ":1:3: cannot tell the unit of current column \"battery_current\": expected a "
+                                    "name ending in _a or _ma, or a current scale (amps per unit)");
+    opt.columns.current_scale_to_a = 1.0;
+    opt.columns.time_scale_to_s = -1.0;
+    CHECK(read_error(p, opt) == p + ": time scale must be a positive number of seconds per unit, got -1");
+}
+
+TEST_CASE("bad input: duplicate column, unclosed quote, bare CR, cell gap, long line", "[io]") {
+    TempDir t;
+    const std::string d = t.write("dup.csv", "time_s,voltage_v,Voltage_V,current_a\n0,1,2,3\n");
+    CHECK(read_error(d) ==
+          d + ":1:3: column \"voltage_v\" appears twice in the header (fields 2 and 3); expected unique column names");
+    const std::string q = t.write("q.csv", "time_s,voltage_v,current_a\n0,\"12,1\n0.1,12,1\n");
+    CHECK(read_error(q) == q + ":2:2: expected a closing '\"' and then a comma or the end of the line");
+    const std::string cr = t.write("cr.csv", "time_s,voltage_v,current_a\r0,12,1\r");
+    CHECK(read_error(cr) ==
+          cr + ":1: the header contains a bare carriage return; expected \"\\n\" or \"\\r\\n\" line ends");
+    const std::string g = t.write("gap.csv", "time_s,voltage_v,current_a,cell1_v,cell3_v\n0,8,1,4,4\n");
+    CHECK(read_error(g) == g + ":1: cell voltage columns must be numbered cell1_v..cellN_v without gaps; cell2_v is "
+                               "missing; columns found: time_s, voltage_v, current_a, cell1_v, cell3_v");
+    const std::string l = t.write("long.csv", "time_s,voltage_v,current_a\n" + std::string(3 * 1024 * 1024, '1') + "\n");
+    CHECK(read_error(l) == l + ":2: line is longer than 1048576 bytes; expected a text log with one record per line");
+}
+
+// ---------------------------------------------------------------------------------------
+// Headered CSV
+
+TEST_CASE("headered CSV: default names, units, cells, temperature", "[io]") {
+    TempDir t;
+    const std::string p = t.write("h.csv",
+                                  "\xEF\xBB\xBF \"time_ms\" , \"voltage_v\",current_ma,cell2_v,cell1_v,temperature_c,"
+                                  "\"note, with comma\"\r\n"
+                                  "1000, 8.1 ,1500,4.06,4.04,21.5,\"a, b\"\r\n"
+                                  "1067,8.0,-250,4.0,4.0,21.6,x\r\n");
+    SourceInfo info;
+    const auto s = read_all(p, ReaderOptions(), &info);
+    REQUIRE(s.size() == 2);
+    CHECK(info.format == LogFormat::Csv);
+    CHECK(info.cell_count == 2);
+    CHECK(info.has_temperature);
+    CHECK(info.notes.empty());
+    CHECK(s[0].time_us == 1000000u);
+    CHECK(s[1].time_us == 1067000u);
+    CHECK(s[0].voltage_v == 8.1f);
+    CHECK(s[0].current_a == Approx(1.5));
+    CHECK(s[1].current_a == Approx(-0.25));
+    CHECK(s[0].cell_count == 2);
+    CHECK(s[0].cell_voltage_v[0] == 4.04f);  // cell1_v, although it comes second
+    CHECK(s[0].cell_voltage_v[1] == 4.06f);
+    CHECK(s[0].has_temperature);
+    CHECK(s[0].temperature_c == 21.5f);
+}
+
+TEST_CASE("headered CSV: time units and sign flip", "[io]") {
+    TempDir t;
+    const std::string p = t.write("s.csv", "time_s,voltage_v,current_a\n0.1,4.1,-2.5\n1.000001,4.0,0.5\n");
+    ReaderOptions opt;
+    opt.columns.current_negative_is_discharge = true;
+    const auto s = read_all(p, opt);
+    REQUIRE(s.size() == 2);
+    CHECK(s[0].time_us == 100000u);
+    CHECK(s[1].time_us == 1000001u);
+    CHECK(s[0].current_a == 2.5f);
+    CHECK(s[1].current_a == -0.5f);
+    const std::string u = t.write("u.csv", "time_us,voltage_v,current_a\n1234567890123456789,4.1,1\n");
+    CHECK(read_all(u, ReaderOptions())[0].time_us == 1234567890123456789ull);
+    const std::string mv = t.write("mv.csv", "time_s,pack_mv,current_a\n0,16570,1\n");
+    opt = ReaderOptions();
+    opt.columns.voltage = "pack_mv";
+    CHECK(read_all(mv, opt)[0].voltage_v == Approx(16.57));
+}
+
+TEST_CASE("headered CSV: shunt current source needs a shunt_mv column", "[io]") {
+    TempDir t;
+    ReaderOptions opt;
+    opt.current_source = CurrentSource::Shunt;
+    const std::string p = t.write("s.csv", "time_ms,voltage_v,shunt_mv\n627,16.57,0.39\n");
+    CHECK(read_all(p, opt)[0].current_a == Approx((0.39 / 3.7834625 * 10000 - 982.8158579) / 1000).margin(1e-5));
+    const std::string q = t.write("q.csv", "time_ms,voltage_v,current_a\n627,16.57,0.39\n");
+    CHECK(read_error(q, opt) ==
+          q + ":1: current source \"shunt\" needs a shunt_mv column; columns found: time_ms, voltage_v, current_a");
+}
+
+TEST_CASE("headered CSV: unused columns are not parsed", "[io]") {
+    TempDir t;
+    const std::string p = t.write("n.csv", "time_s,voltage_v,current_a,chamber_temperature_c\n0,4.1,1,nan\n1,4.1,1,\n");
+    CHECK(read_all(p, ReaderOptions()).size() == 2);
+}
+
+TEST_CASE("line reader streams across block boundaries", "[io]") {
+    TempDir t;
+    // ~6 MB, so lines straddle many 256 KiB blocks; the last line has no newline.
+    std::string content = "time_us,voltage_v,current_ma\n";
+    const int n = 200000;
+    for (int i = 0; i < n; ++i) {
+        content += std::to_string(i * 10) + "," + std::to_string(10 + i % 7) + ".123456789," + std::to_string(i) + "\n";
+    }
+    content.pop_back();
+    const std::string p = t.write("big.csv", content);
+    auto r = open_reader(p, ReaderOptions());
+    core::Sample s;
+    int count = 0;
+    bool ok = true;
+    while (r->next(s)) {
+        ok = ok && s.time_us == static_cast<uint64_t>(count) * 10u &&
+             s.current_a == static_cast<float>(count / 1000.0) &&
+             s.voltage_v == static_cast<float>(10 + count % 7 + 0.123456789);
+        ++count;
+    }
+    CHECK(ok);
+    CHECK(count == n);
+    CHECK(r->info().notes.empty());
+
+    LineReader lines(p);
+    std::string_view line;
+    long last = 0;
+    while (lines.next(line)) last = lines.line_number();
+    CHECK(last == n + 1);
+    CHECK_FALSE(lines.line_had_newline());
+    CHECK(lines.bytes_consumed() == content.size());
+}
+
+// ---------------------------------------------------------------------------------------
+// Real data
+
+TEST_CASE("raw reader on predictive-bms flight 30", "[io][data]") {
+    if (!data_dir_present()) {
+        WARN("data dir " << BATTSIM_DATA_DIR << " absent; skipped");
+        return;
+    }
+    const std::string p = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/30.csv";
+    REQUIRE(detect_log_format(p) == LogFormat::RawPbms);
+    SourceInfo info;
+    const auto s = read_all(p, ReaderOptions(), &info);
+    REQUIRE(s.size() == 5285);
+    CHECK(info.notes.empty());
+    CHECK(info.cell_count == 4);
+    CHECK(s[0].time_us == 627000u);
+    CHECK(s[0].voltage_v == Approx(16.57));
+    CHECK(s[0].current_a == Approx(0.04799).margin(1e-7));
+    CHECK(s[0].cell_voltage_v[0] == Approx(4.14));
+    CHECK(s[0].cell_voltage_v[1] == Approx(4.14));
+    CHECK(s[0].cell_voltage_v[2] == Approx(4.14));
+    CHECK(s[0].cell_voltage_v[3] == Approx(4.16));
+    CHECK(s.back().time_us == 354835000u);
+    CHECK(s.back().voltage_v == Approx(13.92));
+    CHECK(s.back().cell_voltage_v[3] == Approx(2.71));
+
+    ReaderOptions shunt;
+    shunt.current_source = CurrentSource::Shunt;
+    const auto t = read_all(p, shunt);
+    REQUIRE(t.size() == 5285);
+    CHECK(t[0].current_a == Approx((0.39 / 3.7834625 * 10000 - 982.8158579) / 1000).margin(1e-5));
+    // The logged current and the shunt formula agree to the 0.01 mV rounding (<= 13 mA).
+    float worst = 0.0f;
+    for (std::size_t i = 0; i < s.size(); ++i) worst = std::max(worst, std::fabs(s[i].current_a - t[i].current_a));
+    CHECK(worst <= 0.0135f);
+}
+
+TEST_CASE("headered reader with the CMU M100 mapping on flight 1", "[io][data]") {
+    if (!data_dir_present()) {
+        WARN("data dir " << BATTSIM_DATA_DIR << " absent; skipped");
+        return;
+    }
+    const std::string p = std::string(BATTSIM_DATA_DIR) + "/cmu-m100/flights/1.csv";
+    ReaderOptions opt;
+    opt.columns.time = "time";
+    opt.columns.time_scale_to_s = 1.0;
+    opt.columns.voltage = "battery_voltage";
+    opt.columns.current = "battery_current";
+    opt.columns.current_scale_to_a = 1.0;
+    REQUIRE(detect_log_format(p) == LogFormat::Csv);
+    SourceInfo info;
+    const auto s = read_all(p, opt, &info);
+    REQUIRE(s.size() == 1339);
+    CHECK(info.notes.empty());
+    CHECK(info.cell_count == 0);
+    CHECK_FALSE(info.has_temperature);
+    CHECK(s[0].time_us == 0u);
+    CHECK(s[0].voltage_v == Approx(24.22217369));
+    CHECK(s[0].current_a == Approx(0.087469511));
+    CHECK(s[0].cell_count == 0);
+    CHECK(s[1].time_us == 200000u);
+    CHECK(s[1].voltage_v == Approx(24.22718048));
+    CHECK(s.back().time_us == 200700000u);
+    CHECK(s.back().voltage_v == Approx(23.07279015));
+    CHECK(s.back().current_a == Approx(0.143131927));
+    // Without the mapping the file is rejected with the columns it has.
+    CHECK_THROWS_WITH(read_all(p, ReaderOptions()),
+                      Catch::StartsWith(p + ":1: missing time column (expected time_s, time_ms or time_us); "
+                                            "columns found: time, wind_speed, wind_angle, battery_voltage"));
+}
