@@ -2,6 +2,7 @@
 // every bad-input rule (each writes its own small file under a temp dir).
 #include <catch2/catch.hpp>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -192,6 +193,24 @@ TEST_CASE("bad input: a directory", "[io]") {
     TempDir t;
     const std::string p = t.path("");
     CHECK(read_error(p) == p + ": cannot open file: it is a directory, expected a log file");
+}
+
+TEST_CASE("bad input: a FIFO is refused without blocking", "[io]") {
+    TempDir t;
+    const std::string p = t.path("fifo");
+    REQUIRE(::mkfifo(p.c_str(), 0600) == 0);
+    CHECK(read_error(p) == p + ": cannot open file: it is not a regular file (pipes and devices are not supported); "
+                               "expected a log file");
+}
+
+TEST_CASE("a reader that threw stays failed", "[io]") {
+    TempDir t;
+    const std::string p = t.write("raw.csv", std::string(kRawRow1) + "694,x,4.14,4.14,4.14,4.16,173.53,0.44,\n" + kRawRow3);
+    auto r = open_reader(p, ReaderOptions());
+    core::Sample s;
+    CHECK(r->next(s));
+    CHECK_THROWS_WITH(r->next(s), p + ":2:2: expected a number, found \"x\"");
+    CHECK_THROWS_WITH(r->next(s), p + ":2:2: expected a number, found \"x\"");
 }
 
 TEST_CASE("bad input: empty file", "[io]") {

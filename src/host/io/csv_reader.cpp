@@ -211,8 +211,14 @@ public:
             has_pending_ = false;
             return true;
         }
+        if (failed_) throw *failed_;  // a reader that threw stays failed: no rows past a bad one
         if (finished_) return false;
-        if (read_row(out)) return true;
+        try {
+            if (read_row(out)) return true;
+        } catch (const InputError& e) {
+            failed_.reset(new InputError(e));
+            throw;
+        }
         finish();
         return false;
     }
@@ -387,6 +393,7 @@ private:
     }
 
     core::Sample pending_;
+    std::unique_ptr<InputError> failed_;
     bool has_pending_ = false;
     bool finished_ = false;
     bool all_trailing_ = true;
@@ -568,8 +575,11 @@ private:
                                      number_text(m.time_scale_to_s));
             }
             time_factor_us_ = m.time_scale_to_s * 1e6;
+            // Whole microseconds per unit (s, ms, us): convert integer times exactly.
+            const double whole = std::round(time_factor_us_);
             time_factor_int_ = 0;
-            if (m.time_scale_to_s == 1.0) time_factor_int_ = 1000000u;
+            if (whole >= 1.0 && whole <= 1e12 && std::fabs(time_factor_us_ - whole) <= 1e-9 * whole)
+                time_factor_int_ = static_cast<std::uint64_t>(whole);
         } else if (ends_with(time_name, "_us")) {
             time_factor_us_ = 1.0;
             time_factor_int_ = 1u;

@@ -63,6 +63,12 @@ namespace battsim {
 namespace host {
 namespace {
 
+using logio::ByteStream;
+using logio::fixed;
+using logio::le;
+using logio::NoteLog;
+using logio::quoted;
+
 constexpr size_t kMaxTextLine = 64 * 1024;
 constexpr int kMaxFormatChars = 64;
 constexpr int kMaxCellFields = 16;
@@ -249,11 +255,6 @@ public:
 };
 
 // --- binary -----------------------------------------------------------------------------------
-uint64_t le(const uint8_t* p, int n) {
-    uint64_t v = 0;
-    for (int i = n - 1; i >= 0; --i) v = (v << 8) | p[i];
-    return v;
-}
 
 class BinaryFields final : public FieldReader {
 public:
@@ -305,13 +306,7 @@ public:
         if (n == 0) throw InputError(path, 0, 0, "empty file: expected a DataFlash binary log");
         const uint8_t* p = in_.data();
         if (n < 3 || p[0] != 0xA3 || p[1] != 0x95 || p[2] != 128) {
-            std::string found;
-            static const char* hex = "0123456789ABCDEF";
-            for (size_t i = 0; i < std::min<size_t>(n, 3); ++i) {
-                found += found.empty() ? "" : " ";
-                found += hex[p[i] >> 4];
-                found += hex[p[i] & 15];
-            }
+            const std::string found = logio::hex_bytes(p, std::min<size_t>(n, 3));
             throw InputError(path, 0, 0,
                              "byte 0: not a DataFlash binary log: expected an FMT message "
                              "(A3 95 80), found " + found);
@@ -584,8 +579,9 @@ private:
             if (nl) {
                 size_t len = static_cast<size_t>(static_cast<const uint8_t*>(nl) - p);
                 if (len > kMaxTextLine) too_long();
-                out = std::string_view(reinterpret_cast<const char*>(p), len);
                 pending_ = len + 1;
+                if (len > 0 && p[len - 1] == '\r') --len;  // CRLF line endings
+                out = std::string_view(reinterpret_cast<const char*>(p), len);
                 ++lineno_;
                 return true;
             }

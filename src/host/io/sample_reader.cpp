@@ -45,16 +45,25 @@ constexpr int kFmtSearchLines = 100;
 // Reads up to kPeekBytes from the start of the file; throws InputError if the file cannot
 // be read or is empty.
 std::vector<unsigned char> peek(const std::string& path) {
+    // Check the kind of file before opening it: opening a FIFO would block, and a pipe
+    // cannot be read twice (once here to detect the format, once by the reader).
+    struct stat st;
+    errno = 0;
+    if (::stat(path.c_str(), &st) != 0) {
+        const int err = errno;
+        throw InputError(path, 0, 0, std::string("cannot open file: ") + (err ? std::strerror(err) : "unknown error"));
+    }
+    if (S_ISDIR(st.st_mode)) throw InputError(path, 0, 0, "cannot open file: it is a directory, expected a log file");
+    if (!S_ISREG(st.st_mode)) {
+        throw InputError(path, 0, 0,
+                         "cannot open file: it is not a regular file (pipes and devices are not supported); "
+                         "expected a log file");
+    }
     errno = 0;
     std::FILE* f = std::fopen(path.c_str(), "rb");
     if (f == nullptr) {
         const int err = errno;
         throw InputError(path, 0, 0, std::string("cannot open file: ") + (err ? std::strerror(err) : "unknown error"));
-    }
-    struct stat st;
-    if (::fstat(::fileno(f), &st) == 0 && S_ISDIR(st.st_mode)) {
-        std::fclose(f);
-        throw InputError(path, 0, 0, "cannot open file: it is a directory, expected a log file");
     }
     std::vector<unsigned char> buf(kPeekBytes);
     errno = 0;

@@ -1,0 +1,17 @@
+#!/bin/sh
+# Regenerates the committed golden summaries (tests/golden/) from the shared flights.
+# Run after an intended change of the monitor's numbers, and say why in the commit.
+set -eu
+root=$(cd "$(dirname "$0")/.." && pwd)
+bin=${BATTSIM:-$root/build/battsim}
+data=${BATTSIM_DATA_DIR:-$root/../shared/data}
+for set in modified original; do
+  out=$root/tests/golden/predictive-bms-$set
+  mkdir -p "$out"
+  for f in 29 30 32 34; do
+    # Run from the data dir so the recorded input path is the same on every machine.
+    (cd "$data" && "$bin" replay "predictive-bms/flights/$f.csv" -c "$root/configs/reference-$set.json" \
+        --summary "$out/$f.json")
+  done
+done
+echo "goldens written under $root/tests/golden/"

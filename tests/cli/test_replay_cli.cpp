@@ -1,0 +1,126 @@
+// battsim replay run as a program: exit codes, messages and JSON parsed from stdout.
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+#include <sys/stat.h>
+
+#include "cli_util.h"
+
+using clitest::q;
+using clitest::run;
+
+namespace {
+const std::string kSource = BATTSIM_SOURCE_DIR;
+const std::string kData = BATTSIM_DATA_DIR;
+const std::string kConfig = kSource + "/configs/reference-modified.json";
+
+// A small valid raw log (dissertation logger format): 10 s of rest, then 10 s at 20 A.
+std::string raw_log(int rest_rows = 150, int load_rows = 150) {
+    std::string s;
+    long t = 630;
+    for (int k = 0; k < rest_rows; ++k, t += 67) s += std::to_string(t) + ",16.50,4.12,4.13,4.12,4.13,250.00,1.32,\n";
+    for (int k = 0; k < load_rows; ++k, t += 67) s += std::to_string(t) + ",15.90,3.97,3.98,3.97,3.98,20000.00,7.94,\n";
+    return s;
+}
+}  // namespace
+
+TEST_CASE("replay --json prints a parseable summary", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/ok.csv", raw_log());
+    auto r = run("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --json");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    auto j = nlohmann::json::parse(r.out);
+    CHECK(j["schema"] == "battsim.summary");
+    CHECK(j["schema_version"] == 1);
+    CHECK(j["samples"]["total"] == 300);
+    CHECK(j["input"]["format"] == "raw");
+    CHECK(j["input"]["cells"] == 4);
+    CHECK_FALSE(j["flight"].is_null());
+    CHECK(j["flight"]["duration_s"].get<double>() == Approx(149 * 0.067 - 0.469).margin(0.07));
+}
+
+TEST_CASE("replay writes series and summary files atomically", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/ok.csv", raw_log());
+    auto r = run("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --series " + q(dir + "/s.csv") +
+                 " --summary " + q(dir + "/s.json"));
+    REQUIRE(r.exit_code == 0);
+    const std::string series = clitest::read_file(dir + "/s.csv");
+    CHECK(series.rfind("time_s,voltage_v,current_a,", 0) == 0);
+    CHECK(std::count(series.begin(), series.end(), '\n') == 301);
+    auto j = nlohmann::json::parse(clitest::read_file(dir + "/s.json"));
+    CHECK(j["samples"]["total"] == 300);
+    // Same input, same bytes.
+    auto r2 = run("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --series " + q(dir + "/s2.csv"));
+    CHECK(clitest::read_file(dir + "/s2.csv") == series);
+}
+
+TEST_CASE("replay reports bad input with file, line and a non-zero exit", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    struct Case {
+        const char* name;
+        std::string content;
+        int exit_code;
+        std::string message;  // substring of stderr
+    };
+    const std::string good = raw_log(5, 0);
+    const Case cases[] = {
+        {"empty.csv", "", 3, "empty"},
+        {"columns.csv", good + "1000,16.5,4.1,4.1\n", 3, "empty.csv"},  // placeholder replaced below
+        {"nonnum.csv", good + "1000,16.5,4.1,abc,4.1,4.1,250.0,1.3,\n", 3, ":6:4: expected a number, found \"abc\""},
+        {"backwards.csv", good + "100,16.5,4.1,4.1,4.1,4.1,250.0,1.3,\n", 3, ":6:"},
+        {"nan.csv", good + "1000,nan,4.1,4.1,4.1,4.1,250.0,1.3,\n", 3, ":6:2"},
+    };
+    for (Case c : cases) {
+        if (std::string(c.name) == "columns.csv") c.message = ":6:";
+        const std::string path = dir + "/" + c.name;
+        clitest::write_file(path, c.content);
+        auto r = run("replay " + q(path) + " -c " + q(kConfig) + " --json");
+        INFO(c.name << " -> " << r.err);
+        CHECK(r.exit_code == c.exit_code);
+        CHECK(r.err.find(path) != std::string::npos);
+        CHECK(r.err.find(c.message) != std::string::npos);
+        CHECK(r.out.empty());
+    }
+    auto missing = run("replay " + q(dir + "/nope.csv") + " --json");
+    CHECK(missing.exit_code == 3);
+    CHECK(missing.err.find(dir + "/nope.csv") != std::string::npos);
+}
+
+TEST_CASE("replay skips a truncated last line and says so", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string path = dir + "/trunc.csv";
+    clitest::write_file(path, raw_log(20, 20) + "2000,16.5,4.1");  // cut mid-row, no newline
+    auto r = run("replay " + q(path) + " -c " + q(kConfig) + " --json");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    auto j = nlohmann::json::parse(r.out);
+    CHECK(j["samples"]["total"] == 40);
+    REQUIRE(j["input"]["notes"].size() >= 1);
+    CHECK(j["input"]["notes"][0].get<std::string>().find("line 41") != std::string::npos);
+    CHECK(r.err.find("note") != std::string::npos);
+}
+
+TEST_CASE("replay rejects bad configs and options", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/ok.csv", raw_log(5, 5));
+    clitest::write_file(dir + "/bad.json", "{\"schema\": \"battsim.config\", \"version\": 1, \"battery\": {\"capacity_ah\": \"x\"}}");
+    auto r = run("replay " + q(dir + "/ok.csv") + " -c " + q(dir + "/bad.json"));
+    CHECK(r.exit_code == 4);
+    CHECK(r.err.find("$.battery.capacity_ah: expected a number") != std::string::npos);
+    auto u = run("replay " + q(dir + "/ok.csv") + " --format nonsense");
+    CHECK(u.exit_code == 2);
+    auto none = run("");
+    CHECK(none.exit_code == 2);
+}
+
+TEST_CASE("replay on a shared dissertation flight matches its golden summary", "[cli]") {
+    struct stat st;
+    if (::stat((kData + "/predictive-bms/flights/29.csv").c_str(), &st) != 0) return;
+    auto r = run("replay " + q(kData + "/predictive-bms/flights/29.csv") + " -c " + q(kConfig) + " --json");
+    REQUIRE(r.exit_code == 0);
+    auto j = nlohmann::json::parse(r.out);
+    auto g = nlohmann::json::parse(clitest::read_file(kSource + "/tests/golden/predictive-bms-modified/29.json"));
+    CHECK(j["flight"]["capacity_ah"] == g["flight"]["capacity_ah"]);
+    CHECK(j["flight"]["resistance_ohm"] == g["flight"]["resistance_ohm"]);
+}
