@@ -793,8 +793,7 @@ void scan_message(const DfFormat& f, const FieldReader& r, const std::string& wh
         return;
     }
     ++c.rows;
-    double t;
-    if (f.boot_time >= 0 && r.number(f.boot_time, t)) {
+    if (f.boot_time >= 0) {  // own time stamp (an unreadable one drops the row later)
         c.any_own_time = true;
     } else {
         if (!clocks.boot_seen) ++c.untimed_before_boot;
@@ -991,20 +990,7 @@ private:
         double inst;
         if (!read_instance(f, r, inst) || inst != 0) return false;
         ++rows_;
-        double volt, curr;
-        if (!r.number(f.volt, volt)) {
-            drop("unreadable", where + (r.column_of(f.volt) ? " column " + std::to_string(r.column_of(f.volt)) : "") +
-                                   ": " + f.name + ".Volt: expected a number, found " + r.raw(f.volt) + "; row skipped");
-            return false;
-        }
-        if (!r.number(f.curr, curr)) {
-            drop("unreadable", where + (r.column_of(f.curr) ? " column " + std::to_string(r.column_of(f.curr)) : "") +
-                                   ": " + f.name + ".Curr: expected a number, found " + r.raw(f.curr) + "; row skipped");
-            return false;
-        }
-        volt *= battery_scale(f, f.volt);
-        curr *= battery_scale(f, f.curr);
-
+        // Time first: a row dropped below still occupies its slot in an inferred spacing.
         double t;
         if (f.boot_time >= 0) {
             if (!r.number(f.boot_time, t) || !std::isfinite(t)) {
@@ -1025,7 +1011,19 @@ private:
                 t = plan_.first_clock_us - static_cast<double>(std::max(0L, plan_.rows_before - k)) * plan_.spacing_us;
         }
         t -= plan_.origin_us;
-
+        double volt, curr;
+        if (!r.number(f.volt, volt)) {
+            drop("unreadable", where + (r.column_of(f.volt) ? " column " + std::to_string(r.column_of(f.volt)) : "") +
+                                   ": " + f.name + ".Volt: expected a number, found " + r.raw(f.volt) + "; row skipped");
+            return false;
+        }
+        if (!r.number(f.curr, curr)) {
+            drop("unreadable", where + (r.column_of(f.curr) ? " column " + std::to_string(r.column_of(f.curr)) : "") +
+                                   ": " + f.name + ".Curr: expected a number, found " + r.raw(f.curr) + "; row skipped");
+            return false;
+        }
+        volt *= battery_scale(f, f.volt);
+        curr *= battery_scale(f, f.curr);
         if (!std::isfinite(volt) || volt < 0 || volt > 1000) {
             drop("bad-value", where + ": " + f.name + ".Volt = " + fixed(volt, 3) +
                                   " V is not a plausible pack voltage (finite, 0..1000 V); row dropped");
