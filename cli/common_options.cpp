@@ -20,6 +20,7 @@ void add_input_options(CLI::App& sub, InputArgs& a) {
     sub.add_option("--current-unit", a.current_unit, "CSV: unit of the current column (A, mA) when its name has no suffix");
     sub.add_option("--cell-cols", a.cell_cols, "CSV: names of the cell voltage columns, cell 1 first")->delimiter(',');
     sub.add_option("--temperature-col", a.temperature_col, "CSV: name of the temperature column (degC)");
+    sub.add_option("--estimator", a.estimator, "Estimator: reference (the dissertation's) or joint (the newer one); default from the config");
     sub.add_flag("--negative-discharge", a.negative_discharge, "CSV: the log's current is negative while discharging");
 }
 
@@ -65,6 +66,14 @@ int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedC
     } catch (const host::ConfigError& e) {
         std::cerr << "battsim: config: " << e.what() << "\n";
         return kExitConfigError;
+    }
+    if (a.estimator == "reference") {
+        config.monitor.estimator = core::EstimatorKind::Reference;
+    } else if (a.estimator == "joint") {
+        config.monitor.estimator = core::EstimatorKind::Joint;
+    } else if (!a.estimator.empty()) {
+        std::cerr << "battsim: --estimator: expected reference or joint, found \"" << a.estimator << "\"\n";
+        return kExitUsage;
     }
     return kExitOk;
 }

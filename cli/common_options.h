@@ -20,6 +20,7 @@ struct InputArgs {
     std::string time_unit, current_unit;
     std::vector<std::string> cell_cols;
     bool negative_discharge = false;
+    std::string estimator;  // empty = as the config says
 };
 
 void add_input_options(CLI::App& sub, InputArgs& a);

@@ -8,6 +8,7 @@
 #include "core/estimate/flight_time.h"
 #include "core/estimate/flying_state.h"
 #include "core/estimate/initial_state.h"
+#include "core/estimate/joint_estimator.h"
 #include "core/estimate/low_pass.h"
 #include "core/estimate/reference_capacity.h"
 #include "core/estimate/resistance_estimator.h"
@@ -38,7 +39,12 @@ struct SensorLimits {
     float max_cell_sum_error_v = 0.5f;  // |Σ cells − pack|
 };
 
+// Which estimator fills the monitor's capacity, resistance and flight-time outputs. The
+// reference one stays selectable forever, so the two can be compared on every log.
+enum class EstimatorKind : uint8_t { Reference = 0, Joint = 1 };
+
 struct MonitorConfig {
+    EstimatorKind estimator = EstimatorKind::Reference;
     int cells_in_series = 4;
     TremblayParams battery;
     float max_voltage_v = 16.8f;  // pack range used for state of charge
@@ -52,6 +58,7 @@ struct MonitorConfig {
     FlyingState::Config flying;
     InitialState::Config initial;
     PiaoCellScorer::Config cells;
+    JointEstimator::Config joint;
     WarningConfig warnings;
     SensorLimits sensor;
     ShuntCalibration shunt;

@@ -11,6 +11,7 @@ const char* warning_name(Warning w) {
         case kWarnHighResistance: return "high_resistance";
         case kWarnCellOutlier: return "cell_outlier";
         case kWarnSensorFault: return "sensor_fault";
+        case kWarnShortFlight: return "short_flight";
         default: return "unknown";
     }
 }
@@ -29,6 +30,9 @@ void Monitor::configure(const MonitorConfig& config) {
     flying_.configure(config.flying);
     initial_.configure(config.initial);
     cells_.configure(config.cells);
+    JointEstimator::Config jc = config.joint;
+    jc.min_voltage_v = config.flight_time.min_flight_voltage_v;
+    joint_.configure(jc, config.battery, config.cells_in_series);
     have_time_ = false;
     last_time_us_ = 0;
     status_.capacity_ah = capacity_.status().capacity_ah;
@@ -107,6 +111,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         status_.initialised = true;
         status_.initial_forced = initial_.status().forced;
         counter_.reset(initial_.status().used_ah * 1000.0f, initial_.status().used_wh * 1000.0f);
+        if (config_.estimator == EstimatorKind::Joint) joint_.start(sample.voltage_v, sample.current_a);
     } else {
         counter_.update(sample.current_a, sample.voltage_v, dt_s);
     }
@@ -140,16 +145,39 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
     status_.total_time_s = ft.total_time_s;
     status_.time_valid = ft.valid;
 
+    bool short_flight = false;
+    if (config_.estimator == EstimatorKind::Joint) {
+        joint_.update(sample.time_us, sample.voltage_v, sample.current_a, dt_s, flying);
+        const JointEstimator::Status& js = joint_.status();
+        status_.capacity_ah = js.capacity_ah;
+        status_.resistance_ohm = js.resistance_ohm;
+        status_.soc = js.soc;
+        status_.remaining_time_s = js.remaining_time_s;
+        status_.total_time_s = js.total_time_s;
+        status_.time_valid = js.time_valid;
+        status_.expected_time_s = js.expected_time_s;
+        status_.remaining_energy_wh = js.remaining_energy_wh;
+        status_.short_flight_cause = js.cause;
+        short_flight = js.short_flight;
+    }
+
     const PiaoCellScorer::Status& cs = cells_.status();
     status_.cell_count = cs.cell_count;
     for (int c = 0; c < kMaxCells; ++c) status_.cell_score[c] = cs.score[c];
 
     const WarningConfig& wc = config_.warnings;
-    const float rated_ah = config_.battery.capacity_ah;
-    raise(kWarnLowCapacity, status_.capacity_ah < wc.low_capacity_fraction * rated_ah);
-    raise(kWarnHighResistance, resistance_.status().updates >= wc.min_resistance_updates &&
-                                   status_.resistance_ohm >
-                                       wc.high_resistance_factor * config_.battery.internal_resistance_ohm);
+    if (config_.estimator == EstimatorKind::Joint) {
+        // The joint estimator warns about the flight, naming its cause(s).
+        raise(kWarnShortFlight, short_flight);
+        raise(kWarnLowCapacity, short_flight && (status_.short_flight_cause & JointEstimator::kCauseCapacity));
+        raise(kWarnHighResistance, short_flight && (status_.short_flight_cause & JointEstimator::kCauseResistance));
+    } else {
+        const float rated_ah = config_.battery.capacity_ah;
+        raise(kWarnLowCapacity, status_.capacity_ah < wc.low_capacity_fraction * rated_ah);
+        raise(kWarnHighResistance, resistance_.status().updates >= wc.min_resistance_updates &&
+                                       status_.resistance_ohm >
+                                           wc.high_resistance_factor * config_.battery.internal_resistance_ohm);
+    }
     const bool outlier = cs.worst_cell >= 0 && cs.outlier_samples >= wc.min_cell_outlier_samples &&
                          fabsf(cs.score[cs.worst_cell]) >= wc.cell_outlier_score;
     raise(kWarnCellOutlier, outlier);

@@ -17,7 +17,8 @@ enum Warning : uint8_t {
     kWarnHighResistance = 1,
     kWarnCellOutlier = 2,
     kWarnSensorFault = 3,
-    kWarnCount = 4,
+    kWarnShortFlight = 4,  // the flight will be > 20 % shorter than a healthy pack's
+    kWarnCount = 5,
 };
 const char* warning_name(Warning w);
 
@@ -47,6 +48,9 @@ struct MonitorStatus {
     float avg_current_a = 0.0f;
     float avg_power_w = 0.0f;
     float long_avg_power_w = 0.0f;
+    float expected_time_s = 0.0f;      // joint estimator: a healthy pack's flight time
+    float remaining_energy_wh = 0.0f;  // joint estimator: to the cutoff at the mean power
+    uint8_t short_flight_cause = 0;    // JointEstimator::Cause bits
 
     uint8_t cell_count = 0;
     float cell_score[kMaxCells] = {};
@@ -81,6 +85,7 @@ private:
     FlyingState flying_;
     InitialState initial_;
     PiaoCellScorer cells_;
+    JointEstimator joint_;
     bool have_time_ = false;
     uint64_t last_time_us_ = 0;
 };

@@ -145,6 +145,49 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
             rw.number("min_cell_outlier_samples", m.warnings.min_cell_outlier_samples, 0, 1e9);
         }
     }
+    std::string estimator = m.estimator == core::EstimatorKind::Joint ? "joint" : "reference";
+    root.string("estimator", estimator);
+    if (estimator == "reference") m.estimator = core::EstimatorKind::Reference;
+    else if (estimator == "joint") m.estimator = core::EstimatorKind::Joint;
+    else root.fail("$.estimator", "expected \"reference\" or \"joint\", found \"" + estimator + "\"");
+    if (const json* s = root.object("joint")) {
+        ObjectReader r(*s, root.child("joint"), origin);
+        core::JointEstimator::Config& jc = m.joint;
+        r.number("resistance_lag_s", jc.resistance.lag_s, 0, 60);
+        r.number("resistance_memory_s", jc.resistance.memory_s, 0, kBig);
+        r.number("resistance_min_step_a", jc.resistance.min_step_a, 0, kBig);
+        r.number("resistance_min_excitation_a2", jc.resistance.min_excitation_a2, 0, kBig);
+        r.number("polarisation_time_s", jc.polarisation_time_s, 0, kBig);
+        r.number("voltage_sigma_v", jc.ekf.voltage_sigma_v, 1e-6, 100);
+        r.number("soc_sigma0", jc.ekf.soc_sigma0, 0, 1);
+        r.number("capacity_sigma0_fraction", jc.ekf.capacity_sigma0_fraction, 0, 10);
+        r.number("polarisation_initial_ohm", jc.ekf.polarisation_initial_ohm, 0, 10);
+        r.number("polarisation_sigma0_ohm", jc.ekf.polarisation_sigma0_ohm, 0, 10);
+        r.number("soc_process_per_sqrt_s", jc.ekf.soc_process_per_sqrt_s, 0, 1);
+        r.number("capacity_process_fraction_per_sqrt_s", jc.ekf.capacity_process_fraction_per_sqrt_s, 0, 1);
+        r.number("polarisation_process_ohm_per_sqrt_s", jc.ekf.polarisation_process_ohm_per_sqrt_s, 0, 1);
+        r.number("gate_sigmas", jc.ekf.gate_sigmas, 1, 1000);
+        r.number("solver_steps", jc.solver_steps, 2, 1000);
+        r.number("solver_steps_per_update", jc.solver_steps_per_update, 1, 1000);
+        r.number("short_flight_fraction", jc.short_flight_fraction, 0, 1);
+        r.number("cause_fraction", jc.cause_fraction, 0, 1);
+        r.number("min_flight_s", jc.min_flight_s, 0, kBig);
+        r.number("persistence", jc.persistence, 1, 1e6);
+        if (const json* t = r.object("ocv_cell_voltage_v")) {
+            if (!t->is_array() || t->size() < 2 || t->size() > static_cast<size_t>(core::kOcvTableMaxPoints))
+                r.fail(r.child("ocv_cell_voltage_v"), "expected an array of 2.." + std::to_string(core::kOcvTableMaxPoints) +
+                                                          " cell voltages at evenly spaced SOC from 0 to 1");
+            jc.ocv.points = static_cast<int>(t->size());
+            for (size_t k = 0; k < t->size(); ++k) {
+                const json& v = (*t)[k];
+                if (!v.is_number() || !(v.get<double>() > 0) || v.get<double>() > 10)
+                    r.fail(r.child("ocv_cell_voltage_v") + "[" + std::to_string(k) + "]", "expected a cell voltage in (0, 10] V");
+                jc.ocv.cell_voltage_v[k] = v.get<float>();
+                if (k > 0 && !(jc.ocv.cell_voltage_v[k] >= jc.ocv.cell_voltage_v[k - 1]))
+                    r.fail(r.child("ocv_cell_voltage_v") + "[" + std::to_string(k) + "]", "must not fall as SOC rises");
+            }
+        }
+    }
     if (const json* s = root.object("sensor")) {
         ObjectReader r(*s, root.child("sensor"), origin);
         r.number("shunt_offset_ma", m.shunt.offset_ma, -kBig, kBig);
@@ -220,6 +263,38 @@ json config_to_json(const LoadedConfig& c) {
           {"cell_outlier_score", m.warnings.cell_outlier_score},
           {"min_cell_outlier_samples", m.warnings.min_cell_outlier_samples}}},
     };
+    j["estimator"] = m.estimator == core::EstimatorKind::Joint ? "joint" : "reference";
+    {
+        const core::JointEstimator::Config& jc = m.joint;
+        json jj = {
+            {"resistance_lag_s", jc.resistance.lag_s},
+            {"resistance_memory_s", jc.resistance.memory_s},
+            {"resistance_min_step_a", jc.resistance.min_step_a},
+            {"resistance_min_excitation_a2", jc.resistance.min_excitation_a2},
+            {"polarisation_time_s", jc.polarisation_time_s},
+            {"voltage_sigma_v", jc.ekf.voltage_sigma_v},
+            {"soc_sigma0", jc.ekf.soc_sigma0},
+            {"capacity_sigma0_fraction", jc.ekf.capacity_sigma0_fraction},
+            {"polarisation_initial_ohm", jc.ekf.polarisation_initial_ohm},
+            {"polarisation_sigma0_ohm", jc.ekf.polarisation_sigma0_ohm},
+            {"soc_process_per_sqrt_s", jc.ekf.soc_process_per_sqrt_s},
+            {"capacity_process_fraction_per_sqrt_s", jc.ekf.capacity_process_fraction_per_sqrt_s},
+            {"polarisation_process_ohm_per_sqrt_s", jc.ekf.polarisation_process_ohm_per_sqrt_s},
+            {"gate_sigmas", jc.ekf.gate_sigmas},
+            {"solver_steps", jc.solver_steps},
+            {"solver_steps_per_update", jc.solver_steps_per_update},
+            {"short_flight_fraction", jc.short_flight_fraction},
+            {"cause_fraction", jc.cause_fraction},
+            {"min_flight_s", jc.min_flight_s},
+            {"persistence", jc.persistence},
+        };
+        if (jc.ocv.points >= 2) {
+            json t = json::array();
+            for (int k = 0; k < jc.ocv.points; ++k) t.push_back(jc.ocv.cell_voltage_v[k]);
+            jj["ocv_cell_voltage_v"] = t;
+        }
+        j["joint"] = jj;
+    }
     j["sensor"] = {
         {"shunt_offset_ma", m.shunt.offset_ma},
         {"shunt_scale_mv_per_10a", m.shunt.scale_mv_per_10a},

@@ -56,7 +56,7 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     j["input"] = {{"path", path}, {"format", to_string(info.format)}, {"cells", info.cell_count},
                   {"has_temperature", info.has_temperature}, {"notes", info.notes}};
     j["config"] = options.config.name;
-    j["estimator"] = "reference";
+    j["estimator"] = options.config.monitor.estimator == core::EstimatorKind::Joint ? "joint" : "reference";
     nlohmann::json body = summary.to_json(info.cell_count);
     for (auto it = body.begin(); it != body.end(); ++it) j[it.key()] = it.value();
     if (series) series->commit();

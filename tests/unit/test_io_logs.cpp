@@ -580,7 +580,7 @@ TEST_CASE("DataFlash text malformed: non-UTF-8 bytes", "[io-logs]") {
     REQUIRE(r.samples.size() == 2);
     CHECK(r.samples[1].voltage_v == Approx(14.97));
     CHECK(any_note(r, "line 6 column 4: CURR.Volt: expected a number, found '1\\xFF98'"));
-    CHECK(any_note(r, "1 lines are not messages"));
+    CHECK(any_note(r, "1 line(s) are not messages"));
 }
 
 TEST_CASE("DataFlash text malformed: no battery messages", "[io-logs]") {
@@ -709,6 +709,19 @@ TEST_CASE("ULog malformed: format string with an unclosed array type", "[io-logs
     CHECK(error_of(Kind::Ulog, d.write("nocolon.ulg", no_colon)).find("no ':'") != std::string::npos);
     const std::string no_type = ulog_header() + ulog_msg('F', "battery_status:timestamp;");
     CHECK(error_of(Kind::Ulog, d.write("notype.ulg", no_type)).find("has no type") != std::string::npos);
+}
+
+TEST_CASE("ULog malformed: format larger than any message", "[io-logs]") {
+    LogTempDir d;
+    const std::string bytes =
+        ulog_header() +
+        ulog_msg('F', "battery_status:uint64_t timestamp;float voltage_v;float current_a;double[65535] a;") +
+        ulog_sub(0, 3);
+    CHECK(error_of(Kind::Ulog, d.write("big.ulg", bytes)).find("larger than 65535 bytes") != std::string::npos);
+    const std::string nested = ulog_header() + ulog_msg('F', "big:double[65535] a;") +
+                               ulog_msg('F', "battery_status:uint64_t timestamp;float voltage_v;float current_a;big[65535] b;") +
+                               ulog_sub(0, 3);
+    CHECK(error_of(Kind::Ulog, d.write("big2.ulg", nested)).find("larger than 65535 bytes") != std::string::npos);
 }
 
 TEST_CASE("ULog malformed: unknown type in battery_status", "[io-logs]") {

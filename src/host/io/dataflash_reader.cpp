@@ -138,7 +138,9 @@ void complete_format(DfFormat& f, const std::string& path, long line, const std:
                      NoteLog& notes) {
     f.defined = true;
     f.defined_at = where;
-    const std::string head = where + ": FMT for type " + std::to_string(f.id) + " " + quoted(f.name);
+    // Text errors carry the line number in InputError itself; binary ones name the byte offset.
+    const std::string head =
+        (line > 0 ? std::string() : where + ": ") + "FMT for type " + std::to_string(f.id) + " " + quoted(f.name);
     if (f.length < 3 || f.length > 255)
         throw InputError(path, line, 0,
                          head + " declares length " + std::to_string(f.length) +
@@ -619,7 +621,7 @@ private:
     void define() {
         const auto& v = fields_.v;
         const std::string where = "line " + std::to_string(lineno_);
-        if (v.size() < 5)
+        if (v.size() < 4)
             throw InputError(path_, lineno_, 0,
                              "FMT line has " + std::to_string(v.size()) +
                                  " fields; expected FMT, type, length, name, format, columns");
@@ -631,14 +633,14 @@ private:
         DfFormat f;
         f.id = static_cast<int>(id);
         f.name = std::string(v[3]);
-        f.format = std::string(v[4]);
+        if (v.size() > 4) f.format = std::string(v[4]);  // "FMT, 10, 3, STRT" has no columns at all
         if (f.name.empty() || f.name.size() > 16)
             throw InputError(path_, lineno_, 4, "FMT name must be 1..16 characters, found " + quoted(v[3]));
         for (size_t i = 5; i < v.size(); ++i)
             if (!v[i].empty()) f.labels.emplace_back(v[i]);
         if (length < 3 || length > 255)
             throw InputError(path_, lineno_, 3,
-                             where + ": FMT for type " + std::to_string(f.id) + " " + quoted(f.name) +
+                             "FMT for type " + std::to_string(f.id) + " " + quoted(f.name) +
                                  " declares length " + std::string(v[2]) +
                                  "; a DataFlash message is 3..255 bytes (3-byte header + payload)");
         f.length = static_cast<int>(length);
@@ -657,7 +659,7 @@ private:
         finished_ = true;
         if (other_lines_ > 0)
             notes_.add("other-lines", std::to_string(other_lines_) +
-                                          " lines are not messages of a type defined by an FMT line (first: line " +
+                                          " line(s) are not messages of a type defined by an FMT line (first: line " +
                                           std::to_string(first_other_) + " " + other_example_ + "); ignored");
     }
 
@@ -783,7 +785,8 @@ void scan_message(const DfFormat& f, const FieldReader& r, const std::string& wh
     }
     if (f.role != Role::Battery) return;
     if (!f.decodable)
-        throw InputError(path, line, 0, where + ": " + f.name + " rows cannot be read: " + f.why_not +
+        throw InputError(path, line, 0, (line > 0 ? std::string() : where + ": ") + f.name +
+                                            " rows cannot be read: " + f.why_not +
                                             " (FMT at " + f.defined_at + ")");
     Candidate& c = f.name == "BAT" ? s.bat : s.curr;
     double inst;
@@ -961,6 +964,7 @@ public:
     }
 
     const SourceInfo& info() const override { return info_; }
+    void add_note(const std::string& text) { info_.notes.push_back(text); }
 
 private:
     std::unique_ptr<MessageSource> open_source(NoteLog& notes) {
@@ -1074,12 +1078,21 @@ private:
 
 }  // namespace
 
-std::unique_ptr<SampleReader> open_dataflash_text(const std::string& path, const ReaderOptions&) {
-    return std::make_unique<DataflashReader>(path, true);
+namespace {
+std::unique_ptr<SampleReader> open_dataflash(const std::string& path, const ReaderOptions& options, bool text) {
+    auto r = std::make_unique<DataflashReader>(path, text);
+    if (options.current_source == CurrentSource::Shunt)
+        r->add_note("the shunt current source applies to raw monitor logs only; the logged Curr is used");
+    return r;
+}
+}  // namespace
+
+std::unique_ptr<SampleReader> open_dataflash_text(const std::string& path, const ReaderOptions& options) {
+    return open_dataflash(path, options, true);
 }
 
-std::unique_ptr<SampleReader> open_dataflash_binary(const std::string& path, const ReaderOptions&) {
-    return std::make_unique<DataflashReader>(path, false);
+std::unique_ptr<SampleReader> open_dataflash_binary(const std::string& path, const ReaderOptions& options) {
+    return open_dataflash(path, options, false);
 }
 
 }  // namespace host

@@ -441,6 +441,9 @@ private:
                 need_number(l.cells, true);
             }
             pos += bytes;
+            if (pos > kMaxMessageBytes)
+                fail(off, "format 'battery_status' is larger than " + std::to_string(kMaxMessageBytes) +
+                              " bytes, more than any ULog message can carry");
             if (f.name.compare(0, 8, "_padding") != 0) l.min_size = pos;
         }
         l.full_size = pos;
@@ -553,6 +556,7 @@ public:
     }
 
     const SourceInfo& info() const override { return info_; }
+    void add_note(const std::string& text) { info_.notes.push_back(text); }
 
 private:
     void scan() {
@@ -651,8 +655,11 @@ private:
 
 }  // namespace
 
-std::unique_ptr<SampleReader> open_ulog(const std::string& path, const ReaderOptions&) {
-    return std::make_unique<UlogReader>(path);
+std::unique_ptr<SampleReader> open_ulog(const std::string& path, const ReaderOptions& options) {
+    auto r = std::make_unique<UlogReader>(path);
+    if (options.current_source == CurrentSource::Shunt)
+        r->add_note("the shunt current source applies to raw monitor logs only; battery_status.current_a is used");
+    return r;
 }
 
 }  // namespace host

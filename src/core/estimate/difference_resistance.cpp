@@ -1,0 +1,64 @@
+#include "core/estimate/difference_resistance.h"
+
+#include "core/numeric.h"
+
+namespace battsim {
+namespace core {
+
+void DifferenceResistanceEstimator::configure(const Config& config) {
+    config_ = config;
+    status_ = Status{};
+    status_.resistance_ohm = config.initial_resistance_ohm;
+    head_ = 0;
+    count_ = 0;
+    sxx_ = sxy_ = syy_ = n_ = 0.0f;
+    last_us_ = 0;
+}
+
+void DifferenceResistanceEstimator::update(uint64_t time_us, float voltage_v, float current_a) {
+    const float dt_s = count_ > 0 && time_us > last_us_ ? static_cast<float>(time_us - last_us_) * 1.0e-6f : 0.0f;
+    last_us_ = time_us;
+    const uint64_t lag_us = static_cast<uint64_t>(config_.lag_s * 1.0e6f);
+    // Newest sample at least `lag` old; a gap much longer than the lag breaks the pair.
+    int pick = -1;
+    for (int n = 0; n < count_; ++n) {
+        const int k = (head_ - 1 - n + kHistory) % kHistory;
+        if (time_us >= t_us_[k] + lag_us) {
+            if (time_us - t_us_[k] <= 3 * lag_us + 200000u) pick = k;
+            break;
+        }
+    }
+    t_us_[head_] = time_us;
+    v_[head_] = voltage_v;
+    i_[head_] = current_a;
+    head_ = (head_ + 1) % kHistory;
+    if (count_ < kHistory) ++count_;
+
+    // Forget by elapsed time, so irregular sample rates weigh time, not sample counts.
+    const float keep = config_.memory_s > 0.0f ? clampf(1.0f - dt_s / config_.memory_s, 0.0f, 1.0f) : 0.0f;
+    sxx_ *= keep;
+    sxy_ *= keep;
+    syy_ *= keep;
+    n_ *= keep;
+    if (pick < 0) return;
+    const float di = current_a - i_[pick];
+    const float dv = voltage_v - v_[pick];
+    if (fabsf(di) < config_.min_step_a) return;
+    sxx_ += di * di;
+    sxy_ += di * dv;
+    syy_ += dv * dv;
+    n_ += 1.0f;
+    status_.excitation_a2 = sxx_;
+    if (sxx_ < config_.min_excitation_a2 || n_ < 3.0f) return;
+    const float r = -sxy_ / sxx_;
+    if (!(r > 0.0f) || !finitef(r)) return;
+    status_.resistance_ohm = r;
+    // Residual variance of ΔV about −R·ΔI over the weighted points, then var(R) = s²/Σx².
+    const float rss = maxf(0.0f, syy_ - sxy_ * sxy_ / sxx_);
+    const float s2 = rss / maxf(1.0f, n_ - 1.0f);
+    status_.sigma_ohm = sqrtf(s2 / sxx_);
+    status_.valid = true;
+}
+
+}  // namespace core
+}  // namespace battsim

@@ -1,0 +1,125 @@
+#include "core/estimate/joint_estimator.h"
+
+#include "core/numeric.h"
+
+namespace battsim {
+namespace core {
+
+void JointEstimator::configure(const Config& config, const TremblayParams& rated, int cells_in_series) {
+    config_ = config;
+    rated_ = rated;
+    ocv_.configure(config.ocv, cells_in_series, rated);
+    DifferenceResistanceEstimator::Config rc = config.resistance;
+    rc.initial_resistance_ohm = rated.internal_resistance_ohm;
+    resistance_.configure(rc);
+    ekf_.configure(config.ekf, rated.capacity_ah);
+    polarisation_current_ = LowPassFilter{};
+    polarisation_current_.configure({config.polarisation_time_s});
+    status_ = Status{};
+    status_.capacity_ah = rated.capacity_ah;
+    status_.resistance_ohm = rated.internal_resistance_ohm;
+    solve_ = kSolveRemaining;
+    flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = elapsed_at_solve_s_ = 0.0f;
+    short_count_ = 0;
+}
+
+void JointEstimator::start(float voltage_v, float current_a) {
+    const float soc = ocv_.soc_at_voltage(voltage_v + current_a * rated_.internal_resistance_ohm);
+    ekf_.start(soc);
+    polarisation_current_.reset(current_a);
+    status_.started = true;
+    status_.soc = soc;
+}
+
+void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, float dt_s, bool flying) {
+    if (!status_.started) start(voltage_v, current_a);
+    if (flying) resistance_.update(time_us, voltage_v, current_a);
+    else resistance_.break_history();
+    const DifferenceResistanceEstimator::Status& rs = resistance_.status();
+    const float r0 = rs.resistance_ohm;
+
+    const float ip = polarisation_current_.update(current_a, dt_s);
+    ekf_.predict(current_a, dt_s);
+    // Until the resistance is known its error dominates the compensated voltage.
+    const float r_sigma = rs.valid ? rs.sigma_ohm : 0.5f * rated_.internal_resistance_ohm;
+    ekf_.correct(voltage_v + r0 * current_a, ip, (r_sigma * current_a) * (r_sigma * current_a), ocv_);
+    const CapacityEkf::Status& es = ekf_.status();
+
+    if (flying) {
+        flying_s_ += dt_s;
+        flying_energy_j_ += voltage_v * current_a * dt_s;
+        charge_since_takeoff_ah_ += current_a * dt_s / 3600.0f;
+    }
+    status_.soc = clampf(es.soc, 0.0f, 1.0f);
+    status_.capacity_ah = es.capacity_ah;
+    status_.sigma_capacity_ah = es.sigma_capacity_ah;
+    status_.resistance_ohm = r0;
+    status_.polarisation_ohm = es.polarisation_ohm;
+    status_.mean_power_w = flying_s_ > 0.0f ? flying_energy_j_ / flying_s_ : 0.0f;
+
+    // Flight-time solves, round robin, a bounded number of steps per update.
+    if (status_.mean_power_w > 0.0f && flying_s_ > 1.0f) {
+        if (solver_.done()) start_solve();
+        if (solver_.advance(ocv_, config_.solver_steps_per_update)) finish_solve();
+    }
+    if (status_.time_valid) {
+        // Between refreshes the remaining time runs down with the clock.
+        status_.remaining_time_s = maxf(0.0f, results_[kSolveRemaining] - (flying_s_ - elapsed_at_solve_s_));
+    }
+}
+
+void JointEstimator::start_solve() {
+    const CapacityEkf::Status& es = ekf_.status();
+    const float q = es.capacity_ah;
+    const float r_total = status_.resistance_ohm + es.polarisation_ohm;
+    const float r_rated = rated_.internal_resistance_ohm + es.polarisation_ohm;
+    // The charge at take-off as the present estimate sees it.
+    const float soc_takeoff = clampf(es.soc + charge_since_takeoff_ah_ / q, 0.0f, 1.0f);
+    if (solve_ == kSolveRemaining) {
+        solve_power_w_ = status_.mean_power_w;
+        elapsed_at_solve_s_ = flying_s_;
+    }
+    const float p = solve_power_w_;
+    const float v_min = config_.min_voltage_v;
+    const int n = config_.solver_steps;
+    switch (solve_) {
+        case kSolveRemaining: solver_.start(clampf(es.soc, 0.0f, 1.0f), q, r_total, p, v_min, n); break;
+        case kSolveTotal: solver_.start(soc_takeoff, q, r_total, p, v_min, n); break;
+        case kSolveExpected: solver_.start(soc_takeoff, rated_.capacity_ah, r_rated, p, v_min, n); break;
+        case kSolveCapacityOnly: solver_.start(soc_takeoff, q, r_rated, p, v_min, n); break;
+        default: solver_.start(soc_takeoff, rated_.capacity_ah, r_total, p, v_min, n); break;
+    }
+}
+
+void JointEstimator::finish_solve() {
+    const PowerTimeSolver::Result& r = solver_.result();
+    results_[solve_] = r.time_s;
+    if (solve_ == kSolveRemaining) status_.remaining_energy_wh = r.energy_wh;
+    solve_ = static_cast<uint8_t>((solve_ + 1) % kSolveCount);
+    if (solve_ != kSolveRemaining) return;
+
+    // A full round is in: publish, then judge.
+    status_.time_valid = true;
+    status_.total_time_s = results_[kSolveTotal];
+    status_.expected_time_s = results_[kSolveExpected];
+    const float expected = results_[kSolveExpected];
+    if (flying_s_ < config_.min_flight_s || !(expected > 0.0f)) return;
+    const bool is_short = results_[kSolveTotal] < config_.short_flight_fraction * expected;
+    short_count_ = is_short ? short_count_ + 1 : 0;
+    if (short_count_ >= config_.persistence) {
+        status_.short_flight = true;
+        uint8_t cause = kCauseNone;
+        if (results_[kSolveCapacityOnly] < config_.cause_fraction * expected) cause |= kCauseCapacity;
+        if (results_[kSolveResistanceOnly] < config_.cause_fraction * expected) cause |= kCauseResistance;
+        if (cause == kCauseNone) {
+            cause = results_[kSolveCapacityOnly] <= results_[kSolveResistanceOnly] ? kCauseCapacity : kCauseResistance;
+        }
+        status_.cause = cause;
+    } else if (short_count_ == 0) {
+        status_.short_flight = false;
+        status_.cause = kCauseNone;
+    }
+}
+
+}  // namespace core
+}  // namespace battsim

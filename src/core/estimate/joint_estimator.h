@@ -1,0 +1,82 @@
+// The newer estimator: resistance from short-lag differences, state of charge, capacity
+// and polarisation from an EKF on the resistance-compensated voltage, and flight time
+// solved forward at the flight's mean power (current rises as the voltage sags). It also
+// decides whether the flight will be markedly shorter than a healthy pack's, and why.
+#pragma once
+#include <stdint.h>
+
+#include "core/estimate/capacity_ekf.h"
+#include "core/estimate/difference_resistance.h"
+#include "core/estimate/low_pass.h"
+#include "core/estimate/power_time_solver.h"
+#include "core/model/ocv.h"
+#include "core/model/tremblay.h"
+
+namespace battsim {
+namespace core {
+
+class JointEstimator {
+public:
+    struct Config {
+        DifferenceResistanceEstimator::Config resistance;
+        CapacityEkf::Config ekf;
+        OcvTable ocv;                       // optional; else the model's no-load curve
+        float polarisation_time_s = 5.0f;   // i_p time constant: fast enough that i_p follows the throttle and cannot mimic the SOC trend
+        float min_voltage_v = 13.3f;        // loaded cutoff
+        int solver_steps = 64;
+        int solver_steps_per_update = 8;
+        float short_flight_fraction = 0.8f;  // warn below this × a healthy pack's flight time
+        float cause_fraction = 0.9f;         // a cause alone must cost ≥ 10 % of the time
+        float min_flight_s = 8.0f;           // before any verdict
+        int persistence = 3;                 // consecutive verdicts before a warning
+    };
+    enum Cause : uint8_t { kCauseNone = 0, kCauseCapacity = 1, kCauseResistance = 2 };
+    struct Status {
+        bool started = false;
+        float soc = 0.0f;
+        float capacity_ah = 0.0f;
+        float sigma_capacity_ah = 0.0f;
+        float resistance_ohm = 0.0f;       // ohmic (short-lag) resistance
+        float polarisation_ohm = 0.0f;
+        float mean_power_w = 0.0f;         // since take-off
+        float remaining_time_s = 0.0f;
+        float remaining_energy_wh = 0.0f;
+        float total_time_s = 0.0f;         // estimated flight time from take-off
+        float expected_time_s = 0.0f;      // a healthy pack's, from the same take-off charge
+        bool time_valid = false;
+        bool short_flight = false;
+        uint8_t cause = kCauseNone;        // Cause bits
+    };
+
+    void configure(const Config& config, const TremblayParams& rated, int cells_in_series);
+    // Settles the initial state of charge from a resting voltage.
+    void start(float voltage_v, float current_a);
+    void update(uint64_t time_us, float voltage_v, float current_a, float dt_s, bool flying);
+    const Status& status() const { return status_; }
+    const OcvCurve& ocv() const { return ocv_; }
+
+private:
+    enum Solve : uint8_t { kSolveRemaining = 0, kSolveTotal, kSolveExpected, kSolveCapacityOnly, kSolveResistanceOnly, kSolveCount };
+    void start_solve();
+    void finish_solve();
+
+    Config config_;
+    Status status_;
+    TremblayParams rated_;
+    OcvCurve ocv_;
+    DifferenceResistanceEstimator resistance_;
+    CapacityEkf ekf_;
+    LowPassFilter polarisation_current_;
+    PowerTimeSolver solver_;
+    uint8_t solve_ = kSolveRemaining;
+    float solve_power_w_ = 0.0f;
+    float results_[kSolveCount] = {};
+    float flying_s_ = 0.0f;
+    float flying_energy_j_ = 0.0f;
+    float charge_since_takeoff_ah_ = 0.0f;
+    float elapsed_at_solve_s_ = 0.0f;
+    int short_count_ = 0;
+};
+
+}  // namespace core
+}  // namespace battsim

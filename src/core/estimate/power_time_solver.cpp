@@ -1,0 +1,76 @@
+#include "core/estimate/power_time_solver.h"
+
+#include "core/numeric.h"
+
+namespace battsim {
+namespace core {
+
+void PowerTimeSolver::start(float soc_from, float capacity_ah, float resistance_ohm, float power_w,
+                            float min_voltage_v, int steps) {
+    soc_from_ = clampf(soc_from, 0.0f, 1.0f);
+    capacity_ah_ = maxf(capacity_ah, 1.0e-3f);
+    resistance_ohm_ = maxf(resistance_ohm, 0.0f);
+    power_w_ = maxf(power_w, 1.0e-3f);
+    min_v_ = min_voltage_v;
+    steps_ = steps > 1 ? steps : 2;
+    step_ = 0;
+    done_ = false;
+    result_ = Result{};
+    prev_v_ = -1.0f;
+}
+
+float PowerTimeSolver::loaded_voltage(const OcvCurve& ocv, float soc, float& current_a, bool& feasible) const {
+    const float e = ocv.voltage_v(soc);
+    const float disc = e * e - 4.0f * resistance_ohm_ * power_w_;
+    feasible = disc >= 0.0f && e > 0.0f;
+    if (!feasible) {
+        current_a = e > 0.0f && resistance_ohm_ > 0.0f ? e / (2.0f * resistance_ohm_) : 0.0f;
+        return 0.5f * e;
+    }
+    // The smaller root: the operating point on the stable side of maximum power.
+    current_a = resistance_ohm_ > 1.0e-9f ? (e - sqrtf(disc)) / (2.0f * resistance_ohm_) : power_w_ / e;
+    return e - resistance_ohm_ * current_a;
+}
+
+bool PowerTimeSolver::advance(const OcvCurve& ocv, int max_steps) {
+    if (done_) return true;
+    const float dsoc = soc_from_ / static_cast<float>(steps_);
+    for (int n = 0; n < max_steps && !done_; ++n) {
+        bool feasible = true;
+        float i_a = 0.0f;
+        if (prev_v_ < 0.0f) {  // the starting point
+            prev_v_ = loaded_voltage(ocv, soc_from_, prev_i_, feasible);
+            if (!feasible || prev_v_ <= min_v_) {
+                result_.cutoff = true;
+                done_ = true;
+                break;
+            }
+        }
+        const float soc = soc_from_ - dsoc * static_cast<float>(step_ + 1);
+        const float v = loaded_voltage(ocv, soc, i_a, feasible);
+        float fraction = 1.0f;
+        bool stop = false;
+        if (!feasible || v <= min_v_) {
+            // Linear interpolation to where the loaded voltage crosses the minimum.
+            fraction = feasible && prev_v_ > v ? clampf((prev_v_ - min_v_) / (prev_v_ - v), 0.0f, 1.0f) : 0.0f;
+            stop = true;
+        }
+        const float dq_ah = dsoc * capacity_ah_ * fraction;
+        const float i_mean = 0.5f * (prev_i_ + (feasible ? i_a : prev_i_));
+        if (i_mean > 0.0f) {
+            const float dt_s = dq_ah * 3600.0f / i_mean;
+            result_.time_s += dt_s;
+            result_.charge_ah += dq_ah;
+            result_.energy_wh += power_w_ * dt_s / 3600.0f;
+        }
+        prev_v_ = v;
+        prev_i_ = i_a;
+        ++step_;
+        if (stop) result_.cutoff = true;
+        if (stop || step_ >= steps_) done_ = true;
+    }
+    return done_;
+}
+
+}  // namespace core
+}  // namespace battsim

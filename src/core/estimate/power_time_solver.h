@@ -1,0 +1,38 @@
+// Time to the cutoff voltage at a constant power demand: steps the pack down its OCV
+// curve, solving at each step the current that delivers the power through the total
+// resistance (P = (OCV − R·I)·I, closed form), until the loaded voltage reaches the
+// minimum. Work is spread over calls (`advance`) so no monitor update runs long.
+#pragma once
+
+#include "core/model/ocv.h"
+
+namespace battsim {
+namespace core {
+
+class PowerTimeSolver {
+public:
+    struct Result {
+        float time_s = 0.0f;
+        float charge_ah = 0.0f;
+        float energy_wh = 0.0f;
+        bool cutoff = false;  // the minimum voltage (or the power limit) was reached
+    };
+
+    void start(float soc_from, float capacity_ah, float resistance_ohm, float power_w, float min_voltage_v,
+               int steps);
+    // Runs up to `max_steps` steps; returns true when the result is complete.
+    bool advance(const OcvCurve& ocv, int max_steps);
+    bool done() const { return done_; }
+    const Result& result() const { return result_; }
+
+private:
+    float loaded_voltage(const OcvCurve& ocv, float soc, float& current_a, bool& feasible) const;
+    float soc_from_ = 0.0f, capacity_ah_ = 0.0f, resistance_ohm_ = 0.0f, power_w_ = 0.0f, min_v_ = 0.0f;
+    int steps_ = 0, step_ = 0;
+    float prev_v_ = 0.0f, prev_i_ = 0.0f;
+    bool done_ = true;
+    Result result_;
+};
+
+}  // namespace core
+}  // namespace battsim

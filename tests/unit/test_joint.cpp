@@ -1,0 +1,238 @@
+// The newer estimator's parts against hand-computed values, and the whole of it against
+// a pack with injected truth. The plant here is an equivalent circuit (OCV table, series
+// resistance, one RC branch), not the Tremblay model the reference monitor runs.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "core/estimate/capacity_ekf.h"
+#include "core/estimate/difference_resistance.h"
+#include "core/estimate/joint_estimator.h"
+#include "core/estimate/power_time_solver.h"
+#include "core/model/ocv.h"
+
+using namespace battsim::core;
+
+namespace {
+
+// Per-cell LiPo-like OCV at SOC 0, 0.1, …, 1.
+OcvTable lipo_table() {
+    OcvTable t;
+    const float v[11] = {3.30f, 3.60f, 3.68f, 3.73f, 3.77f, 3.81f, 3.86f, 3.92f, 3.99f, 4.07f, 4.17f};
+    t.points = 11;
+    for (int k = 0; k < 11; ++k) t.cell_voltage_v[k] = v[k];
+    return t;
+}
+
+// Deterministic pseudo-noise in [−1, 1] (no library RNG: same on every platform).
+struct Lcg {
+    uint32_t s = 12345u;
+    float next() {
+        s = s * 1664525u + 1013904223u;
+        return static_cast<float>(s >> 8) / 8388608.0f - 1.0f;
+    }
+};
+
+struct Plant {
+    OcvCurve ocv;
+    float capacity_ah, r0_ohm, r1_ohm, tau_s;
+    float soc = 1.0f, v1 = 0.0f;
+    float step(float current_a, float dt_s) {
+        soc -= current_a * dt_s / (3600.0f * capacity_ah);
+        v1 += (current_a * r1_ohm - v1) * (1.0f - std::exp(-dt_s / tau_s));
+        return ocv.voltage_v(soc) - r0_ohm * current_a - v1;
+    }
+};
+
+// A racing-style power profile: bursts and cruise, constant power per phase.
+float demand_w(float t_s) {
+    const int phase = static_cast<int>(t_s / 3.0f) % 5;
+    const float p[5] = {250.0f, 420.0f, 180.0f, 520.0f, 300.0f};
+    return p[phase];
+}
+
+}  // namespace
+
+TEST_CASE("OCV table interpolates and inverts", "[joint]") {
+    OcvCurve c;
+    c.configure(lipo_table(), 4, TremblayParams{});
+    CHECK(c.voltage_v(1.0f) == Approx(16.68f));
+    CHECK(c.voltage_v(0.0f) == Approx(13.2f));
+    CHECK(c.voltage_v(0.55f) == Approx(4.0f * (3.81f + 0.5f * (3.86f - 3.81f))));
+    CHECK(c.slope_v_per_soc(0.55f) == Approx(4.0f * 0.05f / 0.1f).epsilon(1e-3));
+    CHECK(c.soc_at_voltage(4.0f * 3.835f) == Approx(0.55f).margin(1e-4));
+    CHECK(c.soc_at_voltage(20.0f) == 1.0f);
+    CHECK(c.soc_at_voltage(1.0f) == 0.0f);
+    OcvCurve m;  // without a table: the model's no-load curve
+    m.configure(OcvTable{}, 4, TremblayParams{});
+    CHECK_FALSE(m.from_table());
+    CHECK(m.voltage_v(1.0f) == Approx(16.94f).margin(1e-3));
+}
+
+TEST_CASE("Difference resistance: one step by hand, then recovery under noise", "[joint][truth]") {
+    DifferenceResistanceEstimator r;
+    DifferenceResistanceEstimator::Config cfg;
+    cfg.lag_s = 0.13f;
+    cfg.min_excitation_a2 = 0.0f;
+    r.configure(cfg);
+    // Samples every 67 ms: 10 A, 10 A, then 30 A. The third pairs with the first
+    // (134 ms ≥ 130 ms): ΔI = 20 A, ΔV = −0.6 V → 0.03 ohm once three pairs exist.
+    uint64_t t = 0;
+    const float i_seq[6] = {10, 10, 30, 30, 10, 10};
+    for (int k = 0; k < 6; ++k, t += 67000) r.update(t, 16.0f - 0.03f * i_seq[k], i_seq[k]);
+    CHECK(r.status().valid);
+    CHECK(r.status().resistance_ohm == Approx(0.03f).epsilon(1e-4));
+    CHECK(r.status().sigma_ohm == Approx(0.0f).margin(1e-4));
+
+    // Truth: 0.045 ohm, an RC branch of 0.015 ohm / 8 s, OCV sagging, 10 mV quantisation.
+    Plant p{OcvCurve{}, 1.5f, 0.045f, 0.015f, 8.0f};
+    p.ocv.configure(lipo_table(), 4, TremblayParams{});
+    DifferenceResistanceEstimator e;
+    e.configure(DifferenceResistanceEstimator::Config{});
+    Lcg rng;
+    t = 0;
+    for (int k = 0; k < 1500; ++k, t += 67000) {
+        const float i = 10.0f + 30.0f * static_cast<float>((k / 9) % 3) + 2.0f * rng.next();
+        const float v = std::round(p.step(i, 0.067f) * 100.0f) / 100.0f;
+        e.update(t, v, i);
+    }
+    // The lag lets ~1.6 % of the RC branch in (1 − e^(−0.134/8)); well inside 5 %.
+    CHECK(e.status().resistance_ohm == Approx(0.045f).epsilon(0.05));
+    CHECK(e.status().sigma_ohm < 0.002f);
+}
+
+TEST_CASE("Power-time solver against closed forms", "[joint]") {
+    // Flat OCV of 16 V, R 0.05 ohm, 400 W: I solves 0.05·I² − 16·I + 400 = 0 → I = 26.79 A
+    // (smaller root); 1 Ah from SOC 1 to 0 takes 1·3600/26.79 = 134.4 s; the loaded voltage
+    // 14.66 V never reaches a 13 V minimum.
+    OcvTable flat;
+    flat.points = 2;
+    flat.cell_voltage_v[0] = flat.cell_voltage_v[1] = 4.0f;
+    OcvCurve c;
+    c.configure(flat, 4, TremblayParams{});
+    PowerTimeSolver s;
+    s.start(1.0f, 1.0f, 0.05f, 400.0f, 13.0f, 50);
+    int calls = 0;
+    while (!s.advance(c, 7)) ++calls;
+    CHECK(calls == 7);  // 50 steps at 7 per call: done in the eighth call
+    const double i = (16.0 - std::sqrt(256.0 - 4 * 0.05 * 400)) / 0.1;
+    CHECK(s.result().time_s == Approx(3600.0 / i).epsilon(1e-4));
+    CHECK(s.result().energy_wh == Approx(400.0 / i).epsilon(1e-4));
+    CHECK_FALSE(s.result().cutoff);
+    // Linear OCV 12→16.8 V over SOC, no resistance, 100 W, minimum 14.4 V: the cutoff is at
+    // SOC 0.5; the time is ∫ Q·3600/(P/V) dsoc = 3600·Q/P·∫V dsoc over [0.5, 1].
+    OcvTable lin;
+    lin.points = 2;
+    lin.cell_voltage_v[0] = 3.0f;
+    lin.cell_voltage_v[1] = 4.2f;
+    c.configure(lin, 4, TremblayParams{});
+    s.start(1.0f, 2.0f, 0.0f, 100.0f, 14.4f, 100);
+    while (!s.advance(c, 100)) {
+    }
+    CHECK(s.result().cutoff);
+    CHECK(s.result().charge_ah == Approx(1.0f).epsilon(1e-3));
+    CHECK(s.result().time_s == Approx(3600.0 * 2.0 / 100.0 * 0.5 * (16.8 + 14.4) / 2.0).epsilon(2e-3));
+}
+
+TEST_CASE("Capacity EKF recovers an injected capacity from the OCV", "[joint][truth]") {
+    for (float factor : {0.75f, 1.0f, 1.15f}) {
+        Plant p{OcvCurve{}, 1.5f * factor, 0.03f, 0.0f, 5.0f};
+        p.ocv.configure(lipo_table(), 4, TremblayParams{});
+        CapacityEkf ekf;
+        ekf.configure(CapacityEkf::Config{}, 1.5f);
+        ekf.start(1.0f);
+        Lcg rng;
+        for (int k = 0; k < 3000; ++k) {  // 200 s at ~20 A: ~1.1 Ah
+            const float i = 20.0f + 10.0f * rng.next();
+            const float v = p.step(i, 0.067f) + 0.01f * rng.next();
+            ekf.predict(i, 0.067f);
+            ekf.correct(v + 0.03f * i, 0.0f, 0.0f, p.ocv);
+            if (p.soc < 0.15f) break;
+        }
+        INFO("true capacity " << 1.5f * factor);
+        CHECK(ekf.status().capacity_ah == Approx(1.5f * factor).epsilon(0.03));
+        CHECK(ekf.status().soc == Approx(p.soc).margin(0.03));
+    }
+}
+
+namespace {
+struct FlightResult {
+    JointEstimator::Status at20;
+    JointEstimator::Status end;
+    float true_total_s = 0;
+    bool warned = false;
+    uint8_t cause = 0;
+};
+
+// Flies the plant at the demand profile until the loaded voltage reaches 13.3 V and
+// records the estimator at 20 % of that (true) flight time.
+FlightResult fly(float capacity_factor, float resistance_factor) {
+    const float dt = 0.067f;
+    TremblayParams rated;
+    rated.capacity_ah = 1.5f;
+    rated.internal_resistance_ohm = 0.025f;
+    auto make_plant = [&]() {
+        Plant p{OcvCurve{}, 1.5f * capacity_factor, 0.025f * resistance_factor, 0.008f * resistance_factor, 6.0f};
+        p.ocv.configure(lipo_table(), 4, rated);
+        return p;
+    };
+    // First pass: the true flight time.
+    Plant truth = make_plant();
+    float t = 0.0f, i = 20.0f;
+    while (t < 2000.0f) {
+        const float v = truth.step(i, dt);
+        if (v < 13.3f) break;
+        i = demand_w(t) / v;
+        t += dt;
+    }
+    FlightResult out;
+    out.true_total_s = t;
+    // Second pass: the estimator rides along.
+    Plant p = make_plant();
+    JointEstimator::Config jc;
+    jc.ocv = lipo_table();
+    JointEstimator e;
+    e.configure(jc, rated, 4);
+    e.start(p.ocv.voltage_v(1.0f), 0.0f);
+    Lcg rng;
+    float v = p.ocv.voltage_v(1.0f);
+    i = demand_w(0.0f) / v;
+    uint64_t t_us = 0;
+    bool recorded = false;
+    for (float tt = 0.0f; tt < out.true_total_s; tt += dt, t_us += 67000) {
+        v = p.step(i, dt);
+        const float vm = std::round((v + 0.005f * rng.next()) * 100.0f) / 100.0f;
+        e.update(t_us, vm, i + 0.05f * rng.next(), dt, true);
+        if (!recorded && tt >= 0.2f * out.true_total_s) {
+            out.at20 = e.status();
+            recorded = true;
+        }
+        i = demand_w(tt) / v;
+    }
+    out.end = e.status();
+    out.warned = out.at20.short_flight;
+    out.cause = out.at20.cause;
+    return out;
+}
+}  // namespace
+
+TEST_CASE("Joint estimator on injected packs: capacity, resistance, warnings by 20 %", "[joint][truth]") {
+    const FlightResult healthy = fly(1.0f, 1.0f);
+    CHECK(healthy.at20.capacity_ah == Approx(1.5f).epsilon(0.05));
+    CHECK(healthy.at20.resistance_ohm == Approx(0.025f).epsilon(0.06));
+    CHECK_FALSE(healthy.warned);
+    // Remaining time at 20 %, as a share of the true flight.
+    CHECK(std::fabs(healthy.at20.remaining_time_s - 0.8f * healthy.true_total_s) < 0.06f * healthy.true_total_s);
+
+    const FlightResult weak = fly(0.7f, 1.0f);
+    CHECK(weak.at20.capacity_ah == Approx(1.05f).epsilon(0.07));
+    CHECK(weak.warned);
+    CHECK((weak.cause & JointEstimator::kCauseCapacity) != 0);
+    CHECK((weak.cause & JointEstimator::kCauseResistance) == 0);
+
+    const FlightResult resistive = fly(1.0f, 2.2f);
+    CHECK(resistive.at20.resistance_ohm == Approx(0.055f).epsilon(0.06));
+    INFO("resistive: total " << resistive.at20.total_time_s << " expected " << resistive.at20.expected_time_s);
+    CHECK(resistive.warned == (resistive.at20.total_time_s < 0.8f * resistive.at20.expected_time_s));
+    if (resistive.warned) CHECK((resistive.cause & JointEstimator::kCauseResistance) != 0);
+}
+
