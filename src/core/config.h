@@ -4,6 +4,7 @@
 #pragma once
 #include <stdint.h>
 
+#include "core/cells/cell_analyzer.h"
 #include "core/cells/piao.h"
 #include "core/estimate/flight_time.h"
 #include "core/estimate/flying_state.h"
@@ -59,6 +60,7 @@ struct MonitorConfig {
     InitialState::Config initial;
     PiaoCellScorer::Config cells;
     JointEstimator::Config joint;
+    CellAnalyzer::Config cell_analysis;  // the joint estimator's cell check
     WarningConfig warnings;
     SensorLimits sensor;
     ShuntCalibration shunt;

@@ -33,6 +33,7 @@ void Monitor::configure(const MonitorConfig& config) {
     JointEstimator::Config jc = config.joint;
     jc.min_voltage_v = config.flight_time.min_flight_voltage_v;
     joint_.configure(jc, config.battery, config.cells_in_series);
+    cell_analyzer_.configure(config.cell_analysis);
     have_time_ = false;
     last_time_us_ = 0;
     status_.capacity_ah = capacity_.status().capacity_ah;
@@ -159,6 +160,17 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         status_.remaining_energy_wh = js.remaining_energy_wh;
         status_.short_flight_cause = js.cause;
         short_flight = js.short_flight;
+        if (flying && status_.cells_valid) {
+            cell_analyzer_.update(sample.time_us, sample.cell_voltage_v, sample.cell_count, sample.current_a, used_ah,
+                                  joint_.ocv().slope_v_per_soc(js.soc), js.capacity_ah);
+        } else {
+            cell_analyzer_.break_history();
+        }
+        const CellAnalyzer::Status& ca = cell_analyzer_.status();
+        for (int c = 0; c < kMaxCells; ++c) {
+            status_.cell_resistance_ohm[c] = ca.resistance_ohm[c];
+            status_.cell_capacity_deficit[c] = ca.capacity_deficit[c];
+        }
     }
 
     const PiaoCellScorer::Status& cs = cells_.status();
@@ -178,10 +190,17 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
                                        status_.resistance_ohm >
                                            wc.high_resistance_factor * config_.battery.internal_resistance_ohm);
     }
-    const bool outlier = cs.worst_cell >= 0 && cs.outlier_samples >= wc.min_cell_outlier_samples &&
-                         fabsf(cs.score[cs.worst_cell]) >= wc.cell_outlier_score;
-    raise(kWarnCellOutlier, outlier);
-    status_.outlier_cell = outlier ? cs.worst_cell : static_cast<int8_t>(-1);
+    if (config_.estimator == EstimatorKind::Joint) {
+        const CellAnalyzer::Status& ca = cell_analyzer_.status();
+        raise(kWarnCellOutlier, ca.flagged_cell >= 0);
+        status_.outlier_cell = ca.flagged_cell;
+        status_.cell_finding = ca.finding;
+    } else {
+        const bool outlier = cs.worst_cell >= 0 && cs.outlier_samples >= wc.min_cell_outlier_samples &&
+                             fabsf(cs.score[cs.worst_cell]) >= wc.cell_outlier_score;
+        raise(kWarnCellOutlier, outlier);
+        status_.outlier_cell = outlier ? cs.worst_cell : static_cast<int8_t>(-1);
+    }
     return status_;
 }
 

@@ -55,6 +55,9 @@ struct MonitorStatus {
     uint8_t cell_count = 0;
     float cell_score[kMaxCells] = {};
     int8_t outlier_cell = -1;
+    uint8_t cell_finding = 0;  // joint estimator: CellAnalyzer::Finding of outlier_cell
+    float cell_resistance_ohm[kMaxCells] = {};
+    float cell_capacity_deficit[kMaxCells] = {};
 
     uint8_t warnings = 0;                       // bit per Warning, currently active
     uint8_t warnings_raised = 0;                // bit per Warning, ever raised
@@ -86,6 +89,7 @@ private:
     InitialState initial_;
     PiaoCellScorer cells_;
     JointEstimator joint_;
+    CellAnalyzer cell_analyzer_;
     bool have_time_ = false;
     uint64_t last_time_us_ = 0;
 };

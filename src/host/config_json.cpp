@@ -173,6 +173,17 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("cause_fraction", jc.cause_fraction, 0, 1);
         r.number("min_flight_s", jc.min_flight_s, 0, kBig);
         r.number("persistence", jc.persistence, 1, 1e6);
+        core::CellAnalyzer::Config& ca = m.cell_analysis;
+        r.number("cell_resistance_ratio", ca.resistance_ratio, 1, 100);
+        r.number("cell_capacity_deficit", ca.capacity_deficit, 0, 1);
+        r.number("cell_significance_sigmas", ca.significance_sigmas, 0, 100);
+        r.number("cell_min_charge_ah", ca.min_charge_ah, 0, kBig);
+        bool lead = ca.last_cell_includes_lead;
+        if (const json* b = r.object("last_cell_includes_lead")) {
+            if (!b->is_boolean()) r.fail(r.child("last_cell_includes_lead"), "expected true or false");
+            lead = b->get<bool>();
+        }
+        ca.last_cell_includes_lead = lead;
         if (const json* t = r.object("ocv_cell_voltage_v")) {
             if (!t->is_array() || t->size() < 2 || t->size() > static_cast<size_t>(core::kOcvTableMaxPoints))
                 r.fail(r.child("ocv_cell_voltage_v"), "expected an array of 2.." + std::to_string(core::kOcvTableMaxPoints) +
@@ -287,6 +298,11 @@ json config_to_json(const LoadedConfig& c) {
             {"cause_fraction", jc.cause_fraction},
             {"min_flight_s", jc.min_flight_s},
             {"persistence", jc.persistence},
+            {"cell_resistance_ratio", m.cell_analysis.resistance_ratio},
+            {"cell_capacity_deficit", m.cell_analysis.capacity_deficit},
+            {"cell_significance_sigmas", m.cell_analysis.significance_sigmas},
+            {"cell_min_charge_ah", m.cell_analysis.min_charge_ah},
+            {"last_cell_includes_lead", m.cell_analysis.last_cell_includes_lead},
         };
         if (jc.ocv.points >= 2) {
             json t = json::array();

@@ -50,6 +50,13 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
     ++samples_;
     latest_ = s;
     have_latest_ = true;
+    const uint8_t fresh = static_cast<uint8_t>(s.warnings_raised & ~seen_raised_);
+    if (fresh & (1u << core::kWarnShortFlight)) short_cause_ = s.short_flight_cause;
+    if (fresh & (1u << core::kWarnCellOutlier)) {
+        outlier_cell_ = s.outlier_cell;
+        outlier_finding_ = s.cell_finding;
+    }
+    seen_raised_ = s.warnings_raised;
     if (!s.sample_valid) return;
     ++valid_samples_;
     if (!have_time_) first_time_us_ = s.time_us;
@@ -164,6 +171,18 @@ json SummaryAccumulator::to_json(int cells) const {
         json scores = json::array();
         for (int c = 0; c < cells && c < core::kMaxCells; ++c) scores.push_back(round_sig(last_flying_.cell_score[c], 4));
         flight["cell_scores"] = scores;
+        bool cell_analysis = false;
+        for (int c = 0; c < cells && c < core::kMaxCells; ++c)
+            if (last_flying_.cell_resistance_ohm[c] != 0.0f) cell_analysis = true;
+        if (cell_analysis) {  // the joint estimator's per-cell check
+            json r = json::array(), d = json::array();
+            for (int c = 0; c < cells && c < core::kMaxCells; ++c) {
+                r.push_back(round_sig(last_flying_.cell_resistance_ohm[c], 4));
+                d.push_back(round_sig(last_flying_.cell_capacity_deficit[c], 3));
+            }
+            flight["cell_resistance_ohm"] = r;
+            flight["cell_capacity_deficit"] = d;
+        }
         j["flight"] = flight;
     }
 
@@ -198,7 +217,17 @@ json SummaryAccumulator::to_json(int cells) const {
                                          : json(nullptr);
             }
             e["active_at_end"] = (last_.warnings & bit) != 0;
-            if (w == core::kWarnCellOutlier && last_flying_.outlier_cell >= 0) e["cell"] = last_flying_.outlier_cell + 1;
+            if (w == core::kWarnCellOutlier && outlier_cell_ >= 0) {
+                e["cell"] = outlier_cell_ + 1;
+                if (outlier_finding_ == core::CellAnalyzer::kHighResistance) e["finding"] = "high_resistance";
+                if (outlier_finding_ == core::CellAnalyzer::kLowCapacity) e["finding"] = "low_capacity";
+            }
+            if (w == core::kWarnShortFlight) {
+                json cause = json::array();
+                if (short_cause_ & core::JointEstimator::kCauseCapacity) cause.push_back("capacity");
+                if (short_cause_ & core::JointEstimator::kCauseResistance) cause.push_back("resistance");
+                e["cause"] = cause;
+            }
             warnings.push_back(e);
         }
         j["sensor_fault_samples"] = last_.sensor_fault_samples;

@@ -67,6 +67,11 @@ private:
     uint64_t initial_time_us_ = 0;
     float initial_consumed_mah_ = 0, initial_consumed_mwh_ = 0;
     bool initial_forced_ = false;
+    uint8_t seen_raised_ = 0;        // warnings already recorded below
+    uint8_t short_cause_ = 0;        // cause bits when the short-flight warning was first raised
+    int8_t outlier_cell_ = -1;       // cell named when the cell warning was first raised
+    uint8_t outlier_finding_ = 0;
+    float at20_expected_time_s_ = 0; // joint estimator: a healthy pack's flight time at 20 %
 };
 
 }  // namespace host

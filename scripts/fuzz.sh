@@ -1,0 +1,36 @@
+#!/bin/sh
+# Builds the libFuzzer harnesses with clang (ASan+UBSan) and runs each for a bounded time,
+# seeded with the shared real logs and the committed regression inputs. A crash fails the
+# run and leaves the input in build-fuzz/crashes/: add it to tests/fuzz/regressions/.
+set -eu
+root=$(cd "$(dirname "$0")/.." && pwd)
+build="$root/build-fuzz"
+seconds=${FUZZ_SECONDS:-60}
+data=${BATTSIM_DATA_DIR:-$root/../shared/data}
+
+CC=clang CXX=clang++ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBATTSIM_FUZZ=ON >/dev/null
+cmake --build "$build" -j"$(nproc)" --target fuzz_reader fuzz_monitor
+
+corpus="$build/corpus"
+mkdir -p "$corpus/reader" "$corpus/monitor" "$build/crashes"
+# Seeds: small real logs of every format (not copied into the repository).
+for f in "$data/px4/test.ulg" "$data/ardupilot/robert_lefebvre_octo_PM.log" "$root/tests/fuzz/seeds/"*; do
+  [ -f "$f" ] && cp "$f" "$corpus/reader/" || true
+done
+if [ -f "$data/predictive-bms/flights/30.csv" ]; then head -c 4000 "$data/predictive-bms/flights/30.csv" > "$corpus/reader/raw.csv"; fi
+if [ -f "$data/ardupilot/log171.bin" ]; then head -c 20000 "$data/ardupilot/log171.bin" > "$corpus/reader/df.bin"; fi
+if [ -d "$root/tests/fuzz/regressions" ]; then cp "$root"/tests/fuzz/regressions/* "$corpus/reader/" 2>/dev/null || true; fi
+
+status=0
+for h in reader monitor; do
+  echo "fuzz: $h for ${seconds}s"
+  if ! "$build/tests/fuzz_$h" "$corpus/$h" -max_total_time="$seconds" -max_len=65536 -timeout=10 \
+        -artifact_prefix="$build/crashes/$h-" -print_final_stats=1 2>"$build/fuzz_$h.log"; then
+    echo "fuzz: $h FAILED; see $build/fuzz_$h.log and $build/crashes/"
+    tail -40 "$build/fuzz_$h.log"
+    status=1
+  else
+    grep -E "stat::number_of_executed_units|cov:" "$build/fuzz_$h.log" | tail -2
+  fi
+done
+exit $status

@@ -1,0 +1,32 @@
+// libFuzzer harness: any bytes, any format detection, every reader. The only acceptable
+// outcomes are samples or an InputError; a crash, a sanitizer report, a hang or another
+// exception type is a bug (and becomes a regression test under tests/fuzz/regressions).
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+#include "host/io/sample_reader.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    static const std::string path = "/tmp/battsim-fuzz-reader-" + std::to_string(::getpid());
+    FILE* f = std::fopen(path.c_str(), "wb");
+    if (!f) return 0;
+    if (size) std::fwrite(data, 1, size, f);
+    std::fclose(f);
+    // The first byte picks the forced format too, so every reader sees every input.
+    using battsim::host::LogFormat;
+    const LogFormat formats[] = {LogFormat::Auto, LogFormat::RawPbms, LogFormat::Csv, LogFormat::DataflashText,
+                                 LogFormat::DataflashBinary, LogFormat::Ulog};
+    battsim::host::ReaderOptions opt;
+    opt.format = formats[size ? data[0] % 6 : 0];
+    try {
+        auto reader = battsim::host::open_reader(path, opt);
+        battsim::core::Sample s;
+        long n = 0;
+        while (reader->next(s) && n < 1000000) ++n;
+    } catch (const battsim::host::InputError&) {
+    }
+    return 0;
+}

@@ -1,0 +1,116 @@
+// Monitor composition: sensor faults are kept out of the estimators, the state never
+// becomes NaN, warnings carry their first times.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+
+#include "core/monitor.h"
+
+using namespace battsim::core;
+
+namespace {
+Sample make(uint64_t t_us, float v, float i, float cell_v = -1.0f) {
+    Sample s;
+    s.time_us = t_us;
+    s.voltage_v = v;
+    s.current_a = i;
+    s.cell_count = 4;
+    for (int c = 0; c < 4; ++c) s.cell_voltage_v[c] = cell_v > 0 ? cell_v : v / 4.0f;
+    return s;
+}
+bool all_finite(const MonitorStatus& s) {
+    const float v[] = {s.consumed_mah, s.consumed_mwh, s.model_voltage_v, s.adapted_model_voltage_v, s.soc,
+                       s.capacity_ah, s.resistance_ohm, s.remaining_time_s, s.total_time_s, s.avg_power_w};
+    for (float x : v)
+        if (!std::isfinite(x)) return false;
+    return true;
+}
+}  // namespace
+
+TEST_CASE("Monitor settles at rest, counts charge, flies", "[monitor]") {
+    for (EstimatorKind kind : {EstimatorKind::Reference, EstimatorKind::Joint}) {
+        MonitorConfig cfg;
+        cfg.estimator = kind;
+        Monitor m;
+        m.configure(cfg);
+        uint64_t t = 0;
+        for (int k = 0; k < 100; ++k, t += 67000) m.update(make(t, 16.5f, 0.3f));
+        REQUIRE(m.status().initialised);
+        CHECK_FALSE(m.status().flying);
+        const float start_mah = m.status().consumed_mah;
+        for (int k = 0; k < 1000; ++k, t += 67000) m.update(make(t, 15.5f, 20.0f));
+        CHECK(m.status().flying);
+        // 20 A for 67 s = 372.2 mAh.
+        CHECK(m.status().consumed_mah - start_mah == Approx(20.0 * 67.0 / 3.6).epsilon(1e-3));
+        CHECK(all_finite(m.status()));
+        CHECK(m.status().time_valid);
+    }
+}
+
+TEST_CASE("Sensor faults are flagged and kept out of the estimators", "[monitor]") {
+    MonitorConfig cfg;
+    Monitor m;
+    m.configure(cfg);
+    uint64_t t = 0;
+    for (int k = 0; k < 100; ++k, t += 67000) m.update(make(t, 16.5f, 0.3f));
+    for (int k = 0; k < 100; ++k, t += 67000) m.update(make(t, 15.5f, 20.0f));
+    const float mah = m.status().consumed_mah;
+    // NaN voltage, an absurd current, a collapsed balance lead: faults, not data.
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    m.update(make(t, nan, 20.0f));
+    CHECK_FALSE(m.status().sample_valid);
+    CHECK((m.status().warnings & (1u << kWarnSensorFault)) != 0);
+    const uint64_t fault_time = m.status().warning_time_us[kWarnSensorFault];
+    CHECK(fault_time == t);
+    t += 67000;
+    m.update(make(t, 15.5f, 5000.0f));
+    CHECK_FALSE(m.status().sample_valid);
+    t += 67000;
+    Sample lead = make(t, 15.5f, 20.0f);
+    lead.cell_voltage_v[2] = 0.02f;  // the pack is fine, one tap reads nothing
+    m.update(lead);
+    CHECK(m.status().sample_valid);
+    CHECK_FALSE(m.status().cells_valid);
+    CHECK(m.status().sensor_fault_samples == 3);
+    // The charge over the two rejected samples is counted with the next good one's dt.
+    t += 67000;
+    m.update(make(t, 15.5f, 20.0f));
+    CHECK(m.status().consumed_mah - mah == Approx(20.0 * 4 * 0.067 / 3.6).epsilon(1e-3));
+    CHECK(all_finite(m.status()));
+    CHECK(m.status().warning_time_us[kWarnSensorFault] == fault_time);  // first time kept
+    // The cell scorer never saw the collapsed tap.
+    for (int c = 0; c < 4; ++c) CHECK(m.status().cell_score[c] == 0.0f);
+}
+
+TEST_CASE("Monitor survives hostile sample streams", "[monitor]") {
+    const float inf = std::numeric_limits<float>::infinity();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float values[] = {0.0f, -1.0f, 1e-30f, 1e30f, inf, -inf, nan, 16.0f, 3.0f, 400.0f};
+    for (EstimatorKind kind : {EstimatorKind::Reference, EstimatorKind::Joint}) {
+        MonitorConfig cfg;
+        cfg.estimator = kind;
+        Monitor m;
+        m.configure(cfg);
+        uint64_t t = 0;
+        uint32_t seed = 7;
+        for (int k = 0; k < 20000; ++k) {
+            seed = seed * 1664525u + 1013904223u;
+            const float v = (seed >> 28) < 10 ? values[(seed >> 28) % 10] : 12.0f + static_cast<float>((seed >> 8) & 1023) / 200.0f;
+            seed = seed * 1664525u + 1013904223u;
+            const float i = (seed >> 28) < 3 ? values[(seed >> 24) % 10] : static_cast<float>((seed >> 8) & 1023) / 10.0f;
+            seed = seed * 1664525u + 1013904223u;
+            // Time: mostly 67 ms, sometimes still, sometimes backwards, sometimes minutes.
+            const uint32_t r = seed >> 28;
+            if (r == 0) t += 600000000u;
+            else if (r == 1 && t > 1000000u) t -= 1000000u;
+            else if (r != 2) t += 67000u;
+            const MonitorStatus& s = m.update(make(t, v, i));
+            REQUIRE(all_finite(s));
+            REQUIRE(s.soc >= 0.0f);
+            REQUIRE(s.soc <= 1.0f);
+            REQUIRE(s.capacity_ah > 0.0f);
+            REQUIRE(s.resistance_ohm >= 0.0f);
+            REQUIRE(s.remaining_time_s >= 0.0f);
+        }
+    }
+}
