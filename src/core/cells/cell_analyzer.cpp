@@ -68,7 +68,7 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     head_ = (head_ + 1) % kHistory;
     if (count_ < kHistory) ++count_;
 
-    const bool r_ready = sxx_ >= config_.min_excitation_a2 && n_r_ >= 10.0f;
+    const bool r_ready = sxx_ >= config_.min_excitation_a2 && n_r_ >= config_.min_pairs;
     float sigma_r[kMaxCells] = {};
     if (r_ready) {
         for (int c = 0; c < cells; ++c) {
@@ -119,7 +119,7 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     }
     const float var_q = n_ > 1.0f ? sqq_ / n_ - (sq_ / n_) * (sq_ / n_) : 0.0f;
     const float span_ah = sqrtf(maxf(0.0f, var_q)) * 3.4641f;  // a uniform spread's full width
-    const float cell_slope = pack_ocv_slope_v_per_soc / static_cast<float>(cells);
+    const float cell_slope = maxf(pack_ocv_slope_v_per_soc / static_cast<float>(cells), config_.min_cell_ocv_slope_v);
     if (span_ah >= config_.min_charge_ah && cell_slope > 0.0f && capacity_ah > 0.0f) {
         for (int c = 0; c < cells; ++c) {
             const float cov = sqd_[c] / n_ - (sq_ / n_) * (sd_[c] / n_);
@@ -132,6 +132,7 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
             const float deficit = -slope * capacity_ah / cell_slope * static_cast<float>(cells) /
                                   static_cast<float>(cells - 1);
             status_.capacity_deficit[c] = deficit;
+            if (c == lead_cell) continue;
             if (deficit > config_.capacity_deficit && -slope > config_.significance_sigmas * se &&
                 deficit > worst) {
                 worst = deficit;

@@ -6,7 +6,8 @@
 //
 // Measurement topology matters: on the reference logger the last cell is read as
 // pack − last balance tap, so it carries the main lead and connector resistance; with
-// `last_cell_includes_lead` its resistance is never compared with the others.
+// `last_cell_includes_lead` it is never compared with the others (its resistance carries the
+// lead, its drift mixes the two converters' gain errors); its values are still reported.
 #pragma once
 #include <stdint.h>
 
@@ -20,7 +21,11 @@ public:
     struct Config {
         float lag_s = 0.13f;
         float min_step_a = 2.0f;
-        float min_excitation_a2 = 2000.0f;
+        float min_excitation_a2 = 20000.0f;  // ~20 s of racing throttle
+        float min_pairs = 300.0f;
+        // Floor on a cell's dOCV/dSOC: on flat stretches of the curve the conversion from
+        // voltage drift to capacity would amplify noise without bound.
+        float min_cell_ocv_slope_v = 0.4f;
         float resistance_ratio = 1.10f;     // name a cell above this × the others' median
         float capacity_deficit = 0.10f;     // name a cell this much below the others
         float min_charge_ah = 0.1f;         // charge drawn before capacity is judged
