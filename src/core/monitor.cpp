@@ -148,6 +148,12 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
 
     bool short_flight = false;
     if (config_.estimator == EstimatorKind::Joint) {
+        {
+            const CellAnalyzer::Status& ca = cell_analyzer_.status();
+            joint_.set_weakest_cell_deficit(ca.finding == CellAnalyzer::kLowCapacity && ca.flagged_cell >= 0
+                                                ? ca.capacity_deficit[ca.flagged_cell]
+                                                : 0.0f);
+        }
         joint_.update(sample.time_us, sample.voltage_v, sample.current_a, dt_s, flying);
         const JointEstimator::Status& js = joint_.status();
         status_.capacity_ah = js.capacity_ah;

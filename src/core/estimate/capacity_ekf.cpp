@@ -50,7 +50,7 @@ void CapacityEkf::predict(float current_a, float dt_s) {
     publish();
 }
 
-void CapacityEkf::correct(float y_v, float ip_a, float extra_var_v2, const OcvCurve& ocv) {
+void CapacityEkf::correct(float y_v, float ip_a, float extra_var_v2, const OcvCurve& ocv, bool learn_parameters) {
     const float h_soc = ocv.slope_v_per_soc(x_[0]);
     const float hx[3] = {h_soc, 0.0f, -ip_a};
     const float predicted = ocv.voltage_v(x_[0]) - x_[2] * ip_a;
@@ -68,6 +68,7 @@ void CapacityEkf::correct(float y_v, float ip_a, float extra_var_v2, const OcvCu
     }
     float k[3];
     for (int r = 0; r < 3; ++r) k[r] = ph[r] / s;
+    if (!learn_parameters) k[1] = k[2] = 0.0f;  // the Joseph update below stays valid for any gain
     for (int r = 0; r < 3; ++r) x_[r] += k[r] * nu;
 
     // Joseph form: P ← (I − K H) P (I − K H)ᵀ + K R Kᵀ keeps P symmetric and positive.

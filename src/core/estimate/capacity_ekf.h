@@ -15,7 +15,7 @@ namespace core {
 class CapacityEkf {
 public:
     struct Config {
-        float voltage_sigma_v = 0.04f;              // measurement and model error
+        float voltage_sigma_v = 0.02f;              // measurement and model error (tuned on the scenario suite)
         float soc_sigma0 = 0.03f;                   // after the initial state at rest
         float capacity_sigma0_fraction = 0.25f;     // of rated
         float polarisation_initial_ohm = 0.005f;
@@ -42,7 +42,9 @@ public:
     void start(float soc);
     void predict(float current_a, float dt_s);
     // y: V + R0·I; ip: polarisation current; extra_var_v2: variance added by the R0 error.
-    void correct(float y_v, float ip_a, float extra_var_v2, const OcvCurve& ocv);
+    // learn_parameters = false updates the state of charge only (capacity and polarisation
+    // are held as "consider" states): at rest nothing flows that could tell them apart.
+    void correct(float y_v, float ip_a, float extra_var_v2, const OcvCurve& ocv, bool learn_parameters = true);
     const Status& status() const { return status_; }
 
 private:

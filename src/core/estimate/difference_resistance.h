@@ -13,7 +13,7 @@ namespace core {
 class DifferenceResistanceEstimator {
 public:
     struct Config {
-        float lag_s = 0.13f;            // difference lag: two samples of the reference hardware
+        float lag_s = 0.05f;            // difference lag: the previous sample (67 ms on the reference hardware)
         float memory_s = 60.0f;         // forgetting time constant
         float min_step_a = 0.5f;        // smaller current steps carry only noise
         float min_excitation_a2 = 400.0f;  // Σ weighted ΔI² before the estimate counts

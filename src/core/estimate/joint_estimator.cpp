@@ -36,13 +36,24 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     if (flying) resistance_.update(time_us, voltage_v, current_a);
     else resistance_.break_history();
     const DifferenceResistanceEstimator::Status& rs = resistance_.status();
-    const float r0 = rs.resistance_ohm;
+    // Combine the difference estimate with the configured value by inverse variance: a
+    // steady hover excites too little to trust the differences alone.
+    const float prior_sigma = config_.resistance_prior_fraction * rated_.internal_resistance_ohm;
+    float r0 = rated_.internal_resistance_ohm;
+    float r_sigma = prior_sigma;
+    if (rs.valid && rs.sigma_ohm > 0.0f && prior_sigma > 0.0f) {
+        const float wp = 1.0f / (prior_sigma * prior_sigma);
+        const float we = 1.0f / (rs.sigma_ohm * rs.sigma_ohm);
+        r0 = (wp * rated_.internal_resistance_ohm + we * rs.resistance_ohm) / (wp + we);
+        r_sigma = sqrtf(1.0f / (wp + we));
+    } else if (rs.valid) {
+        r0 = rs.resistance_ohm;
+        r_sigma = rs.sigma_ohm;
+    }
 
     const float ip = polarisation_current_.update(current_a, dt_s);
     ekf_.predict(current_a, dt_s);
-    // Until the resistance is known its error dominates the compensated voltage.
-    const float r_sigma = rs.valid ? rs.sigma_ohm : 0.5f * rated_.internal_resistance_ohm;
-    ekf_.correct(voltage_v + r0 * current_a, ip, (r_sigma * current_a) * (r_sigma * current_a), ocv_);
+    ekf_.correct(voltage_v + r0 * current_a, ip, (r_sigma * current_a) * (r_sigma * current_a), ocv_, flying);
     const CapacityEkf::Status& es = ekf_.status();
 
     if (flying) {
@@ -51,7 +62,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         charge_since_takeoff_ah_ += current_a * dt_s / 3600.0f;
     }
     status_.soc = clampf(es.soc, 0.0f, 1.0f);
-    status_.capacity_ah = es.capacity_ah;
+    status_.capacity_ah = es.capacity_ah * (1.0f - weakest_deficit_);
     status_.sigma_capacity_ah = es.sigma_capacity_ah;
     status_.resistance_ohm = r0;
     status_.polarisation_ohm = es.polarisation_ohm;
@@ -70,7 +81,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
 
 void JointEstimator::start_solve() {
     const CapacityEkf::Status& es = ekf_.status();
-    const float q = es.capacity_ah;
+    const float q = es.capacity_ah * (1.0f - weakest_deficit_);
     const float r_total = status_.resistance_ohm + es.polarisation_ohm;
     const float r_rated = rated_.internal_resistance_ohm + es.polarisation_ohm;
     // The charge at take-off as the present estimate sees it.

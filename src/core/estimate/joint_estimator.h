@@ -21,6 +21,7 @@ public:
         DifferenceResistanceEstimator::Config resistance;
         CapacityEkf::Config ekf;
         OcvTable ocv;                       // optional; else the model's no-load curve
+        float resistance_prior_fraction = 0.5f;  // σ of the configured resistance, as a fraction
         float polarisation_time_s = 5.0f;   // i_p time constant: fast enough that i_p follows the throttle and cannot mimic the SOC trend
         float min_voltage_v = 13.3f;        // loaded cutoff
         int solver_steps = 64;
@@ -52,6 +53,9 @@ public:
     // Settles the initial state of charge from a resting voltage.
     void start(float voltage_v, float current_a);
     void update(uint64_t time_us, float voltage_v, float current_a, float dt_s, bool flying);
+    // The weakest cell's capacity shortfall (fraction, from the cell check): a series pack
+    // delivers only what its weakest cell holds.
+    void set_weakest_cell_deficit(float fraction) { weakest_deficit_ = fraction > 0.0f && fraction < 0.9f ? fraction : 0.0f; }
     const Status& status() const { return status_; }
     const OcvCurve& ocv() const { return ocv_; }
 
@@ -76,6 +80,7 @@ private:
     float charge_since_takeoff_ah_ = 0.0f;
     float elapsed_at_solve_s_ = 0.0f;
     int short_count_ = 0;
+    float weakest_deficit_ = 0.0f;
 };
 
 }  // namespace core
