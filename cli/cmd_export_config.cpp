@@ -1,0 +1,42 @@
+// battsim export-config --firmware CFG.json -o battsim_config.h: the firmware's compiled-in
+// configuration, generated from the JSON battsim itself reads.
+#include <iostream>
+
+#include "command.h"
+#include "host/export_header.h"
+
+namespace battsim {
+namespace cli {
+namespace {
+
+struct ExportArgs {
+    std::string firmware;
+    std::string output = "-";
+};
+
+std::function<int()> setup(CLI::App& sub) {
+    auto a = std::make_shared<ExportArgs>();
+    sub.add_option("--firmware", a->firmware, "Config JSON to export as the firmware's C++ header")->required();
+    sub.add_option("-o,--output", a->output, "Header to write (\"-\" = standard output)")->capture_default_str();
+    return [a]() -> int {
+        try {
+            host::export_firmware_config(a->firmware, a->output);
+        } catch (const host::ConfigError& e) {
+            std::cerr << "battsim export-config: " << e.what() << "\n";
+            return kExitConfigError;
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "battsim export-config: " << a->firmware << ": " << e.what() << "\n";
+            return kExitConfigError;
+        } catch (const std::runtime_error& e) {
+            std::cerr << "battsim export-config: " << e.what() << "\n";
+            return kExitOutputError;
+        }
+        return kExitOk;
+    };
+}
+
+const RegisterCommand reg{{"export-config", "Write a config JSON as the firmware's battsim_config.h", setup}};
+
+}  // namespace
+}  // namespace cli
+}  // namespace battsim

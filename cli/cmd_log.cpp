@@ -1,0 +1,75 @@
+// battsim log --port DEVICE --out FILE.csv: record a battsim device's CSV stream over a
+// serial port, surviving disconnects (the library does the work: host/serial/).
+#include <csignal>
+#include <iostream>
+
+#include "command.h"
+#include "host/serial/serial_logger.h"
+
+namespace battsim {
+namespace cli {
+namespace {
+
+std::atomic<bool> g_stop{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
+
+extern "C" void on_signal(int) { g_stop.store(true); }
+
+struct LogArgs {
+    host::serial::SerialLogOptions options;
+    bool quiet = false;
+};
+
+std::function<int()> setup(CLI::App& sub) {
+    auto a = std::make_shared<LogArgs>();
+    sub.add_option("--port", a->options.port, "Serial device of the battsim firmware (e.g. /dev/ttyUSB0)")->required();
+    sub.add_option("--out", a->options.out_path, "CSV file to write")->required();
+    sub.add_option("--baud", a->options.baud, "Baud rate")->capture_default_str();
+    sub.add_flag("--append", a->options.append, "Continue an existing file (its header must match the device's)");
+    sub.add_option("--max-wait", a->options.max_wait_s,
+                   "Stop when the device has been gone this many seconds (default: wait until Ctrl-C)")
+        ->check(CLI::NonNegativeNumber);
+    sub.add_option("--fsync-interval", a->options.fsync_interval_s, "Seconds between fsyncs of the output")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+    sub.add_flag("-q,--quiet", a->quiet, "Print only errors and the final count");
+    return [a]() -> int {
+        g_stop.store(false);
+        std::signal(SIGINT, on_signal);
+        std::signal(SIGTERM, on_signal);
+        const bool quiet = a->quiet;
+        host::serial::MessageSink sink = [quiet](const std::string& m) {
+            if (!quiet) std::cerr << "battsim log: " << m << "\n";
+        };
+        host::serial::SerialLogStats stats;
+        int rc = kExitOk;
+        try {
+            stats = host::serial::run_serial_logger(a->options, g_stop, sink);
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "battsim log: " << e.what() << "\n";
+            return kExitUsage;
+        } catch (const host::serial::HeaderMismatch& e) {
+            std::cerr << "battsim log: " << e.what() << "\n";
+            return kExitInputError;
+        } catch (const std::runtime_error& e) {
+            std::cerr << "battsim log: " << e.what() << "\n";
+            return kExitOutputError;
+        }
+        std::cerr << "battsim log: " << stats.lines_written << " lines written to " << a->options.out_path << " ("
+                  << stats.connections << " connections, " << stats.cut_lines << " cut lines dropped, "
+                  << stats.corrupt_lines << " corrupt lines dropped";
+        if (stats.held_dropped > 0) std::cerr << ", " << stats.held_dropped << " lines lost waiting for a header";
+        std::cerr << ")\n";
+        if (stats.device_gone && stats.connections == 0) {
+            std::cerr << "battsim log: " << a->options.port << " never appeared\n";
+            rc = kExitInputError;
+        }
+        return rc;
+    };
+}
+
+const RegisterCommand reg{{"log", "Record a battsim device's CSV stream from a serial port", setup}};
+
+}  // namespace
+}  // namespace cli
+}  // namespace battsim

@@ -1,0 +1,106 @@
+#include "app/display_pages.h"
+
+#include "app/text_buffer.h"
+
+namespace battsim {
+namespace fw {
+
+namespace {
+
+using Row = FixedText<kDisplayColumns + 1>;
+
+// "m:ss", or "--:--" when unknown.
+void append_minutes(Row& r, bool valid, float seconds) {
+    if (!valid || !(seconds >= 0.0f) || seconds > 359999.0f) {
+        r.append("--:--");
+        return;
+    }
+    const uint32_t s = static_cast<uint32_t>(seconds + 0.5f);
+    r.appendf("%2u:%02u", static_cast<unsigned>(s / 60u), static_cast<unsigned>(s % 60u));
+}
+
+void append_counters_row(Row& r, const ReadingCounters& c) {
+    if (c.ready_timeouts > 0) r.appendf(" INA?%u", static_cast<unsigned>(c.ready_timeouts));
+    if (c.missed > 0) r.appendf(" miss%u", static_cast<unsigned>(c.missed));
+}
+
+}  // namespace
+
+void draw_monitor_page(Display& d, const MonitorPage& page) {
+    const core::MonitorStatus& s = *page.status;
+    const core::Sample& x = *page.sample;
+    d.clear();
+    Row r;
+    r.appendf("%5.2fV %6.1fA %s", static_cast<double>(x.voltage_v), static_cast<double>(x.current_a),
+              s.flying ? "FLY" : "GND");
+    d.text(0, 0, r.c_str());
+
+    r.clear();
+    if (s.initialised) {
+        r.appendf("SoC %3d%% %6.0fmAh", static_cast<int>(s.soc * 100.0f + 0.5f), static_cast<double>(s.consumed_mah));
+    } else {
+        r.append("SoC  --  resting...");
+    }
+    d.text(0, 1, r.c_str());
+
+    r.clear();
+    r.appendf("Cap %4.2fAh R%3.0fmOhm", static_cast<double>(s.capacity_ah),
+              static_cast<double>(s.resistance_ohm * 1000.0f));
+    d.text(0, 2, r.c_str());
+
+    r.clear();
+    r.append("Left ");
+    append_minutes(r, s.time_valid, s.remaining_time_s);
+    r.append(" of ");
+    append_minutes(r, s.time_valid, s.total_time_s);
+    d.text(0, 3, r.c_str());
+
+    r.clear();
+    for (int c = 0; c < x.cell_count && c < 4; ++c) {
+        r.appendf(c == 0 ? "%.2f" : " %.2f", static_cast<double>(x.cell_voltage_v[c]));
+    }
+    if (x.cell_count == 0) r.append("no cell taps");
+    d.text(0, 4, r.c_str());
+
+    r.clear();
+    if (s.warnings == 0) r.append("ok");
+    if (s.warnings & (1u << core::kWarnLowCapacity)) r.append("CAP ");
+    if (s.warnings & (1u << core::kWarnHighResistance)) r.append("RES ");
+    if (s.warnings & (1u << core::kWarnCellOutlier)) r.appendf("CELL%d ", s.outlier_cell + 1);
+    if (s.warnings & (1u << core::kWarnSensorFault)) r.append("SENS ");
+    if (s.warnings & (1u << core::kWarnShortFlight)) r.append("SHORT ");
+    if (!page.sd_ok) r.append(" SD!");
+    append_counters_row(r, page.counters);
+    d.text(0, 5, r.c_str());
+    d.show();
+}
+
+void draw_logger_page(Display& d, const LoggerPage& page) {
+    d.clear();
+    Row r;
+    r.append("discharge logger");
+    d.text(0, 0, r.c_str());
+    r.clear();
+    r.appendf("%6.3f V", static_cast<double>(page.voltage_v));
+    d.text(0, 1, r.c_str());
+    r.clear();
+    r.appendf("%7.2f A", static_cast<double>(page.current_a));
+    d.text(0, 2, r.c_str());
+    r.clear();
+    r.appendf("%8.1f mAh", static_cast<double>(page.consumed_mah));
+    d.text(0, 3, r.c_str());
+    r.clear();
+    if (page.connected) {
+        r.appendf("sent %lu", static_cast<unsigned long>(page.lines_sent));
+    } else {
+        r.append("waiting for host");
+    }
+    d.text(0, 4, r.c_str());
+    r.clear();
+    append_counters_row(r, page.counters);
+    d.text(0, 5, r.c_str());
+    d.show();
+}
+
+}  // namespace fw
+}  // namespace battsim

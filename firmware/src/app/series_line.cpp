@@ -1,0 +1,64 @@
+#include "app/series_line.h"
+
+namespace battsim {
+namespace fw {
+
+void format_series_header(int cells, TextBuffer& out) {
+    out.clear();
+    out.append(
+        "time_s,voltage_v,current_a,filtered_current_a,model_voltage_v,adapted_model_voltage_v,consumed_mah,"
+        "consumed_mwh,soc,capacity_ah,resistance_ohm,usable_capacity_ah,remaining_time_s,total_time_s,"
+        "avg_power_w,flying,sample_valid,warnings");
+    for (int c = 1; c <= cells; ++c) out.appendf(",cell%d_v", c);
+    for (int c = 1; c <= cells; ++c) out.appendf(",cell%d_score", c);
+    out.append_char('\n');
+}
+
+namespace {
+
+void put(TextBuffer& out, const char* fmt, float v) {
+    out.appendf(fmt, static_cast<double>(v));
+    out.append_char(',');
+}
+
+}  // namespace
+
+void format_series_line(const core::Sample& sample, const core::MonitorStatus& s, int cells, TextBuffer& out) {
+    out.clear();
+    // Seconds with 6 decimals straight from the integer microseconds: the same digits as
+    // printing time_us·1e-6 with %.6f, without double arithmetic on the device.
+    out.append_fixed(static_cast<int64_t>(sample.time_us), 6);
+    out.append_char(',');
+    put(out, "%.4f", sample.voltage_v);
+    put(out, "%.4f", sample.current_a);
+    put(out, "%.4f", s.filtered_current_a);
+    put(out, "%.4f", s.model_voltage_v);
+    put(out, "%.4f", s.adapted_model_voltage_v);
+    put(out, "%.3f", s.consumed_mah);
+    put(out, "%.2f", s.consumed_mwh);
+    put(out, "%.5f", s.soc);
+    put(out, "%.5f", s.capacity_ah);
+    put(out, "%.6f", s.resistance_ohm);
+    put(out, "%.5f", s.usable_capacity_ah);
+    if (s.time_valid) {
+        put(out, "%.2f", s.remaining_time_s);
+        put(out, "%.2f", s.total_time_s);
+    } else {
+        out.append(",,");
+    }
+    put(out, "%.3f", s.avg_power_w);
+    out.append(s.flying ? "1," : "0,");
+    out.append(s.sample_valid ? "1," : "0,");
+    out.append_uint(s.warnings);
+    for (int c = 0; c < cells; ++c) {
+        out.append_char(',');
+        if (c < sample.cell_count) out.appendf("%.4f", static_cast<double>(sample.cell_voltage_v[c]));
+    }
+    for (int c = 0; c < cells; ++c) {
+        out.appendf(",%.4f", static_cast<double>(c < s.cell_count ? s.cell_score[c] : 0.0f));
+    }
+    out.append_char('\n');
+}
+
+}  // namespace fw
+}  // namespace battsim

@@ -1,0 +1,86 @@
+// The real hardware behind the firmware's interface (app/hardware.h), on a NodeMCU
+// ESP8266: INA226 (pack bus and 200 A / 75 mV shunt) and INA3221 (balance taps) on I²C,
+// an SSD1306 128×64 OLED on the same bus, an SD card on SPI. This layer is kept thin:
+// configure the chips, turn library floats back into the integer readings, pass bytes.
+// Wiring: docs/firmware.md.
+#pragma once
+#include <Arduino.h>
+#include <INA226_WE.h>
+#include <INA3221.h>
+#include <SdFat.h>
+#include <U8g2lib.h>
+
+#include "app/hardware.h"
+
+namespace battsim {
+namespace fw {
+
+// NodeMCU pins: I²C on D2 (SDA, GPIO4) / D1 (SCL, GPIO5), SD chip select on D8 (GPIO15).
+constexpr uint8_t kSdaPin = D2;
+constexpr uint8_t kSclPin = D1;
+constexpr uint8_t kSdChipSelect = D8;
+constexpr uint8_t kIna226Address = 0x40;  // A0, A1 to GND
+constexpr uint8_t kOledAddress = 0x3C;
+
+class InaSensors : public Sensors {
+public:
+    bool begin() override;
+    bool conversion_ready() override;
+    bool read_pack(PackReading& out) override;
+    bool read_taps(TapReading& out) override;
+
+private:
+    INA226_WE ina226_{kIna226Address};
+    INA3221 ina3221_{INA3221_ADDR41_VCC};  // A0 to VCC: 0x41, clear of the INA226
+    bool taps_present_ = false;
+};
+
+class ArduinoClock : public Clock {
+public:
+    uint32_t micros() override { return ::micros(); }
+    uint32_t millis() override { return ::millis(); }
+    void sleep_us(uint32_t us) override;
+};
+
+class SdStorage : public Storage {
+public:
+    bool begin() override;
+    bool exists(const char* path) override { return sd_.exists(path); }
+    bool make_dir(const char* path) override { return sd_.mkdir(path); }
+    bool open_log(const char* path) override;
+    bool append(const char* data, size_t len) override;
+    bool sync() override { return log_.sync(); }
+    int read_file(const char* path, char* buf, size_t capacity) override;
+    bool write_file(const char* path, const char* data, size_t len) override;
+
+private:
+    int read_one(const char* path, char* buf, size_t capacity);
+    SdFs sd_;
+    FsFile log_;
+};
+
+class OledDisplay : public Display {
+public:
+    bool begin() override;
+    void clear() override { oled_.clearBuffer(); }
+    void text(uint8_t column, uint8_t row, const char* s) override;
+    void show() override { oled_.sendBuffer(); }
+
+private:
+    // Full frame buffer (1 KiB): one sendBuffer() per page, no flicker.
+    U8G2_SSD1306_128X64_NONAME_F_HW_I2C oled_{U8G2_R0, U8X8_PIN_NONE};
+};
+
+class UartPort : public SerialPort {
+public:
+    int read_byte() override { return Serial.available() > 0 ? Serial.read() : -1; }
+    void write(const char* data, size_t len) override {
+        Serial.write(reinterpret_cast<const uint8_t*>(data), len);
+    }
+};
+
+// Wi-Fi off: it is not used, and its current spikes show up on the shunt.
+void radio_off();
+
+}  // namespace fw
+}  // namespace battsim

@@ -1,0 +1,141 @@
+// `battsim export-config --firmware`: the monitor configuration as a C++ header the
+// firmware compiles in, from the same JSON that `battsim` reads, so the device and the
+// host run one configuration. The header defines
+//     namespace battsim_generated { constexpr battsim::core::MonitorConfig monitor_config(); }
+// starting from the core's defaults and assigning every field, floats with the fewest
+// digits that read back as the same float (so the firmware's floats equal the host's).
+//
+// visit_monitor_config() is the one list of MonitorConfig's fields. Tests check that it
+// covers every byte of the struct, so a field added to the core without being added here
+// fails the build's tests instead of silently keeping its default on the device.
+#pragma once
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "host/config_json.h"
+
+namespace battsim {
+namespace host {
+
+// Calls f(path, member) for every field of a MonitorConfig (const or not). Array
+// elements come one by one ("joint.ocv.cell_voltage_v[3]").
+template <typename Config, typename F>
+void visit_monitor_config(Config& c, F&& f) {
+    f("estimator", c.estimator);
+    f("cells_in_series", c.cells_in_series);
+    f("battery.full_voltage_v", c.battery.full_voltage_v);
+    f("battery.exponential_voltage_v", c.battery.exponential_voltage_v);
+    f("battery.exponential_capacity_ah", c.battery.exponential_capacity_ah);
+    f("battery.nominal_zone_voltage_v", c.battery.nominal_zone_voltage_v);
+    f("battery.nominal_zone_capacity_ah", c.battery.nominal_zone_capacity_ah);
+    f("battery.capacity_ah", c.battery.capacity_ah);
+    f("battery.internal_resistance_ohm", c.battery.internal_resistance_ohm);
+    f("battery.curve_current_a", c.battery.curve_current_a);
+    f("max_voltage_v", c.max_voltage_v);
+    f("min_voltage_v", c.min_voltage_v);
+    f("current_filter.time_constant_s", c.current_filter.time_constant_s);
+    f("resistance.filter_time_constant_s", c.resistance.filter_time_constant_s);
+    f("resistance.max_filter_alpha", c.resistance.max_filter_alpha);
+    f("resistance.blend_gain", c.resistance.blend_gain);
+    f("resistance.initial_resistance_ohm", c.resistance.initial_resistance_ohm);
+    f("resistance.min_current_a", c.resistance.min_current_a);
+    f("capacity.max_voltage_variance_v", c.capacity.max_voltage_variance_v);
+    f("capacity.capacity_step_fraction", c.capacity.capacity_step_fraction);
+    f("capacity.persistence_updates", c.capacity.persistence_updates);
+    f("capacity.min_capacity_fraction", c.capacity.min_capacity_fraction);
+    f("capacity.max_capacity_fraction", c.capacity.max_capacity_fraction);
+    f("flight_time.min_flight_voltage_v", c.flight_time.min_flight_voltage_v);
+    f("flight_time.nominal_voltage_v", c.flight_time.nominal_voltage_v);
+    f("flight_time.step_fraction", c.flight_time.step_fraction);
+    f("flight_time.max_capacity_factor", c.flight_time.max_capacity_factor);
+    f("current_average.short_time_s", c.current_average.short_time_s);
+    f("current_average.long_time_s", c.current_average.long_time_s);
+    f("current_average.initial_value", c.current_average.initial_value);
+    f("power_average.short_time_s", c.power_average.short_time_s);
+    f("power_average.long_time_s", c.power_average.long_time_s);
+    f("power_average.initial_value", c.power_average.initial_value);
+    f("flying.min_flying_current_a", c.flying.min_flying_current_a);
+    f("flying.landed_hold_s", c.flying.landed_hold_s);
+    f("flying.takeoff_confirm_s", c.flying.takeoff_confirm_s);
+    f("initial.max_resting_current_a", c.initial.max_resting_current_a);
+    f("initial.stabilisation_time_s", c.initial.stabilisation_time_s);
+    f("cells.min_std_v", c.cells.min_std_v);
+    f("joint.resistance.lag_s", c.joint.resistance.lag_s);
+    f("joint.resistance.memory_s", c.joint.resistance.memory_s);
+    f("joint.resistance.min_step_a", c.joint.resistance.min_step_a);
+    f("joint.resistance.min_excitation_a2", c.joint.resistance.min_excitation_a2);
+    f("joint.resistance.initial_resistance_ohm", c.joint.resistance.initial_resistance_ohm);
+    f("joint.ekf.voltage_sigma_v", c.joint.ekf.voltage_sigma_v);
+    f("joint.ekf.soc_sigma0", c.joint.ekf.soc_sigma0);
+    f("joint.ekf.capacity_sigma0_fraction", c.joint.ekf.capacity_sigma0_fraction);
+    f("joint.ekf.polarisation_initial_ohm", c.joint.ekf.polarisation_initial_ohm);
+    f("joint.ekf.polarisation_sigma0_ohm", c.joint.ekf.polarisation_sigma0_ohm);
+    f("joint.ekf.soc_process_per_sqrt_s", c.joint.ekf.soc_process_per_sqrt_s);
+    f("joint.ekf.capacity_process_fraction_per_sqrt_s", c.joint.ekf.capacity_process_fraction_per_sqrt_s);
+    f("joint.ekf.polarisation_process_ohm_per_sqrt_s", c.joint.ekf.polarisation_process_ohm_per_sqrt_s);
+    f("joint.ekf.gate_sigmas", c.joint.ekf.gate_sigmas);
+    f("joint.ekf.min_capacity_fraction", c.joint.ekf.min_capacity_fraction);
+    f("joint.ekf.max_capacity_fraction", c.joint.ekf.max_capacity_fraction);
+    f("joint.ocv.points", c.joint.ocv.points);
+    for (int i = 0; i < core::kOcvTableMaxPoints; ++i) {
+        f("joint.ocv.cell_voltage_v[" + std::to_string(i) + "]", c.joint.ocv.cell_voltage_v[i]);
+    }
+    f("joint.resistance_prior_fraction", c.joint.resistance_prior_fraction);
+    f("joint.polarisation_time_s", c.joint.polarisation_time_s);
+    f("joint.min_voltage_v", c.joint.min_voltage_v);
+    f("joint.solver_steps", c.joint.solver_steps);
+    f("joint.solver_steps_per_update", c.joint.solver_steps_per_update);
+    f("joint.short_flight_fraction", c.joint.short_flight_fraction);
+    f("joint.cause_fraction", c.joint.cause_fraction);
+    f("joint.min_flight_s", c.joint.min_flight_s);
+    f("joint.persistence", c.joint.persistence);
+    f("cell_analysis.lag_s", c.cell_analysis.lag_s);
+    f("cell_analysis.min_step_a", c.cell_analysis.min_step_a);
+    f("cell_analysis.min_excitation_a2", c.cell_analysis.min_excitation_a2);
+    f("cell_analysis.min_pairs", c.cell_analysis.min_pairs);
+    f("cell_analysis.min_cell_ocv_slope_v", c.cell_analysis.min_cell_ocv_slope_v);
+    f("cell_analysis.resistance_ratio", c.cell_analysis.resistance_ratio);
+    f("cell_analysis.capacity_deficit", c.cell_analysis.capacity_deficit);
+    f("cell_analysis.min_charge_ah", c.cell_analysis.min_charge_ah);
+    f("cell_analysis.significance_sigmas", c.cell_analysis.significance_sigmas);
+    f("cell_analysis.last_cell_includes_lead", c.cell_analysis.last_cell_includes_lead);
+    f("warnings.low_capacity_fraction", c.warnings.low_capacity_fraction);
+    f("warnings.high_resistance_factor", c.warnings.high_resistance_factor);
+    f("warnings.min_resistance_updates", c.warnings.min_resistance_updates);
+    f("warnings.cell_outlier_score", c.warnings.cell_outlier_score);
+    f("warnings.min_cell_outlier_samples", c.warnings.min_cell_outlier_samples);
+    f("sensor.max_pack_voltage_v", c.sensor.max_pack_voltage_v);
+    f("sensor.min_pack_voltage_v", c.sensor.min_pack_voltage_v);
+    f("sensor.max_current_a", c.sensor.max_current_a);
+    f("sensor.min_current_a", c.sensor.min_current_a);
+    f("sensor.min_cell_voltage_v", c.sensor.min_cell_voltage_v);
+    f("sensor.max_cell_voltage_v", c.sensor.max_cell_voltage_v);
+    f("sensor.max_cell_sum_error_v", c.sensor.max_cell_sum_error_v);
+    f("shunt.offset_ma", c.shunt.offset_ma);
+    f("shunt.scale_mv_per_10a", c.shunt.scale_mv_per_10a);
+}
+
+// One field's value as text in C++ source form ("1.55f", "4", "true",
+// "static_cast<battsim::core::EstimatorKind>(1)"), by path, in visiting order.
+struct ConfigField {
+    std::string path;
+    std::string cpp_value;
+};
+std::vector<ConfigField> monitor_config_fields(const core::MonitorConfig& c);
+
+// The shortest decimal that reads back as exactly `v` (9 significant digits at most),
+// as a C++ float literal. Throws std::invalid_argument for NaN or infinity.
+std::string float_literal(float v);
+
+// The whole header. `source` names the JSON in the header's comment. Throws
+// std::invalid_argument if a value cannot be written (not finite).
+std::string firmware_config_header(const LoadedConfig& config, const std::string& source);
+
+// Loads `json_path` (throws ConfigError) and writes the header to `out_path` atomically
+// ("-" = standard output; throws std::runtime_error when it cannot write).
+void export_firmware_config(const std::string& json_path, const std::string& out_path);
+
+}  // namespace host
+}  // namespace battsim

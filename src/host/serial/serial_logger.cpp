@@ -1,0 +1,299 @@
+#include "host/serial/serial_logger.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <deque>
+#include <thread>
+#include <vector>
+
+#include "host/serial/line_protocol.h"
+#include "host/serial/serial_port.h"
+
+namespace battsim {
+namespace host {
+namespace serial {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+std::string errno_text() { return std::strerror(errno); }
+
+// The output: grows only by whole lines, one write() each, on an O_APPEND descriptor.
+class LineFile {
+public:
+    LineFile(const std::string& path, bool append, bool& repaired) : path_(path) {
+        struct stat st;
+        const bool exists = ::stat(path.c_str(), &st) == 0;
+        if (exists && !append && st.st_size > 0) {
+            throw std::runtime_error(path + ": already exists; pass --append to continue it or choose another file");
+        }
+        fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+        if (fd_ < 0) throw std::runtime_error(path + ": cannot open for writing: " + errno_text());
+        if (exists && st.st_size > 0) load_existing(repaired);
+    }
+    ~LineFile() {
+        if (fd_ >= 0) ::close(fd_);
+    }
+    LineFile(const LineFile&) = delete;
+    LineFile& operator=(const LineFile&) = delete;
+
+    const std::string& header() const { return header_; }
+
+    void write_header(const std::string& h) {
+        append_line(h);
+        header_ = h;
+    }
+    void append_line(const std::string& text) {
+        std::string line = text;
+        line += '\n';
+        const ssize_t n = ::write(fd_, line.data(), line.size());
+        if (n != static_cast<ssize_t>(line.size())) {
+            const std::string why = n < 0 ? errno_text() : "short write";
+            // A short write on a full disk could leave part of a line: cut it off again.
+            if (n > 0) truncate_to_last_newline();
+            throw std::runtime_error(path_ + ": write failed: " + why);
+        }
+        dirty_ = true;
+    }
+    void sync() {
+        if (!dirty_) return;
+        if (::fsync(fd_) != 0) throw std::runtime_error(path_ + ": fsync failed: " + errno_text());
+        dirty_ = false;
+        last_sync_ = Clock::now();
+    }
+    void sync_if_due(double interval_s) {
+        if (dirty_ && seconds_since(last_sync_) >= interval_s) sync();
+    }
+
+private:
+    // Reads the header (first line) and removes a cut-off last line left by a crash.
+    void load_existing(bool& repaired) {
+        std::string content;
+        char buf[65536];
+        off_t pos = 0;
+        for (;;) {
+            const ssize_t n = ::pread(fd_, buf, sizeof buf, pos);
+            if (n < 0) throw std::runtime_error(path_ + ": cannot read: " + errno_text());
+            if (n == 0) break;
+            content.append(buf, static_cast<size_t>(n));
+            pos += n;
+        }
+        const std::string::size_type first_nl = content.find('\n');
+        if (first_nl != std::string::npos) {
+            header_ = content.substr(0, first_nl);
+            if (!header_.empty() && header_.back() == '\r') header_.pop_back();
+        }
+        if (!content.empty() && content.back() != '\n') {
+            truncate_to_last_newline();
+            repaired = true;
+        }
+    }
+    void truncate_to_last_newline() {
+        struct stat st;
+        if (::fstat(fd_, &st) != 0) return;
+        off_t end = st.st_size;
+        char c = 0;
+        while (end > 0) {
+            if (::pread(fd_, &c, 1, end - 1) != 1) return;
+            if (c == '\n') break;
+            --end;
+        }
+        if (::ftruncate(fd_, end) != 0) throw std::runtime_error(path_ + ": cannot cut the unfinished last line: " + errno_text());
+        if (end == 0) header_.clear();
+    }
+
+    std::string path_;
+    int fd_ = -1;
+    std::string header_;
+    bool dirty_ = false;
+    Clock::time_point last_sync_ = Clock::now();
+};
+
+class Session {
+public:
+    Session(const SerialLogOptions& o, const MessageSink& message, SerialLogStats& stats)
+        : o_(o), message_(message), stats_(stats), file_(o.out_path, o.append, stats.repaired_tail) {
+        if (stats_.repaired_tail) say(o_.out_path + ": removed an unfinished last line left by an earlier run");
+    }
+
+    void run(const std::atomic<bool>& stop) {
+        Clock::time_point absent_since = Clock::now();
+        std::string bytes;
+        std::vector<std::string> lines;
+        bool reported_absent = false;
+        while (!stop.load()) {
+            if (!port_.is_open()) {
+                if (!try_open()) {
+                    if (!reported_absent) {
+                        say("waiting for " + o_.port);
+                        reported_absent = true;
+                    }
+                    if (o_.max_wait_s > 0 && seconds_since(absent_since) >= o_.max_wait_s) {
+                        stats_.device_gone = true;
+                        say(o_.port + " has been gone for " + std::to_string(o_.max_wait_s) + " s; stopping");
+                        break;
+                    }
+                    sleep_while_running(stop, o_.reopen_interval_s);
+                    continue;
+                }
+                reported_absent = false;
+            }
+            bytes.clear();
+            const SerialPort::Status st = port_.read(bytes, 100);
+            if (st == SerialPort::Status::Gone) {
+                lost_link();
+                absent_since = Clock::now();
+                continue;
+            }
+            if (!bytes.empty()) {
+                lines.clear();
+                splitter_.feed(bytes, lines);
+                for (const std::string& l : lines) handle_line(l);
+            }
+            if (!confirmed_ && seconds_since(last_hello_) >= o_.hello_interval_s) greet();
+            file_.sync_if_due(o_.fsync_interval_s);
+        }
+        // A clean stop: whatever is held without a confirmed header cannot be written.
+        stats_.held_dropped += held_.size();
+        file_.sync();
+    }
+
+private:
+    void say(const std::string& m) {
+        if (message_) message_(m);
+    }
+
+    bool try_open() {
+        try {
+            port_.open(o_.port, o_.baud);
+        } catch (const SerialError&) {
+            return false;
+        }
+        ++stats_.connections;
+        confirmed_ = false;
+        expect_header_ = false;
+        splitter_.discard_partial();
+        say("connected to " + o_.port);
+        greet();
+        return true;
+    }
+
+    void greet() {
+        last_hello_ = Clock::now();
+        port_.write("hello\n");
+    }
+
+    void lost_link() {
+        port_.close();
+        const size_t cut = splitter_.discard_partial();
+        if (cut > 0) ++stats_.cut_lines;
+        stats_.held_dropped += held_.size();
+        held_.clear();
+        confirmed_ = false;
+        expect_header_ = false;
+        file_.sync();
+        say(o_.port + " disconnected" + (cut > 0 ? " mid-line (" + std::to_string(cut) + " bytes dropped)" : "") +
+            "; waiting for it to come back");
+    }
+
+    void handle_line(const std::string& raw) {
+        const DeviceLine d = classify_line(raw);
+        switch (d.kind) {
+            case LineKind::Prompt:
+                // The device (re)started and waits: greet it, at most once per interval.
+                confirmed_ = false;
+                if (seconds_since(last_hello_) >= o_.hello_interval_s * 0.5) greet();
+                return;
+            case LineKind::Hello:
+                expect_header_ = true;
+                return;
+            case LineKind::Note:
+                ++stats_.notes;
+                say("device: " + d.text);
+                return;
+            case LineKind::Corrupt:
+                if (!raw.empty()) ++stats_.corrupt_lines;
+                return;
+            case LineKind::Data:
+                break;
+        }
+        if (expect_header_) {
+            expect_header_ = false;
+            confirm_header(d.text);
+            return;
+        }
+        if (!confirmed_) {
+            // Data before this connection's header: hold it (the header is on its way).
+            if (held_.size() >= o_.max_held_lines) {
+                held_.pop_front();
+                ++stats_.held_dropped;
+            }
+            held_.push_back(d.text);
+            return;
+        }
+        if (d.text == file_.header()) {
+            ++stats_.repeated_headers;
+            return;
+        }
+        file_.append_line(d.text);
+        ++stats_.lines_written;
+    }
+
+    void confirm_header(const std::string& h) {
+        if (file_.header().empty()) {
+            file_.write_header(h);
+            stats_.header_written = 1;
+        } else if (h == file_.header()) {
+            ++stats_.repeated_headers;
+        } else {
+            throw HeaderMismatch(o_.out_path + ": the device's header \"" + h + "\" differs from the file's \"" +
+                                 file_.header() + "\"; record to a new file");
+        }
+        confirmed_ = true;
+        for (const std::string& l : held_) {
+            if (l == file_.header()) continue;
+            file_.append_line(l);
+            ++stats_.lines_written;
+        }
+        held_.clear();
+    }
+
+    static void sleep_while_running(const std::atomic<bool>& stop, double seconds) {
+        const auto until = Clock::now() + std::chrono::duration<double>(seconds);
+        while (!stop.load() && Clock::now() < until) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+
+    const SerialLogOptions& o_;
+    const MessageSink& message_;
+    SerialLogStats& stats_;
+    LineFile file_;
+    SerialPort port_;
+    LineSplitter splitter_;
+    std::deque<std::string> held_;
+    bool confirmed_ = false;
+    bool expect_header_ = false;
+    Clock::time_point last_hello_ = Clock::now() - std::chrono::hours(1);
+};
+
+}  // namespace
+
+SerialLogStats run_serial_logger(const SerialLogOptions& options, const std::atomic<bool>& stop,
+                                 const MessageSink& message) {
+    baud_constant(options.baud);  // a bad rate is a usage error, before any file is touched
+    SerialLogStats stats;
+    Session session(options, message, stats);
+    session.run(stop);
+    return stats;
+}
+
+}  // namespace serial
+}  // namespace host
+}  // namespace battsim
