@@ -13,7 +13,7 @@ PACKAGES="build-essential cmake pkg-config
   libgnuplot-iostream-dev gnuplot-nox libboost-iostreams-dev libboost-system-dev libboost-filesystem-dev"
 # Extra tools the full test run uses (cross-compiler, sanitizers, fuzzers, benchmarks).
 if [ "${BATTSIM_MINIMAL:-0}" != 1 ]; then
-  PACKAGES="$PACKAGES clang libclang-rt-14-dev gcc-xtensa-lx106 valgrind libbenchmark-dev"
+  PACKAGES="$PACKAGES clang libclang-rt-14-dev gcc-xtensa-lx106 picolibc-xtensa-lx106-elf valgrind libbenchmark-dev"
 fi
 
 missing=""

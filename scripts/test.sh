@@ -1,12 +1,28 @@
 #!/bin/sh
-# Runs every test: the unit, golden and CLI suites (ctest), then the checks that need
-# more than the compiler (regression against committed goldens, the firmware's size
-# budget). The README's test command and .ci/run both call this.
+# Runs every test: the unit, golden, firmware and CLI suites (ctest), then the checks that
+# need more than one build: the core cross-compiled for the ESP8266 within its size
+# budget, the test suite again under ASan+UBSan, and bounded libFuzzer runs.
+# The README's test command and .ci/run both call this. BATTSIM_QUICK=1 skips the
+# sanitizer build and the fuzzers (for a fast local loop).
 set -eu
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="$root/build"
+jobs=$(nproc)
 
+echo "== build and ctest"
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build" -j"$(nproc)"
-cd "$build"
-ctest --output-on-failure -j"$(nproc)"
+cmake --build "$build" -j"$jobs"
+(cd "$build" && ctest --output-on-failure -j"$jobs")
+
+echo "== ESP8266 cross-compile and size budget"
+sh "$root/scripts/cross-compile.sh" --header "$build/firmware/generated/battsim_config.h"
+
+if [ "${BATTSIM_QUICK:-0}" = 1 ]; then exit 0; fi
+
+echo "== ASan+UBSan build of the test suite"
+cmake -S "$root" -B "$root/build-asan" -DCMAKE_BUILD_TYPE=Debug -DBATTSIM_SANITIZE=ON >/dev/null
+cmake --build "$root/build-asan" -j"$jobs"
+(cd "$root/build-asan" && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j"$jobs")
+
+echo "== fuzzing (bounded)"
+FUZZ_SECONDS=${FUZZ_SECONDS:-45} sh "$root/scripts/fuzz.sh"
