@@ -101,7 +101,8 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
     status_.filtered_current_a = filtered_a;
     // Only under load: at ground idle the current steps are noise-sized and would make
     // −ΔV/ΔI meaningless (the reference monitor also ran it only while flying).
-    if (flying) resistance_.update(sample.voltage_v, sample.current_a, dt_s);
+    const bool reference = config_.estimator == EstimatorKind::Reference;
+    if (flying && reference) resistance_.update(sample.voltage_v, sample.current_a, dt_s);
     status_.resistance_ohm = resistance_.status().resistance_ohm;
 
     if (!status_.initialised) {
@@ -121,14 +122,21 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
     status_.consumed_mwh = counted.consumed_mwh;
     const float used_ah = counted.consumed_mah * 0.001f;
 
+    // The joint estimator replaces the reference's capacity, flight-time and cell parts;
+    // only the fixed model's voltage is kept for the outputs (each skipped part saves
+    // model evaluations, which are soft-float exponentials on the ESP8266).
     if (flying) {
-        capacity_.update(used_ah, sample.current_a, filtered_a, sample.voltage_v, status_.resistance_ohm);
         current_average_.update(sample.current_a, dt_s);
         power_average_.update(sample.current_a * sample.voltage_v, dt_s);
+    }
+    if (flying && reference) {
+        capacity_.update(used_ah, sample.current_a, filtered_a, sample.voltage_v, status_.resistance_ohm);
         flight_time_.track(capacity_.adapted_model(), power_average_.status().short_avg);
         if (status_.cells_valid) cells_.update(sample.cell_voltage_v, sample.cell_count);
-    } else {
+    } else if (reference) {
         capacity_.evaluate(used_ah, sample.current_a, filtered_a);
+    } else {
+        capacity_.evaluate_fixed(used_ah, sample.current_a, filtered_a);
     }
     const ReferenceCapacityEstimator::Status& cap = capacity_.status();
     status_.model_voltage_v = cap.fixed_model_voltage_v;

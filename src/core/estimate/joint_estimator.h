@@ -24,8 +24,8 @@ public:
         float resistance_prior_fraction = 0.5f;  // σ of the configured resistance, as a fraction
         float polarisation_time_s = 5.0f;   // i_p time constant: fast enough that i_p follows the throttle and cannot mimic the SOC trend
         float min_voltage_v = 13.3f;        // loaded cutoff
-        int solver_steps = 64;
-        int solver_steps_per_update = 8;
+        int solver_steps = 32;
+        int solver_steps_per_update = 4;  // keeps an update near 2,000 instructions
         float short_flight_fraction = 0.8f;  // warn below this × a healthy pack's flight time
         float cause_fraction = 0.9f;         // a cause alone must cost ≥ 10 % of the time
         float min_flight_s = 8.0f;           // before any verdict

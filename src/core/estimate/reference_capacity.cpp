@@ -21,6 +21,11 @@ void ReferenceCapacityEstimator::evaluate(float used_ah, float current_a, float 
     status_.adapted_model_voltage_v = adapted_.voltage_v(used_ah, current_a, filtered_current_a);
 }
 
+void ReferenceCapacityEstimator::evaluate_fixed(float used_ah, float current_a, float filtered_current_a) {
+    status_.fixed_model_voltage_v = fixed_.voltage_v(used_ah, current_a, filtered_current_a);
+    status_.adapted_model_voltage_v = status_.fixed_model_voltage_v;
+}
+
 void ReferenceCapacityEstimator::update(float used_ah, float current_a, float filtered_current_a,
                                         float measured_v, float resistance_ohm) {
     evaluate(used_ah, current_a, filtered_current_a);

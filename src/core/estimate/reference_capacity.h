@@ -31,6 +31,8 @@ public:
     void update(float used_ah, float current_a, float filtered_current_a, float measured_v, float resistance_ohm);
     // Model outputs without adapting (used while not flying).
     void evaluate(float used_ah, float current_a, float filtered_current_a);
+    // The fixed model only (the adapted output then mirrors it).
+    void evaluate_fixed(float used_ah, float current_a, float filtered_current_a);
 
     const Status& status() const { return status_; }
     const TremblayModel& fixed_model() const { return fixed_; }

@@ -1,0 +1,170 @@
+// battsim batch PATHS…: replay many logs in parallel and write the appendix table,
+// per-log summaries, shards of the work and a regression check against goldens.
+#include <unistd.h>
+
+#include <iostream>
+#include <mutex>
+#include <thread>
+
+#include "command.h"
+#include "common_options.h"
+#include "host/batch/batch.h"
+#include "host/batch/table.h"
+#include "host/config_json.h"
+#include "host/io/atomic_file.h"
+
+namespace battsim {
+namespace cli {
+namespace {
+
+struct BatchArgs {
+    std::vector<std::string> paths;
+    std::string manifest;
+    std::string format = "md";
+    std::string output = "-";
+    std::string packs;
+    std::string out_dir;
+    std::string shard;
+    std::string compare;
+    double tolerance = 1e-6;
+    unsigned jobs = 0;
+    bool no_progress = false;
+    InputArgs input;
+};
+
+host::LogSettingStrings setting_strings(const InputArgs& a) {
+    host::LogSettingStrings s;
+    s.config = a.config;
+    s.format = a.format;
+    s.current_source = a.current_source;
+    s.time_col = a.time_col;
+    s.time_unit = a.time_unit;
+    s.voltage_col = a.voltage_col;
+    s.current_col = a.current_col;
+    s.current_unit = a.current_unit;
+    s.temperature_col = a.temperature_col;
+    s.cell_cols = a.cell_cols;
+    s.negative_discharge = a.negative_discharge;
+    s.estimator = a.estimator;
+    return s;
+}
+
+int run(const BatchArgs& a) {
+    const char* me = "battsim batch: ";
+    host::TableFormat format;
+    host::ShardSpec shard;
+    host::BatchPlanRequest plan;
+    try {
+        format = host::parse_table_format(a.format);
+        if (!a.shard.empty()) shard = host::parse_shard(a.shard);
+        plan.command_line = host::settings_from_strings(setting_strings(a.input));
+    } catch (const std::invalid_argument& e) {
+        std::cerr << me << e.what() << "\n";
+        return kExitUsage;
+    }
+    if (a.paths.empty() && a.manifest.empty()) {
+        std::cerr << me << "expected logs (files, directories or patterns) or --manifest FILE\n";
+        return kExitUsage;
+    }
+    if (!(a.tolerance >= 0)) {
+        std::cerr << me << "--tolerance: expected a relative tolerance >= 0\n";
+        return kExitUsage;
+    }
+    plan.paths = a.paths;
+    plan.manifest = a.manifest;
+
+    std::vector<host::BatchItem> all;
+    try {
+        all = host::plan_batch(plan);
+    } catch (const host::InputError& e) {
+        std::cerr << me << e.what() << "\n";
+        return kExitInputError;
+    } catch (const host::ConfigError& e) {
+        std::cerr << me << "config: " << e.what() << "\n";
+        return kExitConfigError;
+    }
+    if (!a.out_dir.empty() || !a.compare.empty()) {
+        const std::vector<std::string> dups = host::duplicate_stems(all);
+        if (!dups.empty()) {
+            std::cerr << me << "--out and --compare name summaries <stem>.json, but these logs share a stem:\n";
+            for (const std::string& d : dups) std::cerr << "  " << d << "\n";
+            return kExitUsage;
+        }
+    }
+    const std::string digest = host::inputs_digest(all);
+    std::vector<host::BatchItem> items;
+    for (const host::BatchItem& it : all)
+        if (shard.contains(it.index)) items.push_back(it);
+
+    host::BatchRunOptions opt;
+    opt.jobs = a.jobs > 0 ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
+    opt.out_dir = a.out_dir;
+    opt.keep_summaries = !a.compare.empty();
+    const bool bar = !a.no_progress && ::isatty(STDERR_FILENO);
+    if (bar) {
+        opt.progress = [](size_t done, size_t total, size_t failed) {
+            std::cerr << "\r" << host::progress_line(done, total, failed) << std::flush;
+        };
+    }
+    host::BatchResult result;
+    try {
+        result = host::run_batch(items, opt);
+    } catch (const std::runtime_error& e) {
+        std::cerr << me << e.what() << "\n";
+        return kExitOutputError;
+    }
+    if (bar) std::cerr << "\r\033[K" << std::flush;  // the table replaces the bar
+
+    const size_t failed = result.failed;
+    const nlohmann::json table = host::make_table(std::move(result.rows), all.size(), digest, shard);
+    for (const nlohmann::json& r : table["rows"])
+        if (r["status"] != "ok") std::cerr << me << "failed: " << r["error"].get<std::string>() << "\n";
+    try {
+        host::write_file_atomic(a.output, host::render_table(table, format));
+        if (!a.packs.empty()) host::write_file_atomic(a.packs, host::render_packs(table, format));
+    } catch (const std::runtime_error& e) {
+        std::cerr << me << e.what() << "\n";
+        return kExitOutputError;
+    }
+
+    bool regressed = false;
+    if (!a.compare.empty()) {
+        const host::GoldenComparison c = host::compare_to_goldens(
+            items, result.summaries, a.compare, host::golden_compare_options(a.tolerance));
+        for (const std::string& line : c.lines) std::cerr << "compare: " << line << "\n";
+        std::cerr << "compare: " << c.compared << " compared, " << c.changed << " changed, " << c.missing
+                  << " without golden, " << c.failed << " not replayed (tolerance " << a.tolerance << " relative)\n";
+        regressed = !c.ok();
+    }
+    if (failed > 0) std::cerr << me << failed << " of " << items.size() << " logs failed\n";
+    return failed > 0 || regressed ? kExitFailure : kExitOk;
+}
+
+std::function<int()> setup(CLI::App& sub) {
+    auto a = std::make_shared<BatchArgs>();
+    sub.add_option("PATHS", a->paths, "Logs: files, directories (their files, not recursive) and glob patterns");
+    sub.add_option("-m,--manifest", a->manifest, "Manifest (JSON or CSV) mapping logs to packs, configs and columns");
+    sub.add_option("-j,--jobs", a->jobs, "Parallel replays (default: all cores)");
+
+    sub.add_option("-o,--output", a->output, "Write the table here (atomically) instead of standard output");
+    sub.add_option("--packs", a->packs, "Also write the per-pack table here, in --format");
+    sub.add_option("--out", a->out_dir, "Write each log's summary JSON here as <log stem>.json, as it completes");
+    sub.add_option("--shard", a->shard, "Replay only shard K of N (K/N, 1-based): inputs whose index mod N is K-1");
+    sub.add_option("--compare", a->compare, "Compare each summary with GOLDEN_DIR/<log stem>.json; exit 1 on a change");
+    sub.add_option("--tolerance", a->tolerance, "--compare: relative tolerance (plus 1e-9 absolute)")->capture_default_str();
+    sub.add_flag("--no-progress", a->no_progress, "No progress bar (it is shown only when stderr is a terminal)");
+    add_input_options(sub, a->input);
+    // Here --format is the table's format (as for merge); the logs' format moves to
+    // --log-format, usually set per log in the manifest anyway.
+    sub.remove_option(sub.get_option("--format"));
+    sub.add_option("--log-format", a->input.format, "Log format: auto, raw, csv, dataflash-text, dataflash-bin, ulog")
+        ->capture_default_str();
+    sub.add_option("--format", a->format, "Table format: md, csv or json (json is what merge reads)")->capture_default_str();
+    return [a]() { return run(*a); };
+}
+
+const RegisterCommand reg{{"batch", "Replay many logs in parallel into one table (shards, goldens, packs)", setup}};
+
+}  // namespace
+}  // namespace cli
+}  // namespace battsim

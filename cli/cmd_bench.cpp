@@ -1,0 +1,184 @@
+// battsim bench monitor|replay|batch: the figures in docs/benchmarks.md (scripts/bench.sh
+// runs them all, and the callgrind count of instructions per monitor update).
+#include <iostream>
+#include <thread>
+
+#include "command.h"
+#include "common_options.h"
+#include "host/batch/bench.h"
+#include "host/config_json.h"
+
+namespace battsim {
+namespace cli {
+namespace {
+
+struct BenchArgs {
+    std::vector<std::string> paths;
+    std::string manifest;
+    std::uint64_t passes = 0;
+    double min_time = 1.0;
+    std::uint64_t min_runs = 3;
+    unsigned jobs = 0;
+    bool json = false;
+    InputArgs input;
+};
+
+host::LogSettingStrings setting_strings(const InputArgs& a) {
+    host::LogSettingStrings s;
+    s.config = a.config;
+    s.format = a.format;
+    s.current_source = a.current_source;
+    s.time_col = a.time_col;
+    s.time_unit = a.time_unit;
+    s.voltage_col = a.voltage_col;
+    s.current_col = a.current_col;
+    s.current_unit = a.current_unit;
+    s.temperature_col = a.temperature_col;
+    s.cell_cols = a.cell_cols;
+    s.negative_discharge = a.negative_discharge;
+    s.estimator = a.estimator;
+    return s;
+}
+
+// The logs with their settings, exactly as `battsim batch` would plan them.
+int plan(const BenchArgs& a, std::vector<host::BatchItem>& items) {
+    host::BatchPlanRequest req;
+    req.paths = a.paths;
+    req.manifest = a.manifest;
+    try {
+        req.command_line = host::settings_from_strings(setting_strings(a.input));
+        items = host::plan_batch(req);
+    } catch (const std::invalid_argument& e) {
+        std::cerr << "battsim bench: " << e.what() << "\n";
+        return kExitUsage;
+    } catch (const host::InputError& e) {
+        std::cerr << "battsim bench: " << e.what() << "\n";
+        return kExitInputError;
+    } catch (const host::ConfigError& e) {
+        std::cerr << "battsim bench: config: " << e.what() << "\n";
+        return kExitConfigError;
+    }
+    if (items.empty()) {
+        std::cerr << "battsim bench: no logs\n";
+        return kExitUsage;
+    }
+    for (const host::BatchItem& it : items) {
+        if (!it.error.empty()) {
+            std::cerr << "battsim bench: " << it.path << ": " << it.error << "\n";
+            return kExitInputError;
+        }
+    }
+    return kExitOk;
+}
+
+void print(const nlohmann::json& j, bool as_json) {
+    if (as_json) {
+        std::cout << j.dump(2) << "\n";
+        return;
+    }
+    for (auto it = j.begin(); it != j.end(); ++it) std::cout << it.key() << ": " << it.value().dump() << "\n";
+}
+
+int run_monitor(const BenchArgs& a) {
+    std::vector<host::BatchItem> items;
+    if (int rc = plan(a, items)) return rc;
+    const host::BatchItem& it = items.front();
+    try {
+        const host::MonitorBench r = host::bench_monitor(it.path, it.replay, a.passes, a.min_time);
+        print({{"log", it.path},
+               {"samples_per_pass", r.samples},
+               {"passes", r.passes},
+               {"updates", r.samples * r.passes},
+               {"seconds", r.seconds},
+               {"cpu_seconds", r.cpu_seconds},
+               {"ns_per_update", r.ns_per_update},
+               {"cpu_ns_per_update", r.cpu_ns_per_update},
+               {"peak_rss_kib", host::peak_rss_kib()}},
+              a.json);
+    } catch (const host::InputError& e) {
+        std::cerr << "battsim bench: " << e.what() << "\n";
+        return kExitInputError;
+    }
+    return kExitOk;
+}
+
+int run_replay(const BenchArgs& a) {
+    std::vector<host::BatchItem> items;
+    if (int rc = plan(a, items)) return rc;
+    const host::BatchItem& it = items.front();
+    try {
+        const host::ThroughputBench r = host::bench_replay(it.path, it.replay, a.min_time, a.min_runs);
+        print({{"log", it.path},
+               {"runs", r.runs},
+               {"samples", r.samples},
+               {"bytes", r.bytes},
+               {"seconds", r.seconds},
+               {"cpu_seconds", r.cpu_seconds},
+               {"samples_per_s", r.samples_per_second()},
+               {"mb_per_s", r.megabytes_per_second()},
+               {"mb_per_cpu_s", r.megabytes_per_cpu_second()},
+               {"ns_per_sample", r.samples ? r.seconds * 1e9 / r.samples : 0.0},
+               {"cpu_ns_per_sample", r.samples ? r.cpu_seconds * 1e9 / r.samples : 0.0},
+               {"peak_rss_kib", host::peak_rss_kib()}},
+              a.json);
+    } catch (const host::InputError& e) {
+        std::cerr << "battsim bench: " << e.what() << "\n";
+        return kExitInputError;
+    }
+    return kExitOk;
+}
+
+int run_batch(const BenchArgs& a) {
+    std::vector<host::BatchItem> items;
+    if (int rc = plan(a, items)) return rc;
+    const unsigned jobs = a.jobs > 0 ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
+    const host::ThroughputBench r = host::bench_batch(items, jobs, a.min_time, a.min_runs);
+    print({{"runs", r.runs},
+           {"logs", r.logs},
+           {"jobs", r.jobs},
+           {"samples", r.samples},
+           {"bytes", r.bytes},
+           {"seconds", r.seconds},
+           {"cpu_seconds", r.cpu_seconds},
+           {"mb_per_cpu_s", r.megabytes_per_cpu_second()},
+           {"logs_per_s", r.seconds > 0 ? r.logs / r.seconds : 0.0},
+           {"samples_per_s", r.samples_per_second()},
+           {"mb_per_s", r.megabytes_per_second()},
+           {"peak_rss_kib", host::peak_rss_kib()}},
+          a.json);
+    return kExitOk;
+}
+
+std::function<int()> setup(CLI::App& sub) {
+    auto a = std::make_shared<BenchArgs>();
+    sub.require_subcommand(1);
+    CLI::App* mon = sub.add_subcommand("monitor", "ns per core::Monitor::update over a log's samples held in memory");
+    CLI::App* rep = sub.add_subcommand("replay", "End-to-end replay throughput of one log (samples/s, MB/s)");
+    CLI::App* bat = sub.add_subcommand("batch", "Batch throughput over many logs with --jobs threads");
+    for (CLI::App* s : {mon, rep, bat}) {
+        s->add_option("-m,--manifest", a->manifest, "Manifest giving the logs' settings (as for batch)");
+        s->add_flag("--json", a->json, "Print the figures as JSON");
+        add_input_options(*s, a->input);
+    }
+    mon->add_option("LOG", a->paths, "Log to replay")->required()->expected(1);
+    mon->add_option("--passes", a->passes, "Passes over the log (default: until --min-time)");
+    mon->add_option("--min-time", a->min_time, "Seconds of updates to time at least")->capture_default_str();
+    rep->add_option("LOG", a->paths, "Log to replay")->required()->expected(1);
+    rep->add_option("--min-time", a->min_time, "Seconds to keep replaying")->capture_default_str();
+    rep->add_option("--min-runs", a->min_runs, "Replays at least")->capture_default_str();
+    bat->add_option("PATHS", a->paths, "Logs: files, directories, patterns (or --manifest alone)");
+    bat->add_option("-j,--jobs", a->jobs, "Threads (default: all cores)");
+    bat->add_option("--min-time", a->min_time, "Seconds to keep repeating the batch")->capture_default_str();
+    bat->add_option("--min-runs", a->min_runs, "Batches at least")->capture_default_str();
+    return [a, mon, rep]() -> int {
+        if (mon->parsed()) return run_monitor(*a);
+        if (rep->parsed()) return run_replay(*a);
+        return run_batch(*a);
+    };
+}
+
+const RegisterCommand reg{{"bench", "Benchmarks: monitor update cost, replay and batch throughput, memory", setup}};
+
+}  // namespace
+}  // namespace cli
+}  // namespace battsim

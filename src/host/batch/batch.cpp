@@ -1,0 +1,325 @@
+#include "host/batch/batch.h"
+
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "host/config_json.h"
+#include "host/io/atomic_file.h"
+
+namespace battsim {
+namespace host {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// Key under which a manifest entry and a command-line path are recognised as the same
+// file, whichever way each spells it.
+std::string file_key(const std::string& path) {
+    std::error_code ec;
+    const fs::path c = fs::weakly_canonical(path, ec);
+    return ec ? fs::path(path).lexically_normal().string() : c.string();
+}
+
+struct Planned {
+    ExpandedPath input;
+    LogSettings settings;
+};
+
+}  // namespace
+
+std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
+    std::optional<Manifest> manifest;
+    if (!request.manifest.empty()) manifest = load_manifest(request.manifest);
+
+    // Each manifest entry expanded (directories, patterns) with its layered settings.
+    std::vector<Planned> from_manifest;
+    if (manifest) {
+        for (const ManifestEntry& e : manifest->logs) {
+            const std::vector<ExpandedPath> files = expand_inputs({e.path});
+            if (e.settings.test && files.size() > 1) {
+                throw InputError(manifest->path, e.line, e.column,
+                                 "\"test\" labels one log, but \"" + e.path + "\" names " + std::to_string(files.size()) +
+                                     " files; drop the label (each row is then named after its file) or list the files");
+            }
+            LogSettings s = manifest->defaults;
+            s.overlay(e.settings);
+            for (const ExpandedPath& f : files) from_manifest.push_back({f, s});
+        }
+    }
+
+    std::vector<Planned> planned;
+    if (manifest && request.paths.empty()) {
+        planned = from_manifest;
+    } else {
+        std::map<std::string, const LogSettings*> by_file;
+        for (const Planned& p : from_manifest) {
+            if (p.input.error.empty()) by_file.emplace(file_key(p.input.path), &p.settings);
+        }
+        for (const ExpandedPath& f : expand_inputs(request.paths)) {
+            LogSettings s = manifest ? manifest->defaults : LogSettings();
+            auto it = by_file.find(file_key(f.path));
+            if (it != by_file.end()) s = *it->second;
+            planned.push_back({f, s});
+        }
+    }
+
+    std::map<std::string, LoadedConfig> configs;  // each config file read once
+    std::vector<BatchItem> items;
+    items.reserve(planned.size());
+    for (Planned& p : planned) {
+        p.settings.overlay(request.command_line);
+        BatchItem item;
+        item.index = items.size();
+        item.path = p.input.path;
+        item.stem = path_stem(p.input.path);
+        item.error = p.input.error;
+        item.test = p.settings.test ? *p.settings.test : (item.error.empty() ? item.stem : p.input.path);
+        item.pack = p.settings.pack ? *p.settings.pack : std::string();
+        item.replay.reader = p.settings.reader_options();
+        if (p.settings.config) {
+            auto it = configs.find(*p.settings.config);
+            if (it == configs.end()) it = configs.emplace(*p.settings.config, load_config_file(*p.settings.config)).first;
+            item.replay.config = it->second;
+        } else {
+            item.replay.config = default_config();
+        }
+        if (p.settings.estimator) item.replay.config.monitor.estimator = *p.settings.estimator;
+        items.push_back(std::move(item));
+    }
+    return items;
+}
+
+std::string inputs_digest(const std::vector<BatchItem>& items) {
+    uint64_t h = 1469598103934665603ull;
+    auto mix = [&h](const std::string& s) {
+        for (unsigned char c : s) {
+            h ^= c;
+            h *= 1099511628211ull;
+        }
+        h ^= 0xff;  // field separator that no text contains
+        h *= 1099511628211ull;
+    };
+    mix(std::to_string(items.size()));
+    for (const BatchItem& it : items) {
+        mix(it.path);
+        mix(it.test);
+        mix(it.pack);
+        mix(it.replay.config.name);
+        mix(to_string(it.replay.config.monitor.estimator));
+    }
+    char buf[17];
+    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+    return buf;
+}
+
+std::vector<std::string> duplicate_stems(const std::vector<BatchItem>& items) {
+    std::map<std::string, std::vector<std::string>> by_stem;
+    std::vector<std::string> order;
+    for (const BatchItem& it : items) {
+        if (!it.error.empty()) continue;
+        auto& v = by_stem[it.stem];
+        if (v.empty()) order.push_back(it.stem);
+        v.push_back(it.path);
+    }
+    std::vector<std::string> out;
+    for (const std::string& stem : order) {
+        const auto& v = by_stem[stem];
+        if (v.size() < 2) continue;
+        std::string line = stem + ":";
+        for (size_t i = 0; i < v.size(); ++i) line += (i ? ", " : " ") + v[i];
+        out.push_back(line);
+    }
+    return out;
+}
+
+std::string progress_line(size_t done, size_t total, size_t failed, int width) {
+    const size_t filled = total ? done * static_cast<size_t>(width) / total : static_cast<size_t>(width);
+    std::string bar = "[" + std::string(filled, '#') + std::string(static_cast<size_t>(width) - filled, '.') + "] ";
+    bar += std::to_string(done) + "/" + std::to_string(total) + " logs";
+    if (failed) bar += ", " + std::to_string(failed) + " failed";
+    return bar;
+}
+
+json make_row(const BatchItem& item, const json& summary) {
+    json row;
+    row["index"] = item.index;
+    row["test"] = item.test;
+    row["log"] = item.path;
+    row["pack"] = item.pack.empty() ? json(nullptr) : json(item.pack);
+    row["config"] = summary.value("config", item.replay.config.name);
+    row["estimator"] = summary.value("estimator", std::string(to_string(item.replay.config.monitor.estimator)));
+    row["status"] = "ok";
+    row["error"] = nullptr;
+    // Missing members give null rather than an exception: a summary without a flight
+    // (or from an older schema) still makes a row.
+    auto pick = [&summary](const char* pointer) -> json {
+        const json::json_pointer p(pointer);
+        return summary.contains(p) ? summary.at(p) : json(nullptr);
+    };
+    const bool flew = pick("/flight").is_object();
+    row["flight"] = flew;
+    row["flight_duration_s"] = pick("/flight/duration_s");
+    row["capacity_mean_ah"] = pick("/flight/capacity_ah/mean");
+    row["capacity_first20_ah"] = pick("/flight/capacity_ah/first20_mean");
+    row["error_mean_v"] = pick("/flight/voltage_error_v/model/mean");
+    row["abs_error_mean_v"] = pick("/flight/voltage_error_v/model/mean_abs");
+    row["resistance_mean_ohm"] = pick("/flight/resistance_ohm/mean");
+    row["resistance_first20_ohm"] = pick("/flight/resistance_ohm/first20_mean");
+    const json scores = pick("/flight/cell_scores");
+    row["cell_scores"] = scores.is_array() ? scores : json::array();
+    row["remaining_at20_s"] = pick("/flight/remaining_time_s/at20");
+    json warnings = json::array();
+    const json raised = pick("/warnings");
+    if (raised.is_array()) {
+        for (const json& w : raised) warnings.push_back(w.is_object() ? w.value("name", std::string("?")) : std::string("?"));
+    }
+    row["warnings"] = warnings;
+    const json total = pick("/samples/total");
+    row["samples"] = total.is_number_unsigned() ? total.get<uint64_t>() : 0;
+    const json faults = pick("/sensor_fault_samples");
+    row["sensor_fault_samples"] = faults.is_number_unsigned() ? faults.get<uint64_t>() : 0;
+    const json notes = pick("/input/notes");
+    row["notes"] = notes.is_array() ? notes.size() : 0;
+    return row;
+}
+
+json make_error_row(const BatchItem& item, const std::string& reason) {
+    json row;
+    row["index"] = item.index;
+    row["test"] = item.test;
+    row["log"] = item.path;
+    row["pack"] = item.pack.empty() ? json(nullptr) : json(item.pack);
+    row["config"] = item.replay.config.name;
+    row["estimator"] = to_string(item.replay.config.monitor.estimator);
+    row["status"] = "error";
+    row["error"] = reason;
+    row["flight"] = false;
+    for (const char* k : {"flight_duration_s", "capacity_mean_ah", "capacity_first20_ah", "error_mean_v",
+                          "abs_error_mean_v", "resistance_mean_ohm", "resistance_first20_ohm", "remaining_at20_s"})
+        row[k] = nullptr;
+    row["cell_scores"] = json::array();
+    row["warnings"] = json::array();
+    row["samples"] = 0;
+    row["sensor_fault_samples"] = 0;
+    row["notes"] = 0;
+    return row;
+}
+
+BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions& options) {
+    const size_t n = items.size();
+    BatchResult result;
+    result.rows.assign(n, json());
+    if (options.keep_summaries) result.summaries.assign(n, json());
+    if (!options.out_dir.empty()) {
+        std::error_code ec;
+        fs::create_directories(options.out_dir, ec);
+        if (ec || !fs::is_directory(options.out_dir))
+            throw std::runtime_error(options.out_dir + ": cannot create the summary directory (" + ec.message() + ")");
+    }
+
+    std::atomic<size_t> next{0};
+    std::mutex lock;
+    size_t done = 0;
+    auto work = [&]() {
+        for (size_t k = next++; k < n; k = next++) {
+            const BatchItem& item = items[k];
+            json row, summary;
+            uint64_t samples = 0;
+            if (!item.error.empty()) {
+                row = make_error_row(item, item.error);
+            } else {
+                try {
+                    summary = replay_log(item.path, item.replay);
+                    row = make_row(item, summary);
+                    samples = row["samples"].get<uint64_t>();
+                } catch (const std::exception& e) {
+                    // InputError carries file:line:column; anything else is reported as is.
+                    row = make_error_row(item, e.what());
+                    summary = json();
+                }
+                if (!summary.is_null() && !options.out_dir.empty()) {
+                    // Written now, not at the end: a crash later loses nothing done so far.
+                    try {
+                        write_file_atomic((fs::path(options.out_dir) / (item.stem + ".json")).string(),
+                                          summary.dump(2) + "\n");
+                    } catch (const std::exception& e) {
+                        row = make_error_row(item, std::string("summary not written: ") + e.what());
+                    }
+                }
+            }
+            const bool failed = row["status"] != "ok";
+            std::lock_guard<std::mutex> g(lock);
+            result.rows[k] = std::move(row);
+            result.samples += samples;
+            if (options.keep_summaries) result.summaries[k] = std::move(summary);
+            if (failed) ++result.failed;
+            ++done;
+            if (options.progress) options.progress(done, n, result.failed);
+        }
+    };
+    const size_t jobs = std::max<size_t>(1, std::min<size_t>(options.jobs, n));
+    if (jobs <= 1) {
+        work();
+    } else {
+        std::vector<std::thread> pool;
+        pool.reserve(jobs);
+        for (size_t t = 0; t < jobs; ++t) pool.emplace_back(work);
+        for (std::thread& t : pool) t.join();
+    }
+    return result;
+}
+
+CompareOptions golden_compare_options(double relative_tolerance, double absolute_tolerance) {
+    CompareOptions o;
+    o.relative_tolerance = relative_tolerance;
+    o.absolute_tolerance = absolute_tolerance;
+    o.ignore = {"/input/path", "/battsim_version"};
+    return o;
+}
+
+GoldenComparison compare_to_goldens(const std::vector<BatchItem>& items, const std::vector<json>& summaries,
+                                    const std::string& golden_dir, const CompareOptions& options) {
+    GoldenComparison c;
+    for (size_t k = 0; k < items.size(); ++k) {
+        const BatchItem& item = items[k];
+        const std::string golden = (fs::path(golden_dir) / (item.stem + ".json")).string();
+        if (k >= summaries.size() || summaries[k].is_null()) {
+            ++c.failed;
+            c.lines.push_back(item.path + ": not compared, the replay failed");
+            continue;
+        }
+        std::error_code ec;
+        if (!fs::is_regular_file(golden, ec)) {
+            ++c.missing;
+            c.lines.push_back(item.path + ": no golden summary " + golden);
+            continue;
+        }
+        json expected;
+        try {
+            std::ifstream in(golden, std::ios::binary);
+            expected = json::parse(in);
+        } catch (const std::exception& e) {
+            ++c.changed;
+            c.lines.push_back(golden + ": not valid JSON (" + std::string(e.what()) + ")");
+            continue;
+        }
+        ++c.compared;
+        const std::vector<JsonDifference> diffs = compare_json(expected, summaries[k], options);
+        if (diffs.empty()) continue;
+        ++c.changed;
+        for (const JsonDifference& d : diffs)
+            c.lines.push_back(golden + ": " + d.path + ": golden " + d.expected + ", now " + d.actual);
+    }
+    return c;
+}
+
+}  // namespace host
+}  // namespace battsim

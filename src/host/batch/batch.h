@@ -1,0 +1,94 @@
+// `battsim batch`: replay many logs in parallel through replay_log and collect one
+// table row per log. Planning (which logs, with which settings) is separate from
+// running, so shards, merge and the benchmarks all see the same list.
+#pragma once
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "host/batch/inputs.h"
+#include "host/batch/manifest.h"
+#include "host/replay.h"
+#include "host/report/json_compare.h"
+
+namespace battsim {
+namespace host {
+
+struct BatchItem {
+    std::size_t index = 0;   // place in the full, unsharded list
+    std::string path;        // log path as given or resolved from the manifest
+    std::string stem;        // file stem: names the --out summary and the golden file
+    std::string test;        // row label (default: the stem)
+    std::string pack;        // empty = none
+    std::string error;       // non-empty: failed before replay (a pattern that matched nothing)
+    ReplayOptions replay;    // reader settings and the loaded config
+};
+
+struct BatchPlanRequest {
+    std::vector<std::string> paths;  // files, directories, patterns; empty with a manifest = all its logs
+    std::string manifest;            // empty = none
+    LogSettings command_line;        // options given on the command line; they win over the manifest
+};
+
+// The full ordered list. With a manifest and no paths: the manifest's logs in its order
+// (directories and patterns in entries expanded in place). With paths: the expanded
+// paths, each taking the settings of the manifest entry naming the same file (or the
+// manifest's defaults). Throws InputError (manifest) or ConfigError (a config file).
+std::vector<BatchItem> plan_batch(const BatchPlanRequest& request);
+
+// Identifies the full list (paths, labels, packs, configs) so merge can tell shards of
+// one run from shards of another. 16 hex digits (FNV-1a 64).
+std::string inputs_digest(const std::vector<BatchItem>& items);
+
+// Stems shared by more than one item ("30: a/30.csv, b/30.csv"), which would overwrite
+// each other's summaries in --out and match the same golden file.
+std::vector<std::string> duplicate_stems(const std::vector<BatchItem>& items);
+
+struct BatchRunOptions {
+    unsigned jobs = 1;
+    std::string out_dir;          // non-empty: write <stem>.json there as each log completes
+    bool keep_summaries = false;  // return the summaries (for --compare)
+    // After each log: logs done, total, failed so far. Called with a lock held, in
+    // completion order (which varies with --jobs; nothing written to the table depends on it).
+    std::function<void(std::size_t, std::size_t, std::size_t)> progress;
+};
+
+struct BatchResult {
+    std::vector<nlohmann::json> rows;       // in item order
+    std::vector<nlohmann::json> summaries;  // in item order (null for failed); empty unless kept
+    std::size_t failed = 0;
+    std::uint64_t samples = 0;              // replayed, over all logs
+};
+
+// Replays `items` on a pool of `jobs` threads. A log that fails becomes an error row
+// with the reason; the others go on. Never throws for a bad log; throws
+// std::runtime_error only if --out cannot be created.
+BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions& options);
+
+// A one-line progress bar ("[#####.....]  12/140 logs, 1 failed"), `width` cells wide.
+std::string progress_line(std::size_t done, std::size_t total, std::size_t failed, int width = 30);
+
+// The table row for a replayed log, and for one that failed.
+nlohmann::json make_row(const BatchItem& item, const nlohmann::json& summary);
+nlohmann::json make_error_row(const BatchItem& item, const std::string& reason);
+
+// --compare: each replayed summary against GOLDEN_DIR/<stem>.json.
+struct GoldenComparison {
+    std::vector<std::string> lines;  // one per difference or problem, in item order
+    std::size_t compared = 0;        // summaries that had a golden
+    std::size_t changed = 0;         // of those, summaries with a difference
+    std::size_t missing = 0;         // summaries without a golden file
+    std::size_t failed = 0;          // items that produced no summary
+    bool ok() const { return changed == 0 && missing == 0 && failed == 0; }
+};
+// Fields always ignored: /input/path (where the log sat on the machine that made the
+// golden) and /battsim_version (a release alone is not a regression).
+CompareOptions golden_compare_options(double relative_tolerance, double absolute_tolerance = 1e-9);
+GoldenComparison compare_to_goldens(const std::vector<BatchItem>& items, const std::vector<nlohmann::json>& summaries,
+                                    const std::string& golden_dir, const CompareOptions& options);
+
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,179 @@
+#include "host/batch/inputs.h"
+
+#include <glob.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+#include <stdexcept>
+#include <system_error>
+
+namespace battsim {
+namespace host {
+
+namespace fs = std::filesystem;
+
+bool natural_less(const std::string& a, const std::string& b) {
+    size_t i = 0, j = 0;
+    auto digit = [](char c) { return c >= '0' && c <= '9'; };
+    while (i < a.size() && j < b.size()) {
+        if (digit(a[i]) && digit(b[j])) {
+            size_t ie = i, je = j;
+            while (ie < a.size() && digit(a[ie])) ++ie;
+            while (je < b.size() && digit(b[je])) ++je;
+            size_t is = i, js = j;  // skip leading zeros for the numeric comparison
+            while (is + 1 < ie && a[is] == '0') ++is;
+            while (js + 1 < je && b[js] == '0') ++js;
+            if (ie - is != je - js) return ie - is < je - js;
+            const int c = a.compare(is, ie - is, b, js, je - js);
+            if (c != 0) return c < 0;
+            i = ie;
+            j = je;
+        } else {
+            if (a[i] != b[j]) return static_cast<unsigned char>(a[i]) < static_cast<unsigned char>(b[j]);
+            ++i;
+            ++j;
+        }
+    }
+    if ((i < a.size()) != (j < b.size())) return j < b.size();
+    return a < b;
+}
+
+namespace {
+
+// Regular (or symlinked-to-regular) files directly in `dir`, hidden ones skipped, sorted.
+std::vector<std::string> list_directory(const std::string& dir) {
+    std::vector<std::string> names;
+    std::error_code ec;
+    fs::directory_iterator it(dir, ec);
+    if (ec) return names;
+    for (const fs::directory_entry& e : it) {
+        const std::string name = e.path().filename().string();
+        if (name.empty() || name[0] == '.') continue;
+        std::error_code sec;
+        if (!fs::is_regular_file(e.path(), sec)) continue;
+        names.push_back(name);
+    }
+    std::sort(names.begin(), names.end(), natural_less);
+    std::vector<std::string> out;
+    out.reserve(names.size());
+    for (const std::string& n : names) out.push_back((fs::path(dir) / n).string());
+    return out;
+}
+
+bool is_directory(const std::string& p) {
+    std::error_code ec;
+    return fs::is_directory(p, ec);
+}
+
+bool exists(const std::string& p) {
+    std::error_code ec;
+    return fs::exists(p, ec);
+}
+
+std::vector<std::string> glob_paths(const std::string& pattern) {
+    glob_t g{};
+    std::vector<std::string> out;
+    // GLOB_NOSORT: glob(3) sorts by the locale's collation; we sort locale-free below.
+    const int rc = ::glob(pattern.c_str(), GLOB_NOSORT, nullptr, &g);
+    if (rc == 0) {
+        for (size_t i = 0; i < g.gl_pathc; ++i) out.emplace_back(g.gl_pathv[i]);
+    }
+    globfree(&g);
+    std::sort(out.begin(), out.end(), natural_less);
+    return out;
+}
+
+}  // namespace
+
+bool is_glob_pattern(const std::string& s) { return s.find_first_of("*?[") != std::string::npos; }
+
+std::vector<ExpandedPath> expand_inputs(const std::vector<std::string>& arguments) {
+    std::vector<ExpandedPath> out;
+    std::set<std::string> seen;
+    auto add = [&](const std::string& path, const std::string& arg) {
+        const std::string key = fs::path(path).lexically_normal().string();
+        if (!seen.insert(key).second) return;
+        out.push_back({path, arg, ""});
+    };
+    for (const std::string& arg : arguments) {
+        if (is_directory(arg)) {
+            const std::vector<std::string> files = list_directory(arg);
+            if (files.empty()) out.push_back({arg, arg, "directory holds no log files"});
+            for (const std::string& f : files) add(f, arg);
+        } else if (is_glob_pattern(arg) && !exists(arg)) {
+            std::vector<std::string> files;
+            for (const std::string& m : glob_paths(arg)) {
+                if (is_directory(m)) {
+                    for (const std::string& f : list_directory(m)) files.push_back(f);
+                } else {
+                    files.push_back(m);
+                }
+            }
+            if (files.empty()) out.push_back({arg, arg, "pattern matches no file"});
+            for (const std::string& f : files) add(f, arg);
+        } else {
+            // Kept even if missing: the replay reports it as an unreadable log.
+            add(arg, arg);
+        }
+    }
+    return out;
+}
+
+ShardSpec parse_shard(const std::string& text) {
+    const size_t slash = text.find('/');
+    auto number = [&](const std::string& s) -> size_t {
+        if (s.empty() || s.size() > 9 || s.find_first_not_of("0123456789") != std::string::npos)
+            throw std::invalid_argument("--shard: expected K/N with whole numbers 1 <= K <= N, found \"" + text + "\"");
+        return static_cast<size_t>(std::stoul(s));
+    };
+    if (slash == std::string::npos)
+        throw std::invalid_argument("--shard: expected K/N (e.g. 2/8), found \"" + text + "\"");
+    ShardSpec s;
+    s.index = number(text.substr(0, slash));
+    s.count = number(text.substr(slash + 1));
+    if (s.count == 0 || s.index == 0 || s.index > s.count)
+        throw std::invalid_argument("--shard: expected K/N with 1 <= K <= N, found \"" + text + "\"");
+    return s;
+}
+
+std::string to_string(const ShardSpec& s) {
+    return s.active() ? std::to_string(s.index) + "/" + std::to_string(s.count) : std::string();
+}
+
+std::string path_stem(const std::string& path) { return fs::path(path).stem().string(); }
+
+std::string expand_variables(const std::string& text) {
+    std::string out;
+    size_t i = 0;
+    while (i < text.size()) {
+        if (text.compare(i, 2, "${") != 0) {
+            out += text[i++];
+            continue;
+        }
+        const size_t close = text.find('}', i + 2);
+        if (close == std::string::npos)
+            throw std::invalid_argument("\"" + text + "\": expected '}' after \"${\"");
+        const std::string inner = text.substr(i + 2, close - i - 2);
+        const size_t dflt = inner.find(":-");
+        const std::string name = inner.substr(0, dflt);
+        if (name.empty() || name.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_") !=
+                                std::string::npos)
+            throw std::invalid_argument("\"" + text + "\": expected a variable name inside ${...}, found \"" + name + "\"");
+        const char* value = std::getenv(name.c_str());
+        if (value && *value) {
+            out += value;
+        } else if (dflt != std::string::npos) {
+            out += inner.substr(dflt + 2);
+        } else {
+            throw std::invalid_argument("\"" + text + "\": environment variable " + name +
+                                        " is not set (write ${" + name + ":-default} to give a fallback)");
+        }
+        i = close + 1;
+    }
+    return out;
+}
+
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,371 @@
+#include "host/batch/table.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "host/io/sample_reader.h"
+#include "host/report/summary.h"
+
+namespace battsim {
+namespace host {
+
+using nlohmann::json;
+
+namespace {
+
+// Every row carries these keys, in this order in the CSV.
+const std::vector<std::string> kRowKeys = {
+    "index", "test", "log", "pack", "config", "estimator", "status", "error", "flight", "flight_duration_s",
+    "capacity_mean_ah", "capacity_first20_ah", "error_mean_v", "abs_error_mean_v", "resistance_mean_ohm",
+    "resistance_first20_ohm", "cell_scores", "remaining_at20_s", "warnings", "samples", "sensor_fault_samples",
+    "notes"};
+
+const std::vector<std::string> kPackKeys = {"pack", "flights", "failed", "capacity_mean_ah",
+                                            "capacity_trend_ah_per_flight", "resistance_mean_ohm",
+                                            "resistance_trend_ohm_per_flight"};
+
+json number_or_null(double v) { return std::isfinite(v) ? json(round_sig(v)) : json(nullptr); }
+
+// Fixed decimals for the Markdown table; "–" for no value. -0.000 prints as 0.000.
+std::string fixed(const json& v, int decimals) {
+    if (!v.is_number()) return "–";
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, v.get<double>());
+    std::string s = buf;
+    if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
+    return s;
+}
+
+std::string significant(const json& v, int digits) {
+    if (!v.is_number()) return "–";
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%+.*g", digits, v.get<double>());
+    std::string s = buf;
+    if (v.get<double>() == 0.0) s = "0";
+    return s;
+}
+
+// A Markdown cell: pipes escaped, line breaks flattened.
+std::string md_cell(const std::string& s) {
+    std::string out;
+    for (char c : s) {
+        if (c == '|') out += "\\|";
+        else if (c == '\n' || c == '\r') out += ' ';
+        else out += c;
+    }
+    return out;
+}
+
+std::string text(const json& v) { return v.is_string() ? v.get<std::string>() : std::string(); }
+
+std::string file_name(const std::string& path) {
+    const size_t slash = path.find_last_of('/');
+    return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+// A CSV field: numbers in their shortest exact form, arrays joined with ';', quoted
+// when needed (RFC 4180).
+std::string csv_field(const json& v) {
+    std::string s;
+    if (v.is_null()) return s;
+    if (v.is_string()) {
+        s = v.get<std::string>();
+    } else if (v.is_array()) {
+        for (size_t i = 0; i < v.size(); ++i) s += (i ? ";" : "") + (v[i].is_string() ? v[i].get<std::string>() : v[i].dump());
+    } else {
+        s = v.dump();
+    }
+    if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
+    std::string q = "\"";
+    for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+}
+
+std::string render_rows_md(const json& table) {
+    std::ostringstream o;
+    o << "| test | log | pack | capacity Ah | first 20 % capacity Ah | error V | abs error V | R Ω | first 20 % R Ω "
+         "| cell differences | remaining at 20 % s | warnings | status |\n";
+    o << "|---|---|---|--:|--:|--:|--:|--:|--:|---|--:|---|---|\n";
+    for (const json& r : table["rows"]) {
+        std::string cells;
+        for (const json& c : r["cell_scores"]) cells += (cells.empty() ? "" : " / ") + fixed(c, 2);
+        std::string warnings;
+        for (const json& w : r["warnings"]) warnings += (warnings.empty() ? "" : ", ") + text(w);
+        std::string status = text(r["status"]);
+        if (status == "ok" && !r["flight"].get<bool>()) status = "ok (no flight)";
+        if (status != "ok" && r["error"].is_string()) status += ": " + r["error"].get<std::string>();
+        o << "| " << md_cell(text(r["test"])) << " | " << md_cell(file_name(text(r["log"]))) << " | "
+          << md_cell(r["pack"].is_string() ? text(r["pack"]) : "–") << " | " << fixed(r["capacity_mean_ah"], 3) << " | "
+          << fixed(r["capacity_first20_ah"], 3) << " | " << fixed(r["error_mean_v"], 3) << " | "
+          << fixed(r["abs_error_mean_v"], 3) << " | " << fixed(r["resistance_mean_ohm"], 4) << " | "
+          << fixed(r["resistance_first20_ohm"], 4) << " | " << (cells.empty() ? "–" : cells) << " | "
+          << fixed(r["remaining_at20_s"], 1) << " | " << (warnings.empty() ? "–" : md_cell(warnings)) << " | "
+          << md_cell(status) << " |\n";
+    }
+    return o.str();
+}
+
+std::string render_packs_md(const json& packs) {
+    std::ostringstream o;
+    o << "| pack | flights | failed | capacity Ah | capacity trend Ah/flight | R Ω | R trend Ω/flight |\n";
+    o << "|---|--:|--:|--:|--:|--:|--:|\n";
+    for (const json& p : packs) {
+        o << "| " << md_cell(text(p["pack"])) << " | " << p["flights"].dump() << " | " << p["failed"].dump() << " | "
+          << fixed(p["capacity_mean_ah"], 3) << " | " << significant(p["capacity_trend_ah_per_flight"], 3) << " | "
+          << fixed(p["resistance_mean_ohm"], 4) << " | " << significant(p["resistance_trend_ohm_per_flight"], 3)
+          << " |\n";
+    }
+    return o.str();
+}
+
+std::string render_csv(const json& rows, const std::vector<std::string>& keys) {
+    std::string out;
+    for (size_t i = 0; i < keys.size(); ++i) out += (i ? "," : "") + keys[i];
+    out += "\n";
+    for (const json& r : rows) {
+        for (size_t i = 0; i < keys.size(); ++i) out += (i ? "," : "") + csv_field(r[keys[i]]);
+        out += "\n";
+    }
+    return out;
+}
+
+std::pair<long, long> line_column(const std::string& text, size_t offset) {
+    long line = 1, col = 1;
+    for (size_t i = 0; i < offset && i < text.size(); ++i) {
+        if (text[i] == '\n') {
+            ++line;
+            col = 1;
+        } else {
+            ++col;
+        }
+    }
+    return {line, col};
+}
+
+}  // namespace
+
+TableFormat parse_table_format(const std::string& name) {
+    if (name == "md") return TableFormat::Markdown;
+    if (name == "csv") return TableFormat::Csv;
+    if (name == "json") return TableFormat::Json;
+    throw std::invalid_argument("unknown table format \"" + name + "\"; expected md, csv or json");
+}
+
+double least_squares_slope(const std::vector<double>& x, const std::vector<double>& y) {
+    const size_t n = std::min(x.size(), y.size());
+    if (n < 2) return NAN;
+    double mx = 0, my = 0;
+    for (size_t i = 0; i < n; ++i) {
+        mx += x[i];
+        my += y[i];
+    }
+    mx /= n;
+    my /= n;
+    double sxy = 0, sxx = 0;
+    for (size_t i = 0; i < n; ++i) {
+        sxy += (x[i] - mx) * (y[i] - my);
+        sxx += (x[i] - mx) * (x[i] - mx);
+    }
+    return sxx > 0 ? sxy / sxx : NAN;
+}
+
+std::vector<json> pack_rows(const std::vector<json>& rows) {
+    struct Acc {
+        size_t flights = 0, failed = 0;
+        std::vector<double> cap_x, cap_y, res_x, res_y;
+    };
+    std::vector<std::string> order;
+    std::map<std::string, Acc> packs;
+    for (const json& r : rows) {
+        if (!r["pack"].is_string()) continue;
+        const std::string id = r["pack"].get<std::string>();
+        auto it = packs.find(id);
+        if (it == packs.end()) {
+            order.push_back(id);
+            it = packs.emplace(id, Acc()).first;
+        }
+        Acc& a = it->second;
+        const double x = static_cast<double>(++a.flights);  // flight number within the pack
+        if (r["status"] != "ok") ++a.failed;
+        if (r["capacity_mean_ah"].is_number()) {
+            a.cap_x.push_back(x);
+            a.cap_y.push_back(r["capacity_mean_ah"].get<double>());
+        }
+        if (r["resistance_mean_ohm"].is_number()) {
+            a.res_x.push_back(x);
+            a.res_y.push_back(r["resistance_mean_ohm"].get<double>());
+        }
+    }
+    auto mean = [](const std::vector<double>& v) {
+        if (v.empty()) return static_cast<double>(NAN);
+        double s = 0;
+        for (double d : v) s += d;
+        return s / v.size();
+    };
+    std::vector<json> out;
+    for (const std::string& id : order) {
+        const Acc& a = packs[id];
+        json p;
+        p["pack"] = id;
+        p["flights"] = a.flights;
+        p["failed"] = a.failed;
+        p["capacity_mean_ah"] = number_or_null(mean(a.cap_y));
+        p["capacity_trend_ah_per_flight"] = number_or_null(least_squares_slope(a.cap_x, a.cap_y));
+        p["resistance_mean_ohm"] = number_or_null(mean(a.res_y));
+        p["resistance_trend_ohm_per_flight"] = number_or_null(least_squares_slope(a.res_x, a.res_y));
+        out.push_back(p);
+    }
+    return out;
+}
+
+json make_table(std::vector<json> rows, size_t inputs, const std::string& digest, const ShardSpec& shard) {
+    json t;
+    t["schema"] = kBatchSchema;
+    t["version"] = kBatchVersion;
+    t["battsim_version"] = BATTSIM_VERSION;
+    t["inputs"] = {{"count", inputs}, {"digest", digest}};
+    t["shard"] = shard.active() ? json{{"index", shard.index}, {"count", shard.count}} : json(nullptr);
+    // A shard's pack table would cover part of each pack's flights: left to merge.
+    t["packs"] = shard.active() ? json(nullptr) : json(pack_rows(rows));
+    t["rows"] = std::move(rows);
+    return t;
+}
+
+size_t failed_rows(const json& table) {
+    size_t n = 0;
+    for (const json& r : table["rows"]) n += r["status"] != "ok";
+    return n;
+}
+
+std::string render_table(const json& table, TableFormat format) {
+    switch (format) {
+        case TableFormat::Json: return table.dump(2) + "\n";
+        case TableFormat::Csv: return render_csv(table["rows"], kRowKeys);
+        case TableFormat::Markdown: break;
+    }
+    std::string out = render_rows_md(table);
+    if (table["shard"].is_object()) {
+        out += "\nShard " + table["shard"]["index"].dump() + "/" + table["shard"]["count"].dump() +
+               " of the inputs; `battsim merge` the shards' JSON tables for the whole table and the per-pack table.\n";
+    } else if (table["packs"].is_array() && !table["packs"].empty()) {
+        out += "\nPer pack (trend: least-squares slope over the pack's flights in input order):\n\n";
+        out += render_packs_md(table["packs"]);
+    }
+    return out;
+}
+
+std::string render_packs(const json& table, TableFormat format) {
+    const json packs = table["packs"].is_array() ? table["packs"] : json::array();
+    switch (format) {
+        case TableFormat::Json: return packs.dump(2) + "\n";
+        case TableFormat::Csv: return render_csv(packs, kPackKeys);
+        case TableFormat::Markdown: break;
+    }
+    return render_packs_md(packs);
+}
+
+json read_table_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path, 0, 0, "cannot open batch table");
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    const std::string text = ss.str();
+    if (text.empty()) throw InputError(path, 0, 0, "file is empty; expected a table written by `battsim batch --format json`");
+    json t;
+    try {
+        t = json::parse(text);
+    } catch (const json::parse_error& e) {
+        const auto lc = line_column(text, e.byte > 0 ? e.byte - 1 : 0);
+        throw InputError(path, lc.first, lc.second,
+                         "not valid JSON; expected a table written by `battsim batch --format json`");
+    }
+    auto fail = [&path](const std::string& what) { throw InputError(path, 0, 0, what); };
+    try {
+        if (!t.is_object() || t.value("schema", std::string()) != kBatchSchema)
+            fail(std::string("expected a JSON table with \"schema\": \"") + kBatchSchema + "\" (from `battsim batch --format json`)");
+        if (t.value("version", 0) != kBatchVersion)
+            fail("unsupported table version " + t.value("version", json()).dump() + "; expected " + std::to_string(kBatchVersion));
+        if (!t.contains("inputs") || !t["inputs"].is_object() || !t["inputs"].value("count", json()).is_number_unsigned() ||
+            !t["inputs"].value("digest", json()).is_string())
+            fail("expected \"inputs\": {\"count\": N, \"digest\": \"…\"}");
+        if (!t.contains("rows") || !t["rows"].is_array()) fail("expected a \"rows\" array");
+        if (!t.contains("shard") || !(t["shard"].is_null() || t["shard"].is_object())) fail("expected \"shard\": null or {\"index\", \"count\"}");
+        const size_t count = t["inputs"]["count"].get<size_t>();
+        for (size_t i = 0; i < t["rows"].size(); ++i) {
+            const json& r = t["rows"][i];
+            const std::string where = "rows[" + std::to_string(i) + "]";
+            if (!r.is_object()) fail(where + ": expected an object");
+            for (const std::string& k : kRowKeys)
+                if (!r.contains(k)) fail(where + ": expected the key \"" + k + "\"");
+            if (!r["index"].is_number_unsigned() || r["index"].get<size_t>() >= count)
+                fail(where + ".index: expected a whole number below the input count " + std::to_string(count));
+            if (!r["status"].is_string() || !r["flight"].is_boolean())
+                fail(where + ": expected \"status\" text and \"flight\" true/false");
+            if (!r["cell_scores"].is_array() || !r["warnings"].is_array())
+                fail(where + ": expected \"cell_scores\" and \"warnings\" arrays");
+        }
+    } catch (const nlohmann::json::exception& e) {
+        // A value of the wrong type somewhere the checks above did not look.
+        fail(std::string("not a batch table: ") + e.what());
+    }
+    return t;
+}
+
+json merge_tables(const std::vector<json>& tables, const std::vector<std::string>& origins) {
+    if (tables.empty()) throw InputError("merge", 0, 0, "expected at least one table");
+    const json& first = tables[0];
+    const size_t count = first["inputs"]["count"].get<size_t>();
+    const std::string digest = first["inputs"]["digest"].get<std::string>();
+    std::vector<const json*> by_index(count, nullptr);
+    std::vector<size_t> from(count, 0);
+    for (size_t t = 0; t < tables.size(); ++t) {
+        const json& tab = tables[t];
+        const std::string& origin = t < origins.size() ? origins[t] : std::string("table");
+        if (tab["inputs"]["count"].get<size_t>() != count || tab["inputs"]["digest"] != digest) {
+            throw InputError(origin, 0, 0,
+                             "comes from a different input list than " + origins[0] + " (inputs " +
+                                 tab["inputs"]["count"].dump() + " / digest " + tab["inputs"]["digest"].dump() +
+                                 " vs " + std::to_string(count) + " / \"" + digest +
+                                 "\"); run every shard with the same paths, manifest and options");
+        }
+        if (tab.value("battsim_version", std::string()) != first.value("battsim_version", std::string()))
+            throw InputError(origin, 0, 0, "was written by battsim " + tab.value("battsim_version", std::string("?")) +
+                                               ", " + origins[0] + " by " + first.value("battsim_version", std::string("?")));
+        for (const json& r : tab["rows"]) {
+            const size_t i = r["index"].get<size_t>();
+            if (by_index[i]) {
+                throw InputError(origin, 0, 0,
+                                 "holds input " + std::to_string(i) + " (" + text(r["log"]) + ") that " + origins[from[i]] +
+                                     " holds too; give each shard once");
+            }
+            by_index[i] = &r;
+            from[i] = t;
+        }
+    }
+    std::string missing;
+    size_t n_missing = 0;
+    for (size_t i = 0; i < count; ++i) {
+        if (by_index[i]) continue;
+        if (n_missing++ < 10) missing += (missing.empty() ? "" : ", ") + std::to_string(i);
+    }
+    if (n_missing) {
+        if (n_missing > 10) missing += ", …";
+        throw InputError(origins[0], 0, 0,
+                         std::to_string(n_missing) + " of " + std::to_string(count) + " inputs are in none of the given tables (index " +
+                             missing + "); expected every shard's table");
+    }
+    std::vector<json> rows;
+    rows.reserve(count);
+    for (const json* r : by_index) rows.push_back(*r);
+    json merged = make_table(std::move(rows), count, digest, ShardSpec());
+    merged["battsim_version"] = first["battsim_version"];
+    return merged;
+}
+
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,53 @@
+// The batch table (schema battsim.batch): one row per log in the columns of the
+// dissertation's appendix, plus a per-pack table. The JSON form is what `batch --format
+// json` writes and `merge` reads; Markdown and CSV are rendered from it, so a merged
+// table and a single run's table come out of the same code byte for byte.
+#pragma once
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "host/batch/inputs.h"
+
+namespace battsim {
+namespace host {
+
+constexpr const char* kBatchSchema = "battsim.batch";
+constexpr int kBatchVersion = 1;
+
+enum class TableFormat { Markdown, Csv, Json };
+// "md", "csv", "json"; throws std::invalid_argument.
+TableFormat parse_table_format(const std::string& name);
+
+// The table document. `rows` are this run's rows (a shard's only, when sharded) in
+// index order; `inputs`/`digest` describe the full list. Unsharded tables also carry
+// the per-pack table.
+nlohmann::json make_table(std::vector<nlohmann::json> rows, std::size_t inputs, const std::string& digest,
+                          const ShardSpec& shard);
+
+// Per pack, in order of the pack's first row: flights (rows), failed, mean capacity
+// and resistance over the pack's flights, and their trend: the least-squares slope
+// against the flight's number within the pack (1, 2, … in input order), per flight.
+std::vector<nlohmann::json> pack_rows(const std::vector<nlohmann::json>& rows);
+
+// Least-squares slope of y over x; NaN with fewer than two distinct x.
+double least_squares_slope(const std::vector<double>& x, const std::vector<double>& y);
+
+// The log table (Markdown: followed by the pack table when there is one).
+std::string render_table(const nlohmann::json& table, TableFormat format);
+// The pack table alone.
+std::string render_packs(const nlohmann::json& table, TableFormat format);
+
+std::size_t failed_rows(const nlohmann::json& table);
+
+// Reads and checks a table written by `batch --format json`. Throws InputError.
+nlohmann::json read_table_file(const std::string& path);
+// Joins shard tables (in any order) into the table one unsharded run would have
+// written. Every shard must come from the same input list (same digest and count), and
+// together they must hold each input exactly once. Throws InputError naming the file.
+nlohmann::json merge_tables(const std::vector<nlohmann::json>& tables, const std::vector<std::string>& origins);
+
+}  // namespace host
+}  // namespace battsim

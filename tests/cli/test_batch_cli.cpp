@@ -1,0 +1,281 @@
+// battsim batch and merge run as programs: error rows and exit codes, summaries kept,
+// byte-identical tables for any --jobs, shards merged back into the single run's table,
+// --compare against goldens, clear manifest errors.
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+#include <sys/stat.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "cli_util.h"
+
+using clitest::q;
+using clitest::read_file;
+using clitest::run;
+
+namespace {
+
+const std::string kSource = BATTSIM_SOURCE_DIR;
+const std::string kData = BATTSIM_DATA_DIR;
+const std::string kConfig = kSource + "/configs/reference-modified.json";
+
+bool exists(const std::string& p) {
+    struct stat st;
+    return ::stat(p.c_str(), &st) == 0;
+}
+
+// A raw predictive-bms log: rest, then a sagging load; `amps`/`sag` vary the numbers.
+std::string raw_flight(double amps, double sag_v_per_s, int load_rows = 400) {
+    std::string s;
+    long t = 630;
+    char line[160];
+    for (int k = 0; k < 150; ++k, t += 67) {
+        std::snprintf(line, sizeof line, "%ld,16.50,4.12,4.13,4.12,4.13,250.00,1.32,\n", t);
+        s += line;
+    }
+    for (int k = 0; k < load_rows; ++k, t += 67) {
+        const double v = 16.2 - amps * 0.02 - sag_v_per_s * k * 0.067;
+        const double c = v / 4;
+        std::snprintf(line, sizeof line, "%ld,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,\n", t, v, c, c + 0.01, c,
+                      v - 3 * c - 0.01, amps * 1000.0, amps * 0.378);
+        s += line;
+    }
+    return s;
+}
+
+// Removes the temp dirs this file made when the test program exits.
+std::string scratch_dir() {
+    struct Registry {
+        std::vector<std::string> dirs;
+        ~Registry() {
+            std::error_code ec;
+            for (const std::string& d : dirs) std::filesystem::remove_all(d, ec);
+        }
+    };
+    static Registry registry;
+    registry.dirs.push_back(clitest::temp_dir());
+    return registry.dirs.back();
+}
+
+// A directory with `good` distinct flights g1..gN and, if asked, one unreadable log.
+std::string fleet_dir(int good, bool with_bad) {
+    const std::string dir = scratch_dir();
+    for (int k = 1; k <= good; ++k)
+        clitest::write_file(dir + "/g" + std::to_string(k) + ".csv", raw_flight(12 + 3 * k, 0.0006 * k));
+    if (with_bad) clitest::write_file(dir + "/bad.csv", "627,16.57,4.14,4.14,4.14,4.16,47.99,0.39,\n628,oops,4.1,4.1,4.1,4.1,1,1,\n");
+    return dir;
+}
+
+}  // namespace
+
+TEST_CASE("batch: a bad log becomes an error row, the rest are replayed and kept", "[cli][batch]") {
+    const std::string dir = fleet_dir(2, true);
+    const std::string out = dir + "/summaries";
+    auto r = run("batch " + q(dir) + " -c " + q(kConfig) + " --out " + q(out) + " --format json --jobs 2");
+    INFO(r.err);
+    CHECK(r.exit_code == 1);
+    const auto table = nlohmann::json::parse(r.out);
+    REQUIRE(table["rows"].size() == 3);
+    // Directory order: natural sort of the names.
+    CHECK(table["rows"][0]["test"] == "bad");
+    CHECK(table["rows"][0]["status"] == "error");
+    CHECK(table["rows"][0]["error"].get<std::string>().find(dir + "/bad.csv:2:2: ") == 0);
+    CHECK(table["rows"][1]["test"] == "g1");
+    CHECK(table["rows"][1]["status"] == "ok");
+    CHECK(table["rows"][2]["status"] == "ok");
+    CHECK(r.err.find("battsim batch: failed: " + dir + "/bad.csv:2:2:") != std::string::npos);
+    CHECK(r.err.find("1 of 3 logs failed") != std::string::npos);
+    // The good logs' summaries are written, in the replay's own format; no summary for the bad one.
+    for (const char* stem : {"g1", "g2"}) {
+        const auto s = nlohmann::json::parse(read_file(out + "/" + stem + ".json"));
+        CHECK(s["schema"] == "battsim.summary");
+        CHECK(s["input"]["path"] == dir + "/" + stem + ".csv");
+    }
+    CHECK_FALSE(exists(out + "/bad.json"));
+    // Identical to what `battsim replay --summary` writes for the same log.
+    auto rep = run("replay " + q(dir + "/g2.csv") + " -c " + q(kConfig) + " --summary " + q(dir + "/rep.json"));
+    REQUIRE(rep.exit_code == 0);
+    CHECK(read_file(dir + "/rep.json") == read_file(out + "/g2.json"));
+
+    // Markdown: the failure is spelt out in the status column.
+    auto md = run("batch " + q(dir) + " -c " + q(kConfig));
+    CHECK(md.exit_code == 1);
+    CHECK(md.out.find("| bad | bad.csv | – | – |") != std::string::npos);
+    CHECK(md.out.find("| error: " + dir + "/bad.csv:2:2: ") != std::string::npos);
+
+    // The estimator is chosen for all logs from the command line and shows in the rows.
+    auto joint = run("batch " + q(dir + "/g1.csv") + " -c " + q(kConfig) + " --estimator joint --format json");
+    CHECK(joint.exit_code == 0);
+    CHECK(nlohmann::json::parse(joint.out)["rows"][0]["estimator"] == "joint");
+
+    // All good: exit 0.
+    auto ok = run("batch " + q(dir + "/g*.csv") + " -c " + q(kConfig) + " --format csv");
+    CHECK(ok.exit_code == 0);
+    CHECK(ok.out.rfind("index,test,log,pack,config,estimator,status,", 0) == 0);
+}
+
+TEST_CASE("batch: output is byte-identical for any --jobs", "[cli][batch]") {
+    const std::string dir = fleet_dir(7, true);
+    for (const char* format : {"md", "csv", "json"}) {
+        auto one = run("batch " + q(dir) + " -c " + q(kConfig) + " --jobs 1 --format " + format);
+        auto two = run("batch " + q(dir) + " -c " + q(kConfig) + " --jobs 2 --format " + format);
+        auto four = run("batch " + q(dir) + " -c " + q(kConfig) + " --jobs 4 --format " + format +
+                        " --output " + q(dir + "/t4." + format));
+        CHECK(one.exit_code == 1);
+        CHECK(two.exit_code == 1);
+        CHECK(four.exit_code == 1);
+        CHECK_FALSE(one.out.empty());
+        CHECK(one.out == two.out);
+        CHECK(read_file(dir + "/t4." + format) == one.out);
+        CHECK(four.out.empty());
+    }
+}
+
+TEST_CASE("batch: shards merged give exactly the single run's table", "[cli][batch]") {
+    const std::string dir = fleet_dir(7, true);
+    // Pack ids so the per-pack table is exercised too.
+    std::string manifest = "path,pack\n";
+    for (int k = 1; k <= 7; ++k) manifest += "g" + std::to_string(k) + ".csv," + (k % 3 ? "A" : "B") + "\n";
+    manifest += "bad.csv,A\n";
+    clitest::write_file(dir + "/fleet.csv", manifest);
+    const std::string common = " --manifest " + q(dir + "/fleet.csv") + " -c " + q(kConfig);
+    std::string shards;
+    for (int k = 1; k <= 3; ++k) {
+        const std::string p = dir + "/shard" + std::to_string(k) + ".json";
+        auto r = run("batch" + common + " --format json --shard " + std::to_string(k) + "/3 --output " + q(p));
+        CHECK(r.exit_code == (k == 2 ? 1 : 0));  // bad.csv is input 7, 7 mod 3 = 1: shard 2
+        shards += " " + q(p);
+    }
+    for (const char* format : {"md", "csv", "json"}) {
+        auto single = run("batch" + common + " --format " + format + " --packs " + q(dir + "/packs-single." + format));
+        auto merged = run("merge" + shards + " --format " + format + " --packs " + q(dir + "/packs-merged." + format));
+        INFO(merged.err);
+        CHECK(single.exit_code == 1);
+        CHECK(merged.exit_code == 1);
+        CHECK_FALSE(single.out.empty());
+        CHECK(merged.out == single.out);
+        CHECK(read_file(dir + "/packs-merged." + format) == read_file(dir + "/packs-single." + format));
+    }
+    auto md = run("batch" + common);
+    CHECK(md.out.find("| A | 6 | 1 |") != std::string::npos);  // g1 g2 g4 g5 g7 + bad
+    CHECK(md.out.find("| B | 2 | 0 |") != std::string::npos);
+
+    // A missing shard, a shard given twice, a shard of another run: refused, exit 3.
+    const std::string s1 = dir + "/shard1.json", s2 = dir + "/shard2.json";
+    auto missing = run("merge " + q(s1) + " " + q(s2));
+    CHECK(missing.exit_code == 3);
+    CHECK(missing.err.find("2 of 8 inputs are in none of the given tables (index 2, 5)") != std::string::npos);
+    auto twice = run("merge " + q(s1) + " " + q(s1));
+    CHECK(twice.exit_code == 3);
+    auto other = run("batch " + q(dir + "/g1.csv") + " -c " + q(kConfig) + " --format json --shard 1/3 --output " +
+                     q(dir + "/other.json"));
+    REQUIRE(other.exit_code == 0);
+    auto foreign = run("merge" + shards + " " + q(dir + "/other.json"));
+    CHECK(foreign.exit_code == 3);
+    CHECK(foreign.err.find("comes from a different input list") != std::string::npos);
+}
+
+TEST_CASE("batch --compare: passes on identical summaries, lists a changed field", "[cli][batch]") {
+    const std::string dir = fleet_dir(3, false);
+    const std::string golden = dir + "/golden";
+    auto make = run("batch " + q(dir) + " -c " + q(kConfig) + " --out " + q(golden));
+    REQUIRE(make.exit_code == 0);
+    // Same logs reached by another path spelling: input.path differs and is ignored.
+    auto same = run("batch " + q(dir + "/./") + " -c " + q(kConfig) + " --compare " + q(golden));
+    INFO(same.err);
+    CHECK(same.exit_code == 0);
+    CHECK(same.err.find("compare: 3 compared, 0 changed, 0 without golden, 0 not replayed") != std::string::npos);
+
+    // Change one field of one golden beyond the tolerance.
+    auto g = nlohmann::json::parse(read_file(golden + "/g2.json"));
+    const double mean = g["flight"]["capacity_ah"]["mean"].get<double>();
+    g["flight"]["capacity_ah"]["mean"] = mean * 1.01;
+    clitest::write_file(golden + "/g2.json", g.dump(2) + "\n");
+    auto changed = run("batch " + q(dir) + " -c " + q(kConfig) + " --compare " + q(golden));
+    CHECK(changed.exit_code == 1);
+    CHECK(changed.err.find("compare: " + golden + "/g2.json: /flight/capacity_ah/mean: golden ") != std::string::npos);
+    CHECK(changed.err.find("1 changed") != std::string::npos);
+    // ... and a tolerance wide enough accepts it.
+    auto loose = run("batch " + q(dir) + " -c " + q(kConfig) + " --compare " + q(golden) + " --tolerance 0.02");
+    CHECK(loose.exit_code == 0);
+
+    // A summary without a golden is a failure too (the golden set must cover the batch).
+    std::remove((golden + "/g1.json").c_str());
+    auto missing = run("batch " + q(dir) + " -c " + q(kConfig) + " --compare " + q(golden) + " --tolerance 0.02");
+    CHECK(missing.exit_code == 1);
+    CHECK(missing.err.find("no golden summary " + golden + "/g1.json") != std::string::npos);
+}
+
+TEST_CASE("batch: manifest and option errors are clear and exit non-zero", "[cli][batch]") {
+    const std::string dir = fleet_dir(1, false);
+    clitest::write_file(dir + "/m.json", "{\n  \"schema\": \"battsim.manifest\",\n  \"logs\": [\n    {\"path\": \"g1.csv\", \"pakc\": \"A\"}\n  ]\n}\n");
+    auto r = run("batch --manifest " + q(dir + "/m.json"));
+    CHECK(r.exit_code == 3);
+    CHECK(r.err == "battsim batch: " + dir + "/m.json:4:24: $.logs[0].pakc: unknown key; expected one of columns, config, "
+                                               "current_source, estimator, format, pack, path, test\n");
+    clitest::write_file(dir + "/m.csv", "path,pack\ng1.csv,A,extra\n");
+    r = run("batch --manifest " + q(dir + "/m.csv"));
+    CHECK(r.exit_code == 3);
+    CHECK(r.err == "battsim batch: " + dir + "/m.csv:2:3: expected 2 fields as in the header, found 3\n");
+    clitest::write_file(dir + "/c.json", "{\"schema\": \"battsim.manifest\", \"logs\": [{\"path\": \"g1.csv\", \"config\": \"nope.json\"}]}");
+    r = run("batch --manifest " + q(dir + "/c.json"));
+    CHECK(r.exit_code == 4);
+    CHECK(r.err.find(dir + "/nope.json: cannot open config file") != std::string::npos);
+    r = run("batch --manifest " + q(dir + "/none.json"));
+    CHECK(r.exit_code == 3);
+    CHECK(r.err == "battsim batch: " + dir + "/none.json: cannot open manifest\n");
+
+    CHECK(run("batch").exit_code == 2);
+    CHECK(run("batch " + q(dir) + " --shard 0/2").exit_code == 2);
+    CHECK(run("batch " + q(dir) + " --format xml").exit_code == 2);
+    CHECK(run("batch " + q(dir) + " --time-unit hours").exit_code == 2);
+    CHECK(run("batch " + q(dir) + " --estimator fancy").exit_code == 2);
+    // Two logs with one stem cannot both be <stem>.json in --out.
+    const std::string other = fleet_dir(1, false);
+    r = run("batch " + q(dir + "/g1.csv") + " " + q(other + "/g1.csv") + " --out " + q(dir + "/o"));
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.find("g1: " + dir + "/g1.csv, " + other + "/g1.csv") != std::string::npos);
+    // Outputs that cannot be written: exit 5, and no half-written file.
+    clitest::write_file(dir + "/plain", "x");
+    r = run("batch " + q(dir + "/g1.csv") + " --out " + q(dir + "/plain/sub"));
+    CHECK(r.exit_code == 5);
+    CHECK(r.err.find("cannot create the summary directory") != std::string::npos);
+    r = run("batch " + q(dir + "/g1.csv") + " -o " + q(dir + "/missing-dir/table.md"));
+    CHECK(r.exit_code == 5);
+    CHECK_FALSE(exists(dir + "/missing-dir"));
+    // A pattern that matches nothing is an error row, not silence.
+    r = run("batch " + q(dir + "/*.bin") + " --format csv");
+    CHECK(r.exit_code == 1);
+    CHECK(r.out.find(",error,pattern matches no file,") != std::string::npos);
+}
+
+TEST_CASE("batch on the shared dissertation flights matches the committed goldens", "[cli][batch]") {
+    if (!exists(kData + "/predictive-bms/flights/30.csv")) {
+        WARN("shared data not found at " << kData << "; skipped");
+        return;
+    }
+    const std::string dir = scratch_dir();
+    // The manifest finds the data through BATTSIM_DATA_DIR (its fallback is ../shared/data
+    // beside the repository); point it at the data this build was configured with.
+    ::setenv("BATTSIM_DATA_DIR", kData.c_str(), 1);
+    auto r = run("batch --manifest " + q(kSource + "/configs/manifests/predictive-bms.json") + " --compare " +
+                 q(kSource + "/tests/golden/predictive-bms-modified") + " --format json --out " + q(dir));
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    const auto t = nlohmann::json::parse(r.out);
+    REQUIRE(t["rows"].size() == 4);
+    CHECK(t["rows"][1]["test"] == "2");
+    CHECK(t["rows"][1]["pack"] == "5");
+    CHECK(t["rows"][1]["log"].get<std::string>().find("predictive-bms/flights/30.csv") != std::string::npos);
+    CHECK(t["packs"].size() == 4);
+    // The same files under --out are the goldens except for the recorded input path.
+    auto g = nlohmann::json::parse(read_file(kSource + "/tests/golden/predictive-bms-modified/34.json"));
+    auto o = nlohmann::json::parse(read_file(dir + "/34.json"));
+    g["input"].erase("path");
+    o["input"].erase("path");
+    CHECK(g == o);
+}

@@ -1,0 +1,530 @@
+// The batch library: input expansion and order, shards, manifests (JSON and CSV, with
+// their error messages), the table and its pack trends, merge, golden comparison, and
+// the thread pool's determinism. Logs are small synthetic raw logs in a temp dir.
+#include <catch2/catch.hpp>
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "host/batch/batch.h"
+#include "host/batch/inputs.h"
+#include "host/batch/manifest.h"
+#include "host/batch/table.h"
+#include "host/config_json.h"
+
+using namespace battsim::host;
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+class TempDir {
+public:
+    TempDir() {
+        static std::atomic<int> counter{0};
+        dir_ = fs::temp_directory_path() /
+               ("battsim_batch_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+        fs::create_directories(dir_);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        fs::remove_all(dir_, ec);
+    }
+    std::string write(const std::string& name, const std::string& content) const {
+        const fs::path p = dir_ / name;
+        fs::create_directories(p.parent_path());
+        std::ofstream out(p, std::ios::binary);
+        out << content;
+        return p.string();
+    }
+    std::string path(const std::string& name = "") const { return name.empty() ? dir_.string() : (dir_ / name).string(); }
+
+private:
+    fs::path dir_;
+};
+
+// A raw predictive-bms log: rest, then a load whose voltage sags with the charge drawn.
+// `amps` and `sag` make each log's numbers different.
+std::string raw_flight(double amps, double sag_v_per_s, int load_rows = 400) {
+    std::string s;
+    long t = 630;
+    char line[160];
+    for (int k = 0; k < 150; ++k, t += 67) {
+        std::snprintf(line, sizeof line, "%ld,16.50,4.12,4.13,4.12,4.13,250.00,1.32,\n", t);
+        s += line;
+    }
+    for (int k = 0; k < load_rows; ++k, t += 67) {
+        const double v = 16.2 - amps * 0.02 - sag_v_per_s * k * 0.067;
+        const double c = v / 4;
+        std::snprintf(line, sizeof line, "%ld,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,\n", t, v, c, c + 0.01, c, v - 3 * c - 0.01,
+                      amps * 1000.0, amps * 0.378);
+        s += line;
+    }
+    return s;
+}
+
+std::vector<std::string> paths_of(const std::vector<ExpandedPath>& v) {
+    std::vector<std::string> out;
+    for (const auto& e : v) out.push_back(fs::path(e.path).filename().string());
+    return out;
+}
+
+// Message of the InputError `f` throws, "" if none.
+template <typename F>
+std::string input_error(F f) {
+    try {
+        f();
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// Inputs and shards
+
+TEST_CASE("natural order puts flight 9 before flight 10 and is total", "[batch]") {
+    CHECK(natural_less("9.csv", "10.csv"));
+    CHECK_FALSE(natural_less("10.csv", "9.csv"));
+    CHECK(natural_less("a2b", "a10a"));
+    CHECK(natural_less("x.csv", "y.csv"));
+    CHECK(natural_less("1.csv", "1.json"));
+    // Equal numbers spelt differently still order one way only.
+    CHECK(natural_less("01.csv", "1.csv") != natural_less("1.csv", "01.csv"));
+    CHECK_FALSE(natural_less("5.csv", "5.csv"));
+}
+
+TEST_CASE("directories, patterns and files expand in a fixed order", "[batch]") {
+    TempDir t;
+    for (const char* n : {"10.csv", "9.csv", "100.csv", ".hidden.csv", "notes.txt"}) t.write(n, "x");
+    t.write("sub/1.csv", "x");
+    const auto dir = expand_inputs({t.path()});
+    // Files only (not the sub-directory), hidden skipped, digits as numbers.
+    CHECK(paths_of(dir) == std::vector<std::string>{"9.csv", "10.csv", "100.csv", "notes.txt"});
+    for (const auto& e : dir) CHECK(e.error.empty());
+
+    const auto glob = expand_inputs({t.path() + "/*.csv", t.path("9.csv"), t.path("sub/1.csv")});
+    // The explicit 9.csv is a duplicate of the pattern's and is kept once, at its first place.
+    CHECK(paths_of(glob) == std::vector<std::string>{"9.csv", "10.csv", "100.csv", "1.csv"});
+
+    const auto none = expand_inputs({t.path() + "/*.bin", t.path("missing.csv")});
+    REQUIRE(none.size() == 2);
+    CHECK(none[0].error == "pattern matches no file");
+    CHECK(none[1].error.empty());  // a missing file is the replay's to report
+    TempDir empty;
+    CHECK(expand_inputs({empty.path()})[0].error == "directory holds no log files");
+}
+
+TEST_CASE("shards partition the inputs by index modulo N", "[batch]") {
+    const ShardSpec s = parse_shard("2/3");
+    CHECK(s.index == 2);
+    CHECK(s.count == 3);
+    CHECK(to_string(s) == "2/3");
+    for (size_t n : {1u, 2u, 7u, 10u}) {
+        for (size_t i = 0; i < n; ++i) {
+            int owners = 0;
+            for (size_t k = 1; k <= 3; ++k) owners += parse_shard(std::to_string(k) + "/3").contains(i);
+            CHECK(owners == 1);
+        }
+    }
+    CHECK(s.contains(1));
+    CHECK(s.contains(4));
+    CHECK_FALSE(s.contains(0));
+    CHECK(ShardSpec().contains(12345));
+    for (const char* bad : {"0/3", "4/3", "3", "a/b", "1/0", "-1/2", "1/2/3", ""})
+        CHECK_THROWS_WITH(parse_shard(bad), Catch::Contains("expected K/N"));
+}
+
+TEST_CASE("manifest paths expand ${VAR} and ${VAR:-default}", "[batch]") {
+    ::setenv("BATTSIM_TEST_VAR", "/data", 1);
+    ::unsetenv("BATTSIM_TEST_UNSET");
+    CHECK(expand_variables("${BATTSIM_TEST_VAR}/a.csv") == "/data/a.csv");
+    CHECK(expand_variables("${BATTSIM_TEST_UNSET:-../x}/a.csv") == "../x/a.csv");
+    CHECK(expand_variables("${BATTSIM_TEST_VAR:-../x}/a.csv") == "/data/a.csv");
+    CHECK(expand_variables("plain") == "plain");
+    CHECK_THROWS_WITH(expand_variables("${BATTSIM_TEST_UNSET}/a"), Catch::Contains("BATTSIM_TEST_UNSET is not set"));
+    CHECK_THROWS_WITH(expand_variables("${OPEN"), Catch::Contains("expected '}'"));
+}
+
+// ---------------------------------------------------------------------------------------
+// Manifests
+
+TEST_CASE("JSON manifest: defaults, entries and relative paths", "[batch]") {
+    TempDir t;
+    const std::string m = t.write("m/fleet.json", R"({
+  "schema": "battsim.manifest", "version": 1,
+  "base_dir": "../logs",
+  "defaults": {"config": "cfg.json", "pack": "A", "format": "csv",
+               "columns": {"time": "t", "time_unit": "ms", "voltage": "v", "current": "i", "current_unit": "mA"}},
+  "logs": [
+    {"path": "1.csv", "test": 7},
+    {"path": "/abs/2.csv", "pack": "B", "columns": {"current": "amps", "current_unit": "A", "cells": ["c1", "c2"],
+                                                    "negative_is_discharge": true}}
+  ]
+})");
+    const Manifest man = load_manifest(m);
+    REQUIRE(man.logs.size() == 2);
+    CHECK(man.logs[0].path == t.path("logs/1.csv"));
+    CHECK(man.logs[0].line == 7);
+    CHECK(man.logs[1].path == "/abs/2.csv");
+    CHECK(*man.defaults.config == t.path("m/cfg.json"));  // configs: relative to the manifest
+    CHECK(*man.logs[0].settings.test == "7");
+    LogSettings s = man.defaults;
+    s.overlay(man.logs[1].settings);
+    const ReaderOptions r = s.reader_options();
+    CHECK(*s.pack == "B");
+    CHECK(r.format == LogFormat::Csv);
+    CHECK(r.columns.time == "t");
+    CHECK(r.columns.time_scale_to_s == 1e-3);
+    CHECK(r.columns.current == "amps");
+    CHECK(r.columns.current_scale_to_a == 1.0);
+    CHECK(r.columns.cells == std::vector<std::string>{"c1", "c2"});
+    CHECK(r.columns.current_negative_is_discharge);
+}
+
+TEST_CASE("JSON manifest errors name the line, column and what was expected", "[batch]") {
+    TempDir t;
+    auto err = [&](const std::string& text) {
+        const std::string p = t.write("bad.json", text);
+        return input_error([&] { load_manifest(p); });
+    };
+    const std::string p = t.path("bad.json");
+    CHECK(err("{\n  \"schema\": \"battsim.manifest\",\n  \"logs\": [\n    {\"path\": \"a.csv\", \"pak\": \"A\"}\n  ]\n}") ==
+          p + ":4:23: $.logs[0].pak: unknown key; expected one of columns, config, current_source, estimator, format, pack, path, test");
+    CHECK(err("{\"schema\": \"battsim.manifest\",\n \"logs\": [{\"path\": 3}]}") ==
+          p + ":2:20: $.logs[0].path: expected a string, found 3");
+    CHECK(err("{\"schema\": \"battsim.manifest\", \"logs\": [{\"test\": \"x\"}]}") ==
+          p + ":1:41: $.logs[0]: expected a \"path\" key naming the log");
+    CHECK(err("{\"schema\": \"battsim.manifest\",\n\"logs\": [{\"path\": \"a\", \"format\": \"xls\"}]}") ==
+          p + ":2:34: $.logs[0].format: unknown log format \"xls\"; expected one of auto, raw, csv, dataflash-text, "
+              "dataflash-bin, ulog");
+    CHECK(err("{\"schema\": \"battsim.manifest\", \"logs\": [{\"path\": \"a\", \"columns\": {\"time_unit\": \"h\"}}]}") ==
+          p + ":1:80: $.logs[0].columns.time_unit: unknown time unit \"h\"; expected s, ms or us");
+    CHECK(err("{\"schema\": \"battsim.manifest\", \"logs\": []}") == p + ":1:40: $.logs: expected at least one log entry");
+    CHECK(err("{\"schema\": \"battsim.config\", \"logs\": []}") ==
+          p + ":1:12: $.schema: expected \"battsim.manifest\", found \"battsim.config\"");
+    CHECK(err("{\n  \"schema\": \"battsim.manifest\",\n  \"logs\": [\n    {\"path\": \"a.csv\",}\n  ]\n}") ==
+          p + ":4:22: not valid JSON: syntax error while parsing object key - unexpected '}'; expected string literal");
+    CHECK(err("{\"schema\": \"battsim.manifest\", \"logs\": [{\"path\": \"${BATTSIM_TEST_NOT_SET_EVER}/a\"}]}")
+              .find("BATTSIM_TEST_NOT_SET_EVER is not set") != std::string::npos);
+    CHECK(input_error([&] { load_manifest(t.path("nope.json")); }) == t.path("nope.json") + ": cannot open manifest");
+}
+
+TEST_CASE("CSV manifest: header, comments, quoting and errors with line and field", "[batch]") {
+    TempDir t;
+    const std::string m = t.write("fleet.csv",
+                                  "# pack assignments\n"
+                                  "path,pack,test,time_col,time_unit,current_unit,cell_cols,negative_discharge\n"
+                                  "a.csv,A,,\"my time\",ms,mA,c1;c2;c3,yes\n"
+                                  "\n"
+                                  "/x/b.csv, B ,\"flight \"\"b\"\"\",,,,,\n");
+    const Manifest man = load_manifest(m);
+    REQUIRE(man.logs.size() == 2);
+    CHECK(man.logs[0].path == t.path("a.csv"));
+    CHECK(man.logs[0].line == 3);
+    CHECK(*man.logs[0].settings.pack == "A");
+    CHECK_FALSE(man.logs[0].settings.test.has_value());  // empty field = inherit
+    CHECK(*man.logs[0].settings.time_col == "my time");
+    CHECK(*man.logs[0].settings.time_scale_to_s == 1e-3);
+    CHECK(*man.logs[0].settings.cell_cols == std::vector<std::string>{"c1", "c2", "c3"});
+    CHECK(*man.logs[0].settings.negative_discharge);
+    CHECK(*man.logs[1].settings.pack == "B");
+    CHECK(*man.logs[1].settings.test == "flight \"b\"");
+
+    auto err = [&](const std::string& text) {
+        const std::string p = t.write("bad.csv", text);
+        return input_error([&] { load_manifest(p); });
+    };
+    const std::string p = t.path("bad.csv");
+    CHECK(err("path,pak\n") == p + ":1:2: unknown column \"pak\" in the header; expected some of path, test, pack, config, "
+                                   "estimator, format, current_source, time_col, time_unit, voltage_col, current_col, current_unit, "
+                                   "cell_cols, temperature_col, negative_discharge");
+    CHECK(err("pack,test\nA,1\n") == p + ":1: expected a header row with a \"path\" column (the first non-comment line)");
+    CHECK(err("path,pack\na.csv\n") == p + ":2:2: expected 2 fields as in the header, found 1");
+    CHECK(err("path,current_unit\na.csv,amps\n") == p + ":2:2: current_unit: unknown current unit \"amps\"; expected A or mA");
+    CHECK(err("path,negative_discharge\na.csv,maybe\n") ==
+          p + ":2:2: negative_discharge: expected true or false, found \"maybe\"");
+    CHECK(err("path,pack\n,A\n") == p + ":2:1: expected the path of a log, found an empty field");
+    CHECK(err("path,pack\n\"a.csv,A\n") == p + ":2: expected a closing '\"' in field 1");
+    CHECK(err("path,path\n") == p + ":1:2: column \"path\" appears twice in the header");
+    CHECK(err("# nothing\n") == p + ": manifest is empty; expected a header row with a \"path\" column");
+    CHECK(err("path\n") == p + ": manifest lists no logs; expected a row per log after the header");
+}
+
+TEST_CASE("command-line settings are validated and win over the manifest", "[batch]") {
+    LogSettingStrings a;
+    a.format = "auto";  // the default: not a choice
+    a.time_unit = "us";
+    a.current_col = "I";
+    LogSettings cli = settings_from_strings(a);
+    CHECK_FALSE(cli.format.has_value());
+    CHECK(*cli.time_scale_to_s == 1e-6);
+    LogSettings man;
+    man.current_col = "battery_current";
+    man.voltage_col = "battery_voltage";
+    man.overlay(cli);
+    CHECK(*man.current_col == "I");
+    CHECK(*man.voltage_col == "battery_voltage");
+    a.current_unit = "kA";
+    CHECK_THROWS_WITH(settings_from_strings(a), "--current-unit: unknown current unit \"kA\"; expected A or mA");
+}
+
+TEST_CASE("plan: manifest order, settings per file, paths matched to entries", "[batch]") {
+    TempDir t;
+    t.write("logs/1.csv", raw_flight(20, 0.001));
+    t.write("logs/2.csv", raw_flight(25, 0.001));
+    t.write("logs/3.csv", raw_flight(30, 0.001));
+    const std::string cfg = std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-original.json";
+    const std::string m = t.write("m.json", R"({"schema": "battsim.manifest",
+      "defaults": {"pack": "P", "config": ")" + cfg + R"("},
+      "logs": [{"path": "logs/3.csv", "test": "third", "pack": "Q"}, {"path": "logs/[12].csv"}]})");
+    BatchPlanRequest req;
+    req.manifest = m;
+    auto items = plan_batch(req);
+    REQUIRE(items.size() == 3);
+    CHECK(items[0].test == "third");
+    CHECK(items[0].pack == "Q");
+    CHECK(items[1].test == "1");
+    CHECK(items[2].stem == "2");
+    CHECK(items[2].pack == "P");
+    CHECK(items[2].index == 2);
+    CHECK(items[1].replay.config.name == "reference-4s-original");
+    CHECK(items[1].replay.config.monitor.estimator == battsim::core::EstimatorKind::Reference);
+    const std::string digest = inputs_digest(items);
+
+    // Paths pick entries by file, however spelt; the command line overrides the config.
+    req.paths = {t.path("logs/./3.csv"), t.path("logs/../other.csv")};
+    req.command_line.config = std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-modified.json";
+    items = plan_batch(req);
+    REQUIRE(items.size() == 2);
+    CHECK(items[0].test == "third");
+    CHECK(items[0].replay.config.name == "reference-4s-modified");
+    CHECK(items[1].pack == "P");     // not in the manifest: its defaults
+    CHECK(items[1].test == "other");
+
+    // The estimator can be chosen per log or for all; it is part of the input list's identity.
+    req.paths.clear();
+    req.command_line = LogSettings();
+    req.command_line.estimator = battsim::core::EstimatorKind::Joint;
+    items = plan_batch(req);
+    CHECK(items[1].replay.config.monitor.estimator == battsim::core::EstimatorKind::Joint);
+    CHECK(inputs_digest(items) != digest);
+    const std::string joint = t.write("j.json", R"({"schema": "battsim.manifest",
+      "logs": [{"path": "logs/1.csv", "estimator": "joint"}, {"path": "logs/2.csv"}]})");
+    req = BatchPlanRequest();
+    req.manifest = joint;
+    items = plan_batch(req);
+    CHECK(items[0].replay.config.monitor.estimator == battsim::core::EstimatorKind::Joint);
+    CHECK(items[1].replay.config.monitor.estimator == battsim::core::EstimatorKind::Reference);
+
+    const std::string bad = t.write("b.json", R"({"schema": "battsim.manifest",
+      "logs": [{"path": "logs/*.csv", "test": "one"}]})");
+    req = BatchPlanRequest();
+    req.manifest = bad;
+    CHECK(input_error([&] { plan_batch(req); }) ==
+          bad + ":2:16: \"test\" labels one log, but \"" + t.path("logs/*.csv") +
+              "\" names 3 files; drop the label (each row is then named after its file) or list the files");
+    const std::string badcfg = t.write("c.json", R"({"schema": "battsim.manifest",
+      "logs": [{"path": "logs/1.csv", "config": "missing.json"}]})");
+    req.manifest = badcfg;
+    CHECK_THROWS_AS(plan_batch(req), ConfigError);
+}
+
+// ---------------------------------------------------------------------------------------
+// Running, table, packs
+
+TEST_CASE("run_batch: the same rows for any number of jobs, errors as rows", "[batch]") {
+    TempDir t;
+    std::vector<std::string> args;
+    for (int k = 0; k < 6; ++k) args.push_back(t.write("f" + std::to_string(k) + ".csv", raw_flight(15 + 4 * k, 0.0008 * (k + 1))));
+    args.insert(args.begin() + 2, t.write("bad.csv", "time_s,voltage_v,current_a\n0,16.5,1\nx,16.4,1\n"));
+    BatchPlanRequest req;
+    req.paths = args;
+    const auto items = plan_batch(req);
+    BatchRunOptions one;
+    one.jobs = 1;
+    one.keep_summaries = true;
+    one.out_dir = t.path("out1");
+    size_t calls = 0;
+    one.progress = [&calls](size_t done, size_t total, size_t) {
+        ++calls;
+        CHECK(done <= total);
+    };
+    const BatchResult a = run_batch(items, one);
+    BatchRunOptions two = one;
+    two.jobs = 3;
+    two.out_dir = t.path("out2");
+    two.progress = nullptr;
+    const BatchResult b = run_batch(items, two);
+    CHECK(calls == items.size());
+    REQUIRE(a.rows.size() == 7);
+    CHECK(json(a.rows).dump() == json(b.rows).dump());
+    CHECK(a.failed == 1);
+    CHECK(a.rows[2]["status"] == "error");
+    CHECK(a.rows[2]["error"] == t.path("bad.csv") + ":3:1: expected a number, found \"x\"");
+    CHECK(a.summaries[2].is_null());
+    CHECK(a.rows[0]["status"] == "ok");
+    CHECK(a.rows[0]["flight"] == true);
+    CHECK(a.rows[0]["capacity_mean_ah"].is_number());
+    CHECK(a.rows[0]["cell_scores"].size() == 4);
+    // Summaries of the good logs are on disk, identical whichever pool wrote them.
+    for (const char* stem : {"f0", "f5"}) {
+        std::ifstream x(t.path(std::string("out1/") + stem + ".json")), y(t.path(std::string("out2/") + stem + ".json"));
+        const std::string sx((std::istreambuf_iterator<char>(x)), {}), sy((std::istreambuf_iterator<char>(y)), {});
+        CHECK(!sx.empty());
+        CHECK(sx == sy);
+    }
+    CHECK_FALSE(fs::exists(t.path("out1/bad.json")));
+}
+
+TEST_CASE("least-squares slope and the pack table", "[batch]") {
+    CHECK(least_squares_slope({1, 2, 3, 4}, {1.0, 0.9, 0.8, 0.7}) == Approx(-0.1));
+    CHECK(std::isnan(least_squares_slope({1}, {1.0})));
+    CHECK(std::isnan(least_squares_slope({2, 2}, {1.0, 3.0})));
+
+    auto row = [](const char* pack, const char* status, json cap, json res) {
+        return json{{"pack", pack ? json(pack) : json(nullptr)}, {"status", status}, {"capacity_mean_ah", cap},
+                    {"resistance_mean_ohm", res}};
+    };
+    // Pack B's second flight failed: flights 1 and 3 still sit at x = 1 and 3.
+    const std::vector<json> rows = {row("B", "ok", 1.5, 0.020), row("A", "ok", 1.0, 0.05), row("B", "error", nullptr, nullptr),
+                                    row(nullptr, "ok", 9.0, 9.0), row("B", "ok", 1.3, 0.024)};
+    const auto packs = pack_rows(rows);
+    REQUIRE(packs.size() == 2);
+    CHECK(packs[0]["pack"] == "B");  // order of first appearance
+    CHECK(packs[0]["flights"] == 3);
+    CHECK(packs[0]["failed"] == 1);
+    CHECK(packs[0]["capacity_mean_ah"].get<double>() == Approx(1.4));
+    CHECK(packs[0]["capacity_trend_ah_per_flight"].get<double>() == Approx(-0.1));
+    CHECK(packs[0]["resistance_trend_ohm_per_flight"].get<double>() == Approx(0.002));
+    CHECK(packs[1]["pack"] == "A");
+    CHECK(packs[1]["capacity_trend_ah_per_flight"].is_null());  // one flight: no trend
+}
+
+TEST_CASE("table rendering: Markdown escapes, CSV quotes, JSON round-trips", "[batch]") {
+    BatchItem it;
+    it.index = 0;
+    it.path = "/d/a|b.csv";
+    it.test = "t,1";
+    it.pack = "P";
+    it.replay.config = default_config();
+    std::vector<json> rows = {make_error_row(it, "bad \"x\"\nline")};
+    const json table = make_table(rows, 1, "0123456789abcdef", ShardSpec());
+    const std::string md = render_table(table, TableFormat::Markdown);
+    CHECK(md.find("| t,1 | a\\|b.csv | P | – |") != std::string::npos);
+    CHECK(md.find("error: bad \"x\" line |") != std::string::npos);
+    const std::string csv = render_table(table, TableFormat::Csv);
+    CHECK(csv.rfind("index,test,log,pack,config,estimator,status,error,flight,", 0) == 0);
+    CHECK(csv.find("0,\"t,1\",/d/a|b.csv,P,reference-4s-modified,reference,error,\"bad \"\"x\"\"\nline\",false,") != std::string::npos);
+    CHECK(json::parse(render_table(table, TableFormat::Json)) == table);
+    CHECK(render_packs(table, TableFormat::Csv).rfind("pack,flights,failed,capacity_mean_ah,", 0) == 0);
+    CHECK_THROWS_WITH(parse_table_format("xlsx"), "unknown table format \"xlsx\"; expected md, csv or json");
+}
+
+TEST_CASE("merge rebuilds the single run's table and refuses incomplete or foreign shards", "[batch]") {
+    TempDir t;
+    std::vector<json> rows;
+    for (size_t i = 0; i < 5; ++i) {
+        BatchItem it;
+        it.index = i;
+        it.path = "/l/" + std::to_string(i) + ".csv";
+        it.test = std::to_string(i);
+        it.pack = i % 2 ? "odd" : "even";
+        rows.push_back(make_error_row(it, "e"));
+        rows.back()["status"] = "ok";
+        rows.back()["capacity_mean_ah"] = 1.0 + 0.1 * i;
+    }
+    const json whole = make_table(rows, 5, "d1", ShardSpec());
+    std::vector<json> shards;
+    for (size_t k = 1; k <= 2; ++k) {
+        std::vector<json> part;
+        for (const json& r : rows)
+            if (parse_shard(std::to_string(k) + "/2").contains(r["index"].get<size_t>())) part.push_back(r);
+        shards.push_back(make_table(part, 5, "d1", parse_shard(std::to_string(k) + "/2")));
+    }
+    CHECK(shards[0]["packs"].is_null());
+    // Written and read back through files, shards in either order.
+    const std::string p1 = t.write("s1.json", render_table(shards[0], TableFormat::Json));
+    const std::string p2 = t.write("s2.json", render_table(shards[1], TableFormat::Json));
+    const json merged = merge_tables({read_table_file(p2), read_table_file(p1)}, {p2, p1});
+    for (TableFormat f : {TableFormat::Json, TableFormat::Csv, TableFormat::Markdown})
+        CHECK(render_table(merged, f) == render_table(whole, f));
+
+    CHECK(input_error([&] { merge_tables({read_table_file(p1)}, {p1}); }) ==
+          p1 + ": 2 of 5 inputs are in none of the given tables (index 1, 3); expected every shard's table");
+    CHECK(input_error([&] { merge_tables({read_table_file(p1), read_table_file(p1)}, {p1, p1}); }) ==
+          p1 + ": holds input 0 (/l/0.csv) that " + p1 + " holds too; give each shard once");
+    json foreign = shards[1];
+    foreign["inputs"]["digest"] = "d2";
+    CHECK(input_error([&] { merge_tables({shards[0], foreign}, {"a", "b"}); })
+              .find("b: comes from a different input list than a") == 0);
+
+    const std::string notjson = t.write("x.json", "{\"schema\": \"battsim.batch\",\n \"rows\": [}");
+    CHECK(input_error([&] { read_table_file(notjson); }) ==
+          notjson + ":2:11: not valid JSON; expected a table written by `battsim batch --format json`");
+    const std::string summary = t.write("y.json", "{\"schema\": \"battsim.summary\"}");
+    CHECK(input_error([&] { read_table_file(summary); }) ==
+          summary + ": expected a JSON table with \"schema\": \"battsim.batch\" (from `battsim batch --format json`)");
+    json broken = shards[0];
+    broken["rows"][0].erase("warnings");
+    const std::string p3 = t.write("z.json", broken.dump());
+    CHECK(input_error([&] { read_table_file(p3); }) == p3 + ": rows[0]: expected the key \"warnings\"");
+}
+
+TEST_CASE("golden comparison: changed fields listed, paths and versions ignored", "[batch]") {
+    TempDir t;
+    BatchItem a, b, c;
+    a.stem = "a";
+    a.path = "/x/a.csv";
+    b.stem = "b";
+    b.path = "/x/b.csv";
+    c.stem = "c";
+    c.path = "/x/c.csv";
+    const json sa = {{"input", {{"path", "/x/a.csv"}}}, {"battsim_version", "9"}, {"flight", {{"capacity_ah", {{"mean", 1.5}}}}}};
+    json golden_a = sa;
+    golden_a["input"]["path"] = "elsewhere/a.csv";
+    golden_a["battsim_version"] = "0.1.0";
+    t.write("g/a.json", golden_a.dump(2));
+    json golden_b = sa;
+    golden_b["flight"]["capacity_ah"]["mean"] = 1.5 * (1 + 5e-7);  // inside the 1e-6 tolerance
+    t.write("g/b.json", golden_b.dump(2));
+    const GoldenComparison same = compare_to_goldens({a, b}, {sa, sa}, t.path("g"), golden_compare_options(1e-6));
+    CHECK(same.ok());
+    CHECK(same.compared == 2);
+    CHECK(same.lines.empty());
+
+    const GoldenComparison tight = compare_to_goldens({b}, {sa}, t.path("g"), golden_compare_options(1e-8));
+    CHECK_FALSE(tight.ok());
+    CHECK(tight.changed == 1);
+    REQUIRE(tight.lines.size() == 1);
+    CHECK(tight.lines[0] == t.path("g/b.json") + ": /flight/capacity_ah/mean: golden 1.50000075, now 1.5");
+
+    const GoldenComparison other = compare_to_goldens({a, c, b}, {sa, sa, json()}, t.path("g"), golden_compare_options(1e-6));
+    CHECK(other.missing == 1);
+    CHECK(other.failed == 1);
+    CHECK(other.lines == std::vector<std::string>{"/x/c.csv: no golden summary " + t.path("g/c.json"),
+                                                  "/x/b.csv: not compared, the replay failed"});
+}
+
+TEST_CASE("inputs digest and duplicate stems", "[batch]") {
+    std::vector<BatchItem> items(2);
+    items[0].path = "a/30.csv";
+    items[0].stem = "30";
+    items[1].path = "b/30.csv";
+    items[1].stem = "30";
+    const std::string d = inputs_digest(items);
+    CHECK(d.size() == 16);
+    items[1].pack = "x";
+    CHECK(inputs_digest(items) != d);
+    CHECK(duplicate_stems(items) == std::vector<std::string>{"30: a/30.csv, b/30.csv"});
+    CHECK(progress_line(3, 12, 1, 8) == "[##......] 3/12 logs, 1 failed");
+}
