@@ -1,0 +1,119 @@
+// battsim discharge LOG: constant-current discharge → lookup tables, zones, plot.
+#include <iostream>
+
+#include "command.h"
+#include "common_options.h"
+#include "host/config_extensions.h"
+#include "host/discharge/discharge.h"
+#include "host/io/atomic_file.h"
+#include "host/plot/plot.h"
+
+namespace battsim {
+namespace cli {
+namespace {
+
+struct DischargeArgs {
+    std::string log, table, curve, summary, plot, config_out;
+    double min_v = 0, max_v = 0, reaction_s = 0, alpha = 0;
+    int decimate = 1;
+    bool json = false;
+    InputArgs input;
+};
+
+std::function<int()> setup(CLI::App& sub) {
+    auto a = std::make_shared<DischargeArgs>();
+    sub.add_option("LOG", a->log, "Discharge log (any supported format)")->required();
+    sub.add_option("--min-voltage", a->min_v, "Battery connected above this; bottom of the tables (default: the config's min_voltage_v)");
+    sub.add_option("--max-voltage", a->max_v, "Top of the tables (default: the config's max_voltage_v)");
+    sub.add_option("--reaction", a->reaction_s, "Smoothing: moving-average (exponential) time constant in s; 0 = none")->capture_default_str();
+    sub.add_option("--alpha", a->alpha, "Smoothing: fixed per-sample constant in (0, 1] instead of --reaction");
+    sub.add_option("--decimate", a->decimate, "Average every x samples")->capture_default_str();
+    sub.add_option("--table", a->table, "Write the voltage -> mAh/mWh lookup table CSV here (10 mV rows, max to min)");
+    sub.add_option("--curve", a->curve, "Write the smoothed, decimated curve with its gradient (CSV)");
+    sub.add_option("--summary", a->summary, "Write the summary JSON (with the table) here");
+    sub.add_option("--plot", a->plot, "Plot the curve and its gradient with the zone ends (.png or .svg)");
+    sub.add_option("--config-out", a->config_out, "Write a starting config with the Tremblay points read off the curve");
+    sub.add_flag("--json", a->json, "Print the summary JSON (with the table) on standard output");
+    add_input_options(sub, a->input);
+    return [a]() -> int {
+        host::discharge::DischargeOptions opt;
+        InputArgs no_config = a->input;
+        no_config.config.clear();
+        host::LoadedConfig unused;
+        int rc = resolve_input(no_config, opt.reader, unused);
+        if (rc != kExitOk) return rc;
+        host::ExtendedConfig config{host::default_config(), {}};
+        try {
+            if (!a->input.config.empty()) config = host::load_extended_config_file(a->input.config);
+        } catch (const host::ConfigError& e) {
+            std::cerr << "battsim discharge: config: " << e.what() << "\n";
+            return kExitConfigError;
+        }
+        opt.reader.shunt = config.config.monitor.shunt;
+        opt.min_voltage_v = a->min_v > 0 ? a->min_v : config.config.monitor.min_voltage_v;
+        opt.max_voltage_v = a->max_v > 0 ? a->max_v : config.config.monitor.max_voltage_v;
+        opt.reaction_s = a->reaction_s;
+        opt.alpha = a->alpha;
+        opt.decimate = a->decimate;
+        try {
+            if (!a->plot.empty()) host::plot::check_plot_path(a->plot);
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "battsim discharge: " << e.what() << "\n";
+            return kExitUsage;
+        }
+        host::discharge::DischargeResult result;
+        try {
+            result = host::discharge::process_discharge(a->log, opt);
+        } catch (const host::InputError& e) {
+            std::cerr << "battsim discharge: " << e.what() << "\n";
+            return kExitInputError;
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "battsim discharge: " << e.what() << "\n";
+            return kExitUsage;
+        }
+        for (const auto& note : result.info.notes) std::cerr << "battsim discharge: note: " << note << "\n";
+        const nlohmann::json summary = host::discharge::discharge_to_json(result, true);
+        try {
+            if (!a->table.empty()) host::write_file_atomic(a->table, host::discharge::table_csv(result));
+            if (!a->curve.empty()) host::write_file_atomic(a->curve, host::discharge::curve_csv(result));
+            if (!a->summary.empty()) host::write_file_atomic(a->summary, summary.dump(2) + "\n");
+            if (!a->plot.empty()) host::discharge::plot_discharge(result, a->plot);
+            if (!a->config_out.empty()) {
+                host::ExtendedConfig out = config;
+                out.config.monitor.battery = host::discharge::params_from_discharge(result, config.config.monitor.battery);
+                out.config.name = "discharge-" + a->log.substr(a->log.find_last_of('/') + 1);
+                out.config.description = "Tremblay points read off the discharge " + a->log + " by battsim discharge";
+                host::write_file_atomic(a->config_out, host::extended_config_to_json(out).dump(2) + "\n");
+            }
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "battsim discharge: " << e.what() << "\n";
+            return kExitInputError;
+        } catch (const std::runtime_error& e) {
+            std::cerr << "battsim discharge: " << e.what() << "\n";
+            return kExitOutputError;
+        }
+        if (a->json) {
+            std::cout << summary.dump(2) << "\n";
+            return kExitOk;
+        }
+        std::cout << a->log << ": " << result.samples_kept << " of " << result.samples_read << " samples above "
+                  << opt.min_voltage_v << " V, " << summary["duration_s"] << " s\n";
+        std::cout << "  " << summary["capacity_mah"] << " mAh, " << summary["energy_mwh"] << " mWh at a mean "
+                  << summary["mean_current_a"] << " A; " << summary["first_voltage_v"] << " -> " << summary["last_voltage_v"] << " V\n";
+        if (result.zones.found) {
+            std::cout << "  exponential zone ends at " << summary["zones"]["exponential_end"]["capacity_ah"] << " Ah, "
+                      << summary["zones"]["exponential_end"]["voltage_v"] << " V; nominal zone ends at "
+                      << summary["zones"]["nominal_end"]["capacity_ah"] << " Ah, " << summary["zones"]["nominal_end"]["voltage_v"]
+                      << " V\n";
+        } else {
+            std::cout << "  zones not found: " << result.zones.note << "\n";
+        }
+        return kExitOk;
+    };
+}
+
+const RegisterCommand reg{{"discharge", "Process a constant-current discharge: lookup tables, zones, plot", setup}};
+
+}  // namespace
+}  // namespace cli
+}  // namespace battsim

@@ -1,0 +1,120 @@
+// battsim fit LOG...: least-squares fit of the model parameters along discharges and flights.
+#include <iostream>
+
+#include "command.h"
+#include "common_options.h"
+#include "host/fit/fit_job.h"
+#include "host/io/atomic_file.h"
+
+namespace battsim {
+namespace cli {
+namespace {
+
+struct FitArgs {
+    std::vector<std::string> logs, tests, add, params, per_log;
+    std::string output, output_dir, report, plot, name;
+    std::string initial = "free";
+    std::string window = "all";
+    size_t max_points = 20000;
+    int max_iterations = 100;
+    bool sample_weights = false;
+    double max_capacity_factor = 1.5;
+    bool json = false;
+    InputArgs input;
+};
+
+std::function<int()> setup(CLI::App& sub) {
+    auto a = std::make_shared<FitArgs>();
+    sub.add_option("LOG", a->logs, "Logs to fit: constant-current discharges and/or flights")->required();
+    sub.add_option("-o,--output", a->output, "Write the fitted config JSON here");
+    sub.add_option("--output-dir", a->output_dir, "Write one fitted config per log into this directory (needed with --per-log)");
+    sub.add_option("--name", a->name, "Name of the fitted config");
+    sub.add_option("--test", a->tests, "Logs to evaluate the fitted model on (not fitted)");
+    sub.add_option("--add", a->add,
+                   "Enable an extension before fitting: rc[:TAU_S], temperature[:REF_C], thermal[:AMBIENT_C], "
+                   "hysteresis, ocv[:N], sensor, timing (repeatable)");
+    sub.add_option("--params", a->params, "Parameters to fit (default: e0,r,kappa,a,b,q and those of the enabled extensions; none = only evaluate)")
+        ->delimiter(',');
+    sub.add_option("--per-log", a->per_log, "Parameters fitted separately for each log (e.g. r,q)")->delimiter(',');
+    sub.add_option("--initial", a->initial, "Initial charge at the monitor's settle sample: free (fitted per log), monitor (model inversion), zero (log starts full)")
+        ->capture_default_str();
+    sub.add_option("--window", a->window, "Samples in the objective: all (initialised) or flight (the summary's flight window)")
+        ->capture_default_str();
+    sub.add_option("--max-points", a->max_points, "At most this many samples per log in the objective (thinned evenly)")->capture_default_str();
+    sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iteration limit")->capture_default_str();
+    sub.add_flag("--sample-weights", a->sample_weights, "Weight logs by their sample count instead of equally");
+    sub.add_option("--max-capacity-factor", a->max_capacity_factor,
+                   "The fitted capacity stays at or below this x the config's (and above the charge drawn)")
+        ->capture_default_str();
+    sub.add_option("--report", a->report, "Write the fit report JSON here");
+    sub.add_option("--plot", a->plot, "Plot measured and model voltage per log (.png or .svg)");
+    sub.add_flag("--json", a->json, "Print the fit report JSON on standard output");
+    add_input_options(sub, a->input);
+    return [a]() -> int {
+        host::fit::FitJob job;
+        InputArgs no_config = a->input;
+        no_config.config.clear();
+        host::LoadedConfig unused;
+        int rc = resolve_input(no_config, job.reader, unused);
+        if (rc != kExitOk) return rc;
+        try {
+            job.config = a->input.config.empty() ? host::ExtendedConfig{host::default_config(), {}}
+                                                 : host::load_extended_config_file(a->input.config);
+        } catch (const host::ConfigError& e) {
+            std::cerr << "battsim fit: config: " << e.what() << "\n";
+            return kExitConfigError;
+        }
+        job.logs = a->logs;
+        job.options.max_capacity_factor = a->max_capacity_factor;
+        job.test_logs = a->tests;
+        job.add = a->add;
+        job.output_config = a->output;
+        job.output_dir = a->output_dir;
+        job.name = a->name;
+        job.plot_path = a->plot;
+        job.options.params = a->params;
+        job.options.per_log_params = a->per_log;
+        job.options.max_points_per_log = a->max_points;
+        job.options.lm.max_iterations = a->max_iterations;
+        job.options.equal_log_weights = !a->sample_weights;
+        try {
+            job.options.initial = host::fit::parse_initial_mode(a->initial);
+            job.options.window = host::fit::parse_window(a->window);
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "battsim fit: " << e.what() << "\n";
+            return kExitUsage;
+        }
+        nlohmann::json report;
+        try {
+            report = host::fit::run_fit_job(job, &std::cerr);
+        } catch (const host::InputError& e) {
+            std::cerr << "battsim fit: " << e.what() << "\n";
+            return kExitInputError;
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "battsim fit: " << e.what() << "\n";
+            return kExitUsage;
+        } catch (const std::runtime_error& e) {
+            std::cerr << "battsim fit: " << e.what() << "\n";
+            return kExitOutputError;
+        }
+        const std::string text = report.dump(2) + "\n";
+        try {
+            if (!a->report.empty()) host::write_file_atomic(a->report, text);
+        } catch (const std::runtime_error& e) {
+            std::cerr << "battsim fit: " << e.what() << "\n";
+            return kExitOutputError;
+        }
+        if (a->json) {
+            std::cout << text;
+        } else {
+            host::fit::print_fit_brief(report, std::cout);
+        }
+        return kExitOk;
+    };
+}
+
+const RegisterCommand reg{{"fit", "Fit the model parameters to discharges and flights (least squares)", setup}};
+
+}  // namespace
+}  // namespace cli
+}  // namespace battsim

@@ -1,0 +1,113 @@
+// battsim residual LOG... --config CFG: trace what the model misses, effect by effect.
+#include <iostream>
+
+#include "command.h"
+#include "common_options.h"
+#include "host/io/atomic_file.h"
+#include "host/residual/residual.h"
+
+namespace battsim {
+namespace cli {
+namespace {
+
+struct ResidualArgs {
+    std::vector<std::string> logs, candidates, fixed;
+    std::string output, report, plot, name;
+    std::string window = "all";
+    std::string initial = "free";
+    int blocks = 20, max_effects = 4, max_iterations = 100;
+    double min_gain = 0.02, max_p = 0.05;
+    double max_capacity_factor = 1.5;
+    bool json = false;
+    InputArgs input;
+};
+
+std::function<int()> setup(CLI::App& sub) {
+    auto a = std::make_shared<ResidualArgs>();
+    sub.add_option("LOG", a->logs, "Logs to analyse (one model for all of them)")->required();
+    sub.add_option("-o,--output", a->output, "Write the config with the effects found, refitted, here");
+    sub.add_option("--name", a->name, "Name of the written config");
+    sub.add_option("--candidates", a->candidates,
+                   "Effects to try (default all): rc_polarisation, temperature, self_heating, soc_shape, current_sensor, "
+                   "hysteresis, sample_timing")
+        ->delimiter(',');
+    sub.add_option("--fixed", a->fixed, "Parameters kept at the config's values (e.g. q when a slow discharge measured it)")
+        ->delimiter(',');
+    sub.add_option("--window", a->window, "Samples analysed: all (initialised) or flight")->capture_default_str();
+    sub.add_option("--initial", a->initial, "Initial charge: free (fitted per log; flights) or zero (logs start full: constant-current discharges)")
+        ->capture_default_str();
+    sub.add_option("--blocks", a->blocks, "Blocks per log; even ones are fitted, odd ones held out")->capture_default_str();
+    sub.add_option("--max-effects", a->max_effects, "Most effects added")->capture_default_str();
+    sub.add_option("--min-gain", a->min_gain, "Least share of the held-out error variance an effect must remove")->capture_default_str();
+    sub.add_option("--max-p", a->max_p, "Significance level of the Wilcoxon signed-rank test over the held-out blocks")->capture_default_str();
+    sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iterations per refit")->capture_default_str();
+    sub.add_option("--max-capacity-factor", a->max_capacity_factor,
+                   "The fitted capacity stays at or below this x the config's (and above the charge drawn)")
+        ->capture_default_str();
+    sub.add_option("--report", a->report, "Write the report JSON here");
+    sub.add_option("--plot", a->plot, "Plot voltage, residual before/after, autocorrelation, histogram (.png or .svg)");
+    sub.add_flag("--json", a->json, "Print the report JSON on standard output");
+    add_input_options(sub, a->input);
+    return [a]() -> int {
+        host::residual::ResidualJob job;
+        InputArgs no_config = a->input;
+        no_config.config.clear();
+        host::LoadedConfig unused;
+        int rc = resolve_input(no_config, job.reader, unused);
+        if (rc != kExitOk) return rc;
+        try {
+            job.config = a->input.config.empty() ? host::ExtendedConfig{host::default_config(), {}}
+                                                 : host::load_extended_config_file(a->input.config);
+        } catch (const host::ConfigError& e) {
+            std::cerr << "battsim residual: config: " << e.what() << "\n";
+            return kExitConfigError;
+        }
+        job.logs = a->logs;
+        job.options.max_capacity_factor = a->max_capacity_factor;
+        job.output_config = a->output;
+        job.name = a->name;
+        job.plot_path = a->plot;
+        job.options.candidates = a->candidates;
+        job.options.fixed = a->fixed;
+        job.options.blocks = a->blocks;
+        job.options.max_effects = a->max_effects;
+        job.options.min_gain = a->min_gain;
+        job.options.max_p = a->max_p;
+        job.options.max_iterations = a->max_iterations;
+        host::residual::ResidualReport report;
+        nlohmann::json j;
+        try {
+            job.options.window = host::fit::parse_window(a->window);
+            job.options.initial = host::fit::parse_initial_mode(a->initial);
+            j = host::residual::run_residual_job(job, &report, &std::cerr);
+        } catch (const host::InputError& e) {
+            std::cerr << "battsim residual: " << e.what() << "\n";
+            return kExitInputError;
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "battsim residual: " << e.what() << "\n";
+            return kExitUsage;
+        } catch (const std::runtime_error& e) {
+            std::cerr << "battsim residual: " << e.what() << "\n";
+            return kExitOutputError;
+        }
+        const std::string text = j.dump(2) + "\n";
+        try {
+            if (!a->report.empty()) host::write_file_atomic(a->report, text);
+        } catch (const std::runtime_error& e) {
+            std::cerr << "battsim residual: " << e.what() << "\n";
+            return kExitOutputError;
+        }
+        if (a->json) {
+            std::cout << text;
+        } else {
+            host::residual::print_report(report, std::cout);
+        }
+        return kExitOk;
+    };
+}
+
+const RegisterCommand reg{{"residual", "Trace the model's residual to effects, add them, refit (held-out checked)", setup}};
+
+}  // namespace
+}  // namespace cli
+}  // namespace battsim

@@ -1,0 +1,105 @@
+// battsim score [SCENARIO|DIR...]: fly the scenario suite, run every estimator column
+// over each log, print the scoreboard (text or --json).
+#include <algorithm>
+#include <iostream>
+#include <memory>
+#include <thread>
+
+#include "command.h"
+#include "host/io/atomic_file.h"
+#include "host/io/sample_reader.h"
+#include "host/score/scoreboard.h"
+
+namespace battsim {
+namespace cli {
+namespace {
+
+struct ScoreArgs {
+    std::vector<std::string> paths;
+    bool json = false;
+    std::string output;
+    int jobs = 0;
+    std::string logs_dir;
+    std::string columns;
+};
+
+std::function<int()> setup(CLI::App& sub) {
+    auto a = std::make_shared<ScoreArgs>();
+    sub.add_option("SCENARIOS", a->paths, "Scenario files or directories (default: configs/scenarios)");
+    sub.add_flag("--json", a->json, "Print the scoreboard as JSON (with per-flight detail)");
+    sub.add_option("-o,--output", a->output, "Write the table (or JSON) to this file instead of standard output");
+    sub.add_option("-j,--jobs", a->jobs, "Flights scored in parallel (default: the machine's cores); the output does not depend on it");
+    sub.add_option("--logs", a->logs_dir, "Read each flight's log from DIR/NAME.csv (written by `battsim simulate --out-dir`) instead of simulating it in memory");
+    sub.add_option("--columns", a->columns, "Estimator columns to run, comma-separated (default: all)");
+    return [a]() -> int {
+        std::vector<std::string> paths = a->paths;
+        if (paths.empty()) paths.push_back("configs/scenarios");
+        std::vector<host::sim::Scenario> scenarios;
+        try {
+            for (const std::string& f : host::sim::find_scenario_files(paths)) scenarios.push_back(host::sim::load_scenario(f));
+        } catch (const host::sim::ScenarioError& e) {
+            std::cerr << "battsim score: " << e.what() << "\n";
+            return kExitConfigError;
+        }
+        std::vector<host::score::EstimatorColumn> columns;
+        const auto all = host::score::standard_columns();
+        std::vector<std::string> wanted;
+        for (size_t b = 0; b <= a->columns.size() && !a->columns.empty();) {
+            const size_t e = std::min(a->columns.find(',', b), a->columns.size());
+            if (e > b) wanted.push_back(a->columns.substr(b, e - b));
+            b = e + 1;
+        }
+        if (wanted.empty()) {
+            columns = all;
+        } else {
+            for (const std::string& name : wanted) {
+                bool found = false;
+                for (const auto& c : all) {
+                    if (c.name == name) {
+                        columns.push_back(c);
+                        found = true;
+                    }
+                }
+                if (!found) {
+                    std::string names;
+                    for (const auto& c : all) names += (names.empty() ? "" : ", ") + c.name;
+                    std::cerr << "battsim score: --columns: unknown estimator \"" << name << "\"; expected " << names << "\n";
+                    return kExitUsage;
+                }
+            }
+        }
+        host::score::ScoreOptions opt;
+        opt.jobs = a->jobs > 0 ? a->jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+        opt.logs_dir = a->logs_dir;
+        host::score::ScoreResult result;
+        try {
+            result = host::score::score_scenarios(scenarios, columns, opt);
+        } catch (const host::sim::ScenarioError& e) {
+            std::cerr << "battsim score: " << e.what() << "\n";
+            return kExitConfigError;
+        } catch (const host::InputError& e) {
+            std::cerr << "battsim score: " << e.what() << "\n";
+            return kExitInputError;
+        }
+        for (const auto& f : result.flights)
+            for (const std::string& n : f.notes) std::cerr << "battsim score: note: " << f.name << ": " << n << "\n";
+        const std::string text = a->json ? host::score::to_json(result).dump(2) + "\n" : host::score::format_table(result);
+        if (a->output.empty()) {
+            std::cout << text;
+            return kExitOk;
+        }
+        try {
+            host::write_file_atomic(a->output, text);
+        } catch (const std::runtime_error& e) {
+            std::cerr << "battsim score: " << e.what() << "\n";
+            return kExitOutputError;
+        }
+        return kExitOk;
+    };
+}
+
+const RegisterCommand reg{{"score", "Score the estimators on simulated flights with known truth", setup}};
+
+}  // namespace
+}  // namespace cli
+}  // namespace battsim

@@ -1,0 +1,114 @@
+// battsim simulate SCENARIO...: fly scenarios through the truth plant and the sensor
+// layer; write each log (in a format the readers take) and its truth JSON.
+#include <iostream>
+#include <memory>
+
+#include "command.h"
+#include "host/sim/simulate.h"
+
+namespace battsim {
+namespace cli {
+namespace {
+
+struct SimulateArgs {
+    std::vector<std::string> scenarios;
+    std::string output;
+    std::string truth;
+    std::string out_dir;
+    std::string format;
+    long long seed = -1;
+    double cutoff = 0;
+};
+
+std::string default_truth_path(const std::string& log) {
+    const size_t slash = log.find_last_of('/');
+    const size_t dot = log.find_last_of('.');
+    const std::string stem = (dot != std::string::npos && (slash == std::string::npos || dot > slash)) ? log.substr(0, dot) : log;
+    return stem + ".truth.json";
+}
+
+std::function<int()> setup(CLI::App& sub) {
+    auto a = std::make_shared<SimulateArgs>();
+    sub.add_option("SCENARIO", a->scenarios, "Scenario JSON files, or directories of them")->required();
+    sub.add_option("-o,--output", a->output, "Log file to write (one scenario only)");
+    sub.add_option("--truth", a->truth, "Truth JSON to write (default: the log's name with .truth.json)");
+    sub.add_option("--out-dir", a->out_dir, "Write NAME.csv and NAME.truth.json here for every scenario");
+    sub.add_option("--seed", a->seed, "Override the scenario's seed");
+    sub.add_option("--format", a->format, "Override the log format: raw (4 cells only) or csv");
+    sub.add_option("--cutoff-v-per-cell", a->cutoff, "Override the truth's loaded cutoff voltage per cell (default 3.3)");
+    return [a]() -> int {
+        if (a->output.empty() == a->out_dir.empty()) {
+            std::cerr << "battsim simulate: give exactly one of -o/--output (one scenario) or --out-dir\n";
+            return kExitUsage;
+        }
+        if (!a->truth.empty() && a->output.empty()) {
+            std::cerr << "battsim simulate: --truth goes with -o/--output\n";
+            return kExitUsage;
+        }
+        if (!a->format.empty() && a->format != "raw" && a->format != "csv" && a->format != "auto") {
+            std::cerr << "battsim simulate: --format: expected auto, raw or csv, found \"" << a->format << "\"\n";
+            return kExitUsage;
+        }
+        if (a->cutoff != 0 && !(a->cutoff >= 2.0 && a->cutoff <= 4.5)) {
+            std::cerr << "battsim simulate: --cutoff-v-per-cell: expected a voltage in [2, 4.5]\n";
+            return kExitUsage;
+        }
+        std::vector<std::string> files;
+        std::vector<host::sim::Scenario> scenarios;
+        try {
+            files = host::sim::find_scenario_files(a->scenarios);
+            for (const std::string& f : files) scenarios.push_back(host::sim::load_scenario(f));
+        } catch (const host::sim::ScenarioError& e) {
+            std::cerr << "battsim simulate: " << e.what() << "\n";
+            return kExitConfigError;
+        }
+        if (!a->output.empty() && scenarios.size() != 1) {
+            std::cerr << "battsim simulate: -o/--output takes one scenario, " << scenarios.size()
+                      << " given; use --out-dir\n";
+            return kExitUsage;
+        }
+        for (host::sim::Scenario& s : scenarios) {
+            if (a->seed >= 0) s.seed = static_cast<uint64_t>(a->seed);
+            if (!a->format.empty()) {
+                if (a->format == "raw" && s.pack.cells != 4) {
+                    std::cerr << "battsim simulate: " << s.source_path << ": the raw format has 4 cells, the pack has "
+                              << s.pack.cells << "\n";
+                    return kExitUsage;
+                }
+                s.log_format = a->format;
+            }
+            if (a->cutoff != 0) s.cutoff_v_per_cell = a->cutoff;
+            host::sim::SimulationResult r;
+            try {
+                r = host::sim::simulate(s);
+            } catch (const host::sim::ScenarioError& e) {
+                std::cerr << "battsim simulate: " << e.what() << "\n";
+                return kExitConfigError;
+            }
+            std::string log = a->output, truth = a->truth;
+            if (!a->out_dir.empty()) {
+                log = a->out_dir + "/" + s.name + ".csv";
+                truth = a->out_dir + "/" + s.name + ".truth.json";
+            } else if (truth.empty()) {
+                truth = default_truth_path(log);
+            }
+            try {
+                host::sim::write_simulation(r, log, truth);
+            } catch (const std::runtime_error& e) {
+                std::cerr << "battsim simulate: " << e.what() << "\n";
+                return kExitOutputError;
+            }
+            const host::sim::Truth& t = r.truth;
+            std::cout << s.name << ": " << t.rows << " rows -> " << log << "; flight " << t.landing_s - t.takeoff_s
+                      << " s of " << t.total_flight_time_s << " s to cutoff (healthy pack " << t.healthy_total_flight_time_s
+                      << " s)" << (t.landed_by_cutoff ? ", cut short by the cutoff" : "") << "\n";
+        }
+        return kExitOk;
+    };
+}
+
+const RegisterCommand reg{{"simulate", "Simulate flights with a truth plant and the reference sensors; write logs and truth", setup}};
+
+}  // namespace
+}  // namespace cli
+}  // namespace battsim

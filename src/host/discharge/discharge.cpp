@@ -1,0 +1,339 @@
+#include "host/discharge/discharge.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "core/estimate/coulomb_counter.h"
+#include "host/plot/plot.h"
+#include "host/report/summary.h"
+
+namespace battsim {
+namespace host {
+namespace discharge {
+
+namespace {
+
+struct Raw {
+    double time_s, voltage_v, current_a;
+};
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0;
+    const size_t mid = v.size() / 2;
+    std::nth_element(v.begin(), v.begin() + mid, v.end());
+    double m = v[mid];
+    if (v.size() % 2 == 0) {
+        std::nth_element(v.begin(), v.begin() + mid - 1, v.end());
+        m = 0.5 * (m + v[mid - 1]);
+    }
+    return m;
+}
+
+void locate_zones(DischargeResult& r) {
+    Zones& z = r.zones;
+    const std::vector<CurvePoint>& c = r.curve;
+    const double q_total = r.capacity_mah * 1e-3;
+    if (c.size() < 10 || !(q_total > 0)) {
+        z.note = "too few points on the curve to locate the zones (need 10 after decimation)";
+        return;
+    }
+    z.full_voltage_v = c.front().voltage_v;
+    std::vector<double> mid;
+    for (const CurvePoint& p : c) {
+        const double q = p.consumed_mah * 1e-3;
+        if (q >= 0.3 * q_total && q <= 0.7 * q_total) mid.push_back(p.gradient_v_per_ah);
+    }
+    if (mid.empty()) {
+        z.note = "no points between 30 % and 70 % of the capacity";
+        return;
+    }
+    const double g_nom = median(mid);  // negative while discharging
+    z.nominal_gradient_v_per_ah = g_nom;
+    if (!(g_nom < 0)) {
+        z.note = "the voltage does not fall over the middle of the discharge";
+        return;
+    }
+    // The exponential term's slope decays as e^(−B·q); Tremblay puts the zone's end where it
+    // is down to e^−3 (5 %), so: the first point after the steepest early slope where the
+    // slope in excess of the nominal one is down to 5 % of that maximum.
+    size_t i_max = 0;
+    double excess_max = 0;
+    for (size_t i = 0; i < c.size() && c[i].consumed_mah * 1e-3 <= 0.3 * q_total; ++i) {
+        const double excess = g_nom - c[i].gradient_v_per_ah;  // > 0 where steeper than nominal
+        if (excess > excess_max) {
+            excess_max = excess;
+            i_max = i;
+        }
+    }
+    if (!(excess_max > 0)) {
+        z.note = "no steeper exponential zone at the start of the curve";
+        return;
+    }
+    size_t i_exp = i_max;
+    while (i_exp + 1 < c.size() && g_nom - c[i_exp].gradient_v_per_ah > 0.05 * excess_max) ++i_exp;
+    // The nominal zone ends at the knee: past half the capacity, the first point where the
+    // curve falls 2.5 times faster than over the middle.
+    size_t i_nom = c.size() - 1;
+    for (size_t i = i_exp; i < c.size(); ++i) {
+        if (c[i].consumed_mah * 1e-3 < 0.5 * q_total) continue;
+        if (c[i].gradient_v_per_ah < 2.5 * g_nom) {
+            i_nom = i;
+            break;
+        }
+    }
+    if (i_exp == 0 || i_exp >= i_nom) {
+        z.note = "the exponential zone runs into the end of the nominal zone";
+        return;
+    }
+    z.exponential_end_ah = c[i_exp].consumed_mah * 1e-3;
+    z.exponential_end_v = c[i_exp].voltage_v;
+    z.nominal_end_ah = c[i_nom].consumed_mah * 1e-3;
+    z.nominal_end_v = c[i_nom].voltage_v;
+    z.found = true;
+}
+
+}  // namespace
+
+DischargeResult process_discharge(const std::string& path, const DischargeOptions& o) {
+    if (!(o.min_voltage_v > 0) || !(o.max_voltage_v > o.min_voltage_v))
+        throw std::invalid_argument("discharge: need 0 < minimum voltage < maximum voltage");
+    if (o.decimate < 1) throw std::invalid_argument("discharge: --decimate must be at least 1");
+    if (o.alpha < 0 || o.alpha > 1) throw std::invalid_argument("discharge: --alpha must be in (0, 1]");
+    if (o.reaction_s < 0) throw std::invalid_argument("discharge: --reaction must not be negative");
+    if (!(o.step_v > 0)) throw std::invalid_argument("discharge: the table step must be positive");
+    DischargeResult r;
+    r.path = path;
+    std::unique_ptr<SampleReader> reader = open_reader(path, o.reader);
+    core::Sample s;
+    std::vector<Raw> raw;
+    bool connected = false, done = false;
+    while (reader->next(s)) {
+        ++r.samples_read;
+        if (done) continue;  // read to the end so the reader checks the whole file
+        const bool above = std::isfinite(s.voltage_v) && s.voltage_v > o.min_voltage_v;
+        if (!connected && !above) continue;
+        if (connected && !above) {
+            done = true;
+            continue;
+        }
+        connected = true;
+        raw.push_back(Raw{s.time_us * 1e-6, s.voltage_v, s.current_a});
+    }
+    r.info = reader->info();
+    if (raw.size() < 2)
+        throw InputError(path, 0, 0, "fewer than 2 samples above the minimum voltage of " + std::to_string(o.min_voltage_v) +
+                                         " V: is the battery connected, and is the minimum (--min-voltage or the config's) right?");
+    r.samples_kept = raw.size();
+    r.start_time_s = raw.front().time_s;
+    r.end_time_s = raw.back().time_s;
+    r.duration_s = r.end_time_s - r.start_time_s;
+    r.first_voltage_v = raw.front().voltage_v;
+    r.last_voltage_v = raw.back().voltage_v;
+
+    // Charge and energy as the firmware counts them (rectangular rule, float, compensated).
+    core::CoulombCounter counter;
+    counter.reset(0.0f, 0.0f);
+    std::vector<double> mah(raw.size()), mwh(raw.size()), smooth(raw.size());
+    double v_filtered = raw[0].voltage_v;
+    for (size_t i = 0; i < raw.size(); ++i) {
+        const double dt = i > 0 ? raw[i].time_s - raw[i - 1].time_s : 0.0;
+        if (i > 0) counter.update(static_cast<float>(raw[i].current_a), static_cast<float>(raw[i].voltage_v), static_cast<float>(dt));
+        mah[i] = counter.status().consumed_mah;
+        mwh[i] = counter.status().consumed_mwh;
+        if (i > 0) {
+            double a = 1.0;
+            if (o.alpha > 0) a = o.alpha;
+            else if (o.reaction_s > 0) a = std::min(1.0, dt / o.reaction_s);
+            v_filtered += a * (raw[i].voltage_v - v_filtered);
+        }
+        smooth[i] = v_filtered;
+    }
+    r.capacity_mah = mah.back();
+    r.energy_mwh = mwh.back();
+    r.mean_current_a = r.duration_s > 0 ? r.capacity_mah * 3.6 / r.duration_s : 0;
+    if (r.mean_current_a < 0)
+        throw InputError(path, 0, 0,
+                         "the mean current is negative (" + std::to_string(r.mean_current_a) +
+                             " A): expected positive = discharge; if the log records discharge as negative, pass --negative-discharge");
+
+    // Decimate by averaging blocks of `decimate` samples (the last block may be shorter).
+    const size_t x = static_cast<size_t>(o.decimate);
+    for (size_t b = 0; b < raw.size(); b += x) {
+        const size_t e = std::min(raw.size(), b + x);
+        CurvePoint p;
+        for (size_t i = b; i < e; ++i) {
+            p.time_s += raw[i].time_s - r.start_time_s;
+            p.voltage_v += smooth[i];
+            p.current_a += raw[i].current_a;
+            p.consumed_mah += mah[i];
+            p.consumed_mwh += mwh[i];
+        }
+        const double n = static_cast<double>(e - b);
+        p.time_s /= n;
+        p.voltage_v /= n;
+        p.current_a /= n;
+        p.consumed_mah /= n;
+        p.consumed_mwh /= n;
+        r.curve.push_back(p);
+    }
+    // Gradient dV/dQ over a span of the capacity, centred where the curve allows.
+    const double span_mah = std::max(o.gradient_span * r.capacity_mah, 1e-9);
+    for (size_t i = 0; i < r.curve.size(); ++i) {
+        size_t lo = i, hi = i;
+        while (lo > 0 && r.curve[i].consumed_mah - r.curve[lo].consumed_mah < 0.5 * span_mah) --lo;
+        while (hi + 1 < r.curve.size() && r.curve[hi].consumed_mah - r.curve[i].consumed_mah < 0.5 * span_mah) ++hi;
+        const double dq_ah = (r.curve[hi].consumed_mah - r.curve[lo].consumed_mah) * 1e-3;
+        r.curve[i].gradient_v_per_ah = dq_ah > 0 ? (r.curve[hi].voltage_v - r.curve[lo].voltage_v) / dq_ah : 0.0;
+    }
+
+    // Lookup tables: rows from the maximum down to the minimum voltage every step. Points that
+    // round to the same row are averaged; a row no point rounds to takes the next available
+    // row below it (the value the discharge reaches next), and rows past the lowest measured
+    // one take that one (the nearest edge).
+    const long rows = std::lround((o.max_voltage_v - o.min_voltage_v) / o.step_v) + 1;
+    std::vector<double> sum_mah(rows, 0), sum_mwh(rows, 0);
+    std::vector<long> count(rows, 0);
+    for (const CurvePoint& p : r.curve) {
+        const long j = std::lround((o.max_voltage_v - p.voltage_v) / o.step_v);
+        if (j < 0 || j >= rows) continue;
+        sum_mah[j] += p.consumed_mah;
+        sum_mwh[j] += p.consumed_mwh;
+        ++count[j];
+    }
+    r.table.resize(rows);
+    long last = -1;
+    for (long j = 0; j < rows; ++j) {
+        r.table[j].voltage_v = o.max_voltage_v - j * o.step_v;
+        if (count[j] > 0) last = j;
+    }
+    if (last < 0)
+        throw InputError(path, 0, 0, "no point of the curve lies between the table's minimum and maximum voltage");
+    for (long j = rows - 1; j >= 0; --j) {
+        TableRow& row = r.table[j];
+        if (count[j] > 0) {
+            row.consumed_mah = sum_mah[j] / count[j];
+            row.consumed_mwh = sum_mwh[j] / count[j];
+            row.measured = true;
+        } else if (j > last) {
+            row.consumed_mah = sum_mah[last] / count[last];
+            row.consumed_mwh = sum_mwh[last] / count[last];
+        } else {
+            row.consumed_mah = r.table[j + 1].consumed_mah;
+            row.consumed_mwh = r.table[j + 1].consumed_mwh;
+        }
+    }
+    locate_zones(r);
+    return r;
+}
+
+nlohmann::json discharge_to_json(const DischargeResult& r, bool with_table) {
+    nlohmann::json j;
+    j["schema"] = "battsim.discharge";
+    j["schema_version"] = 1;
+    j["input"] = {{"path", r.path}, {"format", to_string(r.info.format)}, {"notes", r.info.notes}};
+    j["samples"] = {{"read", r.samples_read}, {"kept", r.samples_kept}, {"curve_points", r.curve.size()}};
+    j["kept_from_s"] = round_sig(r.start_time_s, 9);
+    j["kept_to_s"] = round_sig(r.end_time_s, 9);
+    j["duration_s"] = round_sig(r.duration_s, 7);
+    j["mean_current_a"] = round_sig(r.mean_current_a, 6);
+    j["capacity_mah"] = round_sig(r.capacity_mah, 6);
+    j["energy_mwh"] = round_sig(r.energy_mwh, 6);
+    j["first_voltage_v"] = round_sig(r.first_voltage_v, 6);
+    j["last_voltage_v"] = round_sig(r.last_voltage_v, 6);
+    const Zones& z = r.zones;
+    if (z.found) {
+        j["zones"] = {{"full_voltage_v", round_sig(z.full_voltage_v, 6)},
+                      {"exponential_end", {{"capacity_ah", round_sig(z.exponential_end_ah, 5)}, {"voltage_v", round_sig(z.exponential_end_v, 5)}}},
+                      {"nominal_end", {{"capacity_ah", round_sig(z.nominal_end_ah, 5)}, {"voltage_v", round_sig(z.nominal_end_v, 5)}}},
+                      {"nominal_gradient_v_per_ah", round_sig(z.nominal_gradient_v_per_ah, 5)}};
+    } else {
+        j["zones"] = {{"found", false}, {"note", z.note}};
+    }
+    if (with_table) {
+        nlohmann::json t = nlohmann::json::array();
+        for (const TableRow& row : r.table)
+            t.push_back({{"voltage_v", round_sig(row.voltage_v, 6)}, {"consumed_mah", round_sig(row.consumed_mah, 6)},
+                         {"consumed_mwh", round_sig(row.consumed_mwh, 6)}, {"measured", row.measured}});
+        j["table"] = t;
+    }
+    return j;
+}
+
+std::string table_csv(const DischargeResult& r) {
+    std::string s = "voltage_v,consumed_mah,consumed_mwh,measured\n";
+    char buf[96];
+    for (const TableRow& row : r.table) {
+        std::snprintf(buf, sizeof buf, "%.3f,%.2f,%.2f,%d\n", row.voltage_v, row.consumed_mah, row.consumed_mwh, row.measured ? 1 : 0);
+        s += buf;
+    }
+    return s;
+}
+
+std::string curve_csv(const DischargeResult& r) {
+    std::string s = "time_s,voltage_v,current_a,consumed_mah,consumed_mwh,gradient_v_per_ah\n";
+    char buf[160];
+    for (const CurvePoint& p : r.curve) {
+        std::snprintf(buf, sizeof buf, "%.3f,%.5f,%.5f,%.3f,%.3f,%.6f\n", p.time_s, p.voltage_v, p.current_a, p.consumed_mah,
+                      p.consumed_mwh, p.gradient_v_per_ah);
+        s += buf;
+    }
+    return s;
+}
+
+void plot_discharge(const DischargeResult& r, const std::string& path) {
+    plot::Panel p;
+    char title[200];
+    std::snprintf(title, sizeof title, "%.0f mAh at %.3f A mean, %.0f mWh", r.capacity_mah, r.mean_current_a, r.energy_mwh);
+    p.title = title;
+    p.xlabel = "consumed (mAh)";
+    p.ylabel = "voltage (V)";
+    p.y2label = "gradient dV/dQ (V/Ah)";
+    plot::Series v, g;
+    v.title = "voltage (smoothed)";
+    v.color = "#d62728";
+    v.width = 1.5;
+    g.title = "gradient";
+    g.color = "#1f77b4";
+    g.y2 = true;
+    for (const CurvePoint& c : r.curve) {
+        v.x.push_back(c.consumed_mah);
+        v.y.push_back(c.voltage_v);
+        g.x.push_back(c.consumed_mah);
+        g.y.push_back(c.gradient_v_per_ah);
+    }
+    p.series = {v, g};
+    if (r.zones.found) {
+        char label[96];
+        std::snprintf(label, sizeof label, "exponential zone end %.0f mAh, %.3f V", r.zones.exponential_end_ah * 1e3, r.zones.exponential_end_v);
+        p.vertical_marks.push_back({r.zones.exponential_end_ah * 1e3, label});
+        std::snprintf(label, sizeof label, "nominal zone end %.0f mAh, %.3f V", r.zones.nominal_end_ah * 1e3, r.zones.nominal_end_v);
+        p.vertical_marks.push_back({r.zones.nominal_end_ah * 1e3, label});
+        plot::Series nominal;
+        nominal.title = "nominal gradient";
+        nominal.color = "#7f7f7f";
+        nominal.y2 = true;
+        nominal.x = {0.0, r.capacity_mah};
+        nominal.y = {r.zones.nominal_gradient_v_per_ah, r.zones.nominal_gradient_v_per_ah};
+        p.series.push_back(nominal);
+    }
+    plot::render({p}, "battsim discharge: " + r.path, path, 1400, 700);
+}
+
+core::TremblayParams params_from_discharge(const DischargeResult& r, const core::TremblayParams& keep) {
+    if (!r.zones.found) throw std::invalid_argument("discharge: the zones were not found (" + r.zones.note + ")");
+    core::TremblayParams p = keep;
+    p.full_voltage_v = static_cast<float>(r.zones.full_voltage_v);
+    p.exponential_voltage_v = static_cast<float>(r.zones.exponential_end_v);
+    p.exponential_capacity_ah = static_cast<float>(r.zones.exponential_end_ah);
+    p.nominal_zone_voltage_v = static_cast<float>(r.zones.nominal_end_v);
+    p.nominal_zone_capacity_ah = static_cast<float>(r.zones.nominal_end_ah);
+    p.capacity_ah = static_cast<float>(r.capacity_mah * 1e-3);
+    p.curve_current_a = static_cast<float>(r.mean_current_a);
+    return p;
+}
+
+}  // namespace discharge
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,89 @@
+// Constant-current discharge processing (`battsim discharge`): crop to where the battery was
+// connected, smooth, decimate, count charge and energy, build the voltage → consumed-mAh and
+// voltage → consumed-mWh lookup tables (one row per 10 mV), and locate the ends of the
+// exponential and nominal zones from the curve's gradient — the points the Tremblay model's
+// parameters are read from.
+#pragma once
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/model/tremblay.h"
+#include "host/io/sample_reader.h"
+
+namespace battsim {
+namespace host {
+namespace discharge {
+
+struct DischargeOptions {
+    ReaderOptions reader;
+    double min_voltage_v = 0;   // crop: the battery counts as connected above this; also the table's bottom
+    double max_voltage_v = 0;   // top of the table
+    double reaction_s = 0;      // exponential moving average time constant; 0 = no smoothing
+    double alpha = 0;           // or a fixed per-sample constant in (0, 1]; 0 = use reaction_s
+    int decimate = 1;           // average every x samples
+    double step_v = 0.01;       // table spacing
+    double gradient_span = 0.01;  // fraction of the capacity the gradient is taken over
+};
+
+struct CurvePoint {
+    double time_s = 0;  // since the first kept sample
+    double voltage_v = 0;
+    double current_a = 0;
+    double consumed_mah = 0;
+    double consumed_mwh = 0;
+    double gradient_v_per_ah = 0;  // dV/dQ (negative while discharging)
+};
+
+struct TableRow {
+    double voltage_v = 0;
+    double consumed_mah = 0;
+    double consumed_mwh = 0;
+    bool measured = false;  // false: filled from the next available voltage or the nearest edge
+};
+
+struct Zones {
+    bool found = false;
+    std::string note;  // why not found
+    double full_voltage_v = 0;
+    double exponential_end_ah = 0, exponential_end_v = 0;
+    double nominal_end_ah = 0, nominal_end_v = 0;
+    double nominal_gradient_v_per_ah = 0;  // median dV/dQ over 30–70 % of the capacity
+};
+
+struct DischargeResult {
+    std::string path;
+    SourceInfo info;
+    size_t samples_read = 0;
+    size_t samples_kept = 0;
+    double start_time_s = 0, end_time_s = 0;  // of the kept run, in the log's time
+    double duration_s = 0;
+    double mean_current_a = 0;  // charge / duration
+    double capacity_mah = 0;
+    double energy_mwh = 0;
+    double first_voltage_v = 0, last_voltage_v = 0;
+    std::vector<CurvePoint> curve;  // smoothed and decimated
+    std::vector<TableRow> table;    // max → min voltage
+    Zones zones;
+};
+
+// Throws InputError (bad log, nothing above the minimum, negative mean current) and
+// std::invalid_argument (options).
+DischargeResult process_discharge(const std::string& path, const DischargeOptions& options);
+
+nlohmann::json discharge_to_json(const DischargeResult& r, bool with_table);
+std::string table_csv(const DischargeResult& r);
+std::string curve_csv(const DischargeResult& r);
+// Voltage against consumed charge with the gradient on the right axis and the zone ends marked.
+void plot_discharge(const DischargeResult& r, const std::string& path);
+
+// The Tremblay parameters read off the curve (as the reference did by eye): full voltage,
+// the exponential-zone end, the nominal-zone end, the capacity to the minimum voltage and
+// the mean current; the resistance is kept from `keep` (a single constant-current curve
+// cannot separate it from E0). Throws std::invalid_argument if no zones were found.
+core::TremblayParams params_from_discharge(const DischargeResult& r, const core::TremblayParams& keep);
+
+}  // namespace discharge
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,234 @@
+#include "host/fit/fit_job.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "host/io/atomic_file.h"
+#include "host/plot/plot.h"
+#include "host/report/summary.h"
+
+namespace battsim {
+namespace host {
+namespace fit {
+
+namespace {
+
+double parse_number(const std::string& what, const std::string& text) {
+    size_t used = 0;
+    double v = 0;
+    try {
+        v = std::stod(text, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used != text.size() || !std::isfinite(v))
+        throw std::invalid_argument("--add " + what + ": expected a number after ':', found \"" + text + "\"");
+    return v;
+}
+
+std::string join_labels(const std::vector<Trace>& traces) {
+    std::string s;
+    for (const Trace& t : traces) s += (s.empty() ? "" : "+") + t.label;
+    return s;
+}
+
+}  // namespace
+
+std::vector<std::string> enable_extension(ModelSpec& s, const std::string& what) {
+    const size_t colon = what.find(':');
+    const std::string name = what.substr(0, colon);
+    const bool has_arg = colon != std::string::npos;
+    const std::string arg = has_arg ? what.substr(colon + 1) : "";
+    if (name == "rc") {
+        if (s.ext.rc_count >= core::kMaxRcBranches)
+            throw std::invalid_argument("--add rc: at most " + std::to_string(core::kMaxRcBranches) + " RC branches");
+        static const float kDefaultTau[core::kMaxRcBranches] = {2.0f, 20.0f, 200.0f};
+        const int b = s.ext.rc_count;
+        s.ext.rc[b].time_constant_s = has_arg ? static_cast<float>(parse_number(what, arg)) : kDefaultTau[b];
+        if (!(s.ext.rc[b].time_constant_s > 0)) throw std::invalid_argument("--add rc: time constant must be positive");
+        // A quarter of the ohmic resistance: the right order for LiPo polarisation and
+        // large enough for the time constant to have a gradient.
+        s.ext.rc[b].resistance_ohm = std::max(0.25f * s.battery.internal_resistance_ohm, 1e-4f);
+        s.ext.rc_count = static_cast<uint8_t>(b + 1);
+        const std::string p = "rc" + std::to_string(b + 1);
+        return {p + "_r", p + "_tau"};
+    }
+    if (name == "temperature") {
+        s.ext.temperature.enabled = true;
+        if (has_arg) s.ext.temperature.reference_c = static_cast<float>(parse_number(what, arg));
+        return {"temp_r", "temp_k", "temp_q", "temp_e0"};
+    }
+    if (name == "thermal") {
+        s.ext.thermal.enabled = true;
+        if (has_arg) s.ext.thermal.ambient_c = static_cast<float>(parse_number(what, arg));
+        // Without a temperature measurement only the product of thermal resistance and
+        // activation is identified, so the resistance stays as configured.
+        return {"thermal_tau"};
+    }
+    if (name == "hysteresis") {
+        if (s.ext.hysteresis.magnitude_v == 0.0f) s.ext.hysteresis.magnitude_v = 1e-3f;
+        return {"hyst_m", "hyst_rate"};
+    }
+    if (name == "ocv") {
+        const int n = has_arg ? static_cast<int>(parse_number(what, arg)) : 8;
+        if (n < 2 || n > core::kMaxOcvPoints)
+            throw std::invalid_argument("--add ocv: between 2 and " + std::to_string(core::kMaxOcvPoints) + " points");
+        s.ext.ocv.count = static_cast<uint8_t>(n);
+        s.ext.ocv.span_ah = s.battery.capacity_ah;
+        for (int j = 0; j < core::kMaxOcvPoints; ++j) s.ext.ocv.delta_v[j] = 0.0f;
+        return {"ocv"};
+    }
+    if (name == "sensor") return {"gain", "offset"};
+    if (name == "timing") return {"lead"};
+    throw std::invalid_argument("--add: unknown extension \"" + name +
+                                "\"; expected rc, temperature, thermal, hysteresis, ocv, sensor or timing");
+}
+
+nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
+    if (job.logs.empty()) throw std::invalid_argument("no logs to fit");
+    std::vector<Trace> traces;
+    for (const std::string& path : job.logs) {
+        if (progress) *progress << "battsim fit: reading " << path << "\n";
+        traces.push_back(load_trace(path, job.reader, job.config.config));
+    }
+    ModelSpec start = spec_from_config(job.config);
+    FitOptions options = job.options;
+    std::vector<std::string> added;
+    for (const std::string& a : job.add) {
+        for (const std::string& p : enable_extension(start, a)) added.push_back(p);
+    }
+    const bool none = options.params.size() == 1 && options.params[0] == "none";
+    if (none) {
+        options.params.clear();  // evaluate only (with --initial monitor or zero: nothing is fitted)
+    } else if (options.params.empty()) {
+        options.params = default_parameters(start);
+        for (const std::string& p : added) {
+            if (std::find(options.params.begin(), options.params.end(), p) == options.params.end()) options.params.push_back(p);
+        }
+    }
+    if (options.priors.empty()) options.priors = default_priors(start);
+    // A parameter listed per log is not also shared.
+    for (const std::string& p : options.per_log_params) {
+        options.params.erase(std::remove(options.params.begin(), options.params.end(), p), options.params.end());
+    }
+    const bool per_log = !options.per_log_params.empty();
+    if (per_log && !job.output_config.empty())
+        throw std::invalid_argument("with per-log parameters there is one config per log: use --output-dir, not -o");
+    if (per_log && !job.test_logs.empty())
+        throw std::invalid_argument("with per-log parameters there is no single model to test on other logs");
+
+    if (progress) *progress << "battsim fit: fitting " << options.params.size() << " shared parameter(s) on " << traces.size() << " log(s)\n";
+    const FitResult result = fit_model(traces, {start}, options);
+    nlohmann::json report = fit_result_to_json(result, options);
+    report["battsim_version"] = BATTSIM_VERSION;
+    report["config_start"] = job.config.config.name;
+    report["extensions_added"] = job.add;
+
+    // Baseline: the starting config as the monitor runs it, for the before/after numbers.
+    nlohmann::json before = nlohmann::json::array();
+    const ModelSpec as_given = spec_from_config(job.config);
+    for (const Trace& t : traces) {
+        const LogFitStats s = evaluate(t, as_given, options.initial == InitialMode::Zero ? InitialMode::Zero : InitialMode::Monitor, 0.0f);
+        before.push_back({{"label", t.label}, {"all", error_stats_to_json(s.fit_all)}, {"flight", error_stats_to_json(s.fit_flight)}});
+    }
+    report["start_monitor"] = before;
+
+    std::vector<Trace> tests;
+    nlohmann::json test_json = nlohmann::json::array();
+    for (const std::string& path : job.test_logs) {
+        if (progress) *progress << "battsim fit: testing on " << path << "\n";
+        tests.push_back(load_trace(path, job.reader, job.config.config));
+        // A test log starts like the fitted ones: full (zero) or as the monitor finds it.
+        const InitialMode mode = options.initial == InitialMode::Zero ? InitialMode::Zero : InitialMode::Monitor;
+        const LogFitStats s = evaluate(tests.back(), result.specs[0], mode, 0.0f);
+        const LogFitStats s0 = evaluate(tests.back(), as_given, mode, 0.0f);
+        test_json.push_back({{"label", s.label}, {"path", s.path}, {"initial_ah", round_sig(s.initial_ah, 6)},
+                             {"initial", to_string(mode)},
+                             {"monitor", {{"all", error_stats_to_json(s.fit_all)}, {"flight", error_stats_to_json(s.fit_flight)}}},
+                             {"start_monitor", {{"all", error_stats_to_json(s0.fit_all)}, {"flight", error_stats_to_json(s0.fit_flight)}}}});
+    }
+    report["test"] = test_json;
+
+    // Configs: the start config with the fitted model written in.
+    auto make_config = [&](const ModelSpec& spec, const std::string& name) {
+        ExtendedConfig c = job.config;
+        spec_to_config(spec, c);
+        c.config.name = name;
+        c.config.description = "Fitted by battsim fit " BATTSIM_VERSION " on " + join_labels(traces) +
+                               " (initial " + to_string(options.initial) + ", window " + to_string(options.window) +
+                               ", RMSE " + std::to_string(round_sig(result.rmse_v, 4)) + " V) from " + job.config.config.name;
+        return c;
+    };
+    nlohmann::json written = nlohmann::json::array();
+    if (!job.output_config.empty()) {
+        const std::string name = job.name.empty() ? "fitted-" + join_labels(traces) : job.name;
+        write_file_atomic(job.output_config, extended_config_to_json(make_config(result.specs[0], name)).dump(2) + "\n");
+        written.push_back(job.output_config);
+    }
+    if (!job.output_dir.empty()) {
+        for (size_t t = 0; t < traces.size(); ++t) {
+            const std::string name = (job.name.empty() ? std::string("fitted") : job.name) + "-" + traces[t].label;
+            const std::string path = job.output_dir + "/" + name + ".json";
+            write_file_atomic(path, extended_config_to_json(make_config(result.specs[t], name)).dump(2) + "\n");
+            written.push_back(path);
+        }
+    }
+    report["configs_written"] = written;
+
+    if (!job.plot_path.empty()) {
+        std::vector<plot::ModelTraceSeries> series;
+        for (size_t t = 0; t < traces.size(); ++t) {
+            SimResult sim;
+            simulate(traces[t], result.specs[t], options.initial, result.initial_ah[t], sim);
+            series.push_back(plot::model_series(traces[t], sim.model_v, "fit"));
+        }
+        for (size_t t = 0; t < tests.size(); ++t) {
+            SimResult sim;
+            simulate(tests[t], result.specs[0], options.initial == InitialMode::Zero ? InitialMode::Zero : InitialMode::Monitor,
+                     0.0f, sim);
+            series.push_back(plot::model_series(tests[t], sim.model_v, "test"));
+        }
+        plot::plot_model_fit(series, "battsim fit: measured and fitted model voltage", job.plot_path);
+        report["plot"] = job.plot_path;
+    }
+    return report;
+}
+
+void print_fit_brief(const nlohmann::json& r, std::ostream& out) {
+    out << "fit: RMSE " << r["rmse_v"] << " V, MAE " << r["mae_v"] << " V over " << r["points"] << " points ("
+        << r["solver"]["iterations"] << " iterations, " << r["solver"]["stop"].get<std::string>() << ")\n";
+    for (const auto& p : r["parameters"]) {
+        out << "  " << p["name"].get<std::string>();
+        if (p.contains("log")) out << "[" << p["log"].get<std::string>() << "]";
+        out << " = " << p["value"] << " " << p["unit"].get<std::string>() << " ± " << p["sigma"] << " (AR(1)-corrected ± "
+            << p["sigma_ar1"] << ")" << (p.contains("at_bound") ? " at bound" : "") << "\n";
+    }
+    for (const auto& p : r["derived"]) {
+        out << "  " << p["name"].get<std::string>();
+        if (p.contains("log")) out << "[" << p["log"].get<std::string>() << "]";
+        out << " = " << p["value"] << " " << p["unit"].get<std::string>() << " ± " << p["sigma"] << "\n";
+    }
+    const bool zero = r["options"]["initial"] == "zero";
+    out << (zero ? "  per log, the start config -> the fitted model (logs start full):\n"
+                 : "  per log, the start config -> the fitted model, both with the initial charge the monitor would set "
+                   "(in brackets: with the fitted initial charge):\n");
+    for (size_t i = 0; i < r["logs"].size(); ++i) {
+        const auto& l = r["logs"][i];
+        const auto& b = r["start_monitor"][i];
+        const auto& a = zero ? l["fit"] : l["monitor"];
+        out << "  " << l["label"].get<std::string>() << ": MAE all " << b["all"]["mae_v"] << " -> " << a["all"]["mae_v"] << " V";
+        if (b["flight"]["n"].get<size_t>() > 0) out << ", flight " << b["flight"]["mae_v"] << " -> " << a["flight"]["mae_v"] << " V";
+        if (!zero) out << " (" << l["fit"]["all"]["mae_v"] << " V)";
+        out << "\n";
+    }
+    for (const auto& l : r["test"]) {
+        out << "  test " << l["label"].get<std::string>() << ": MAE all " << l["start_monitor"]["all"]["mae_v"] << " -> "
+            << l["monitor"]["all"]["mae_v"] << " V, flight " << l["start_monitor"]["flight"]["mae_v"] << " -> "
+            << l["monitor"]["flight"]["mae_v"] << " V\n";
+    }
+}
+
+}  // namespace fit
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,53 @@
+// Bounded Levenberg–Marquardt for residuals that come in independent groups (one group per
+// log): a parameter that touches only one log's residuals costs one log's simulation per
+// Jacobian column, not all of them. Central finite differences, Marquardt scaling,
+// Nielsen's damping update, bounds by projection. Single-threaded and deterministic.
+#pragma once
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+namespace battsim {
+namespace host {
+namespace fit {
+
+struct LmProblem {
+    int n_params = 0;
+    std::vector<int> group_sizes;  // residuals per group
+    // Writes group g's residuals for parameters x into r (group_sizes[g] values).
+    std::function<void(const Eigen::VectorXd& x, int g, double* r)> residuals;
+    // Groups each parameter touches; an empty list means all groups.
+    std::vector<std::vector<int>> param_groups;
+    Eigen::VectorXd lower, upper;
+    Eigen::VectorXd typical;  // magnitude used for the finite-difference step
+};
+
+struct LmOptions {
+    int max_iterations = 100;
+    double cost_tolerance = 1e-9;  // stop when an accepted step gains less than this (relative)
+    double step_tolerance = 1e-10;
+    double fd_relative_step = 1e-3;
+};
+
+struct LmResult {
+    Eigen::VectorXd x;
+    Eigen::VectorXd residuals;  // at x
+    Eigen::MatrixXd jacobian;   // at x
+    double cost = 0;            // ½·Σ r²
+    int iterations = 0;
+    int evaluations = 0;        // full residual evaluations (Jacobians counted by groups run)
+    std::string stop_reason;
+    std::vector<bool> at_bound;
+};
+
+LmResult levenberg_marquardt(const LmProblem& problem, const Eigen::VectorXd& x0, const LmOptions& options);
+
+// s²·(JᵀJ)⁻¹ over the parameters not at a bound (zero rows/columns for the others), with
+// s² = Σr²/(m − n_free). Singular directions (rank-deficient JᵀJ) get infinite variance.
+Eigen::MatrixXd covariance(const LmResult& result);
+
+}  // namespace fit
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,169 @@
+#include "host/score/estimator.h"
+
+#include <algorithm>
+#include <memory>
+
+#include "core/estimate/coulomb_baseline.h"
+#include "host/sim/plant.h"
+
+namespace battsim {
+namespace host {
+namespace score {
+
+std::vector<EstimatorColumn> standard_columns() {
+    return {
+        monitor_column("reference", "the core Monitor as configured (the dissertation's method)"),
+        baseline_column(),
+        oracle_column(),
+        monitor_column("joint", "the core Monitor with the joint state/parameter estimator",
+                       [](core::MonitorConfig& c) { c.estimator = core::EstimatorKind::Joint; }),
+    };
+}
+
+EstimatorColumn monitor_column(std::string name, std::string description,
+                               std::function<void(core::MonitorConfig&)> tweak) {
+    EstimatorColumn col;
+    col.name = std::move(name);
+    col.description = std::move(description);
+    col.run = [tweak](const FlightInput& in) {
+        core::MonitorConfig cfg = in.config->monitor;
+        if (tweak) tweak(cfg);
+        auto monitor = std::make_unique<core::Monitor>();  // large: keep it off the stack
+        monitor->configure(cfg);
+        const double nominal_v = cfg.flight_time.nominal_voltage_v;
+        const bool joint = cfg.estimator == core::EstimatorKind::Joint;
+        std::vector<Estimate> out;
+        out.reserve(in.samples->size());
+        for (const core::Sample& s : *in.samples) {
+            const core::MonitorStatus& st = monitor->update(s);
+            Estimate e;
+            e.time_s = static_cast<double>(s.time_us) * 1e-6;
+            if (st.initialised && st.time_valid) {
+                e.has_remaining_time = true;
+                e.remaining_time_s = st.remaining_time_s;
+                // The joint estimator reports its energy to cutoff; the reference's usable
+                // energy is usable capacity × nominal voltage.
+                e.has_remaining_energy = true;
+                e.remaining_energy_wh = joint ? st.remaining_energy_wh
+                                              : st.usable_capacity_ah * nominal_v - st.consumed_mwh * 1e-3;
+            }
+            if (st.initialised) {
+                e.has_capacity = true;
+                e.capacity_ah = st.capacity_ah;
+            }
+            if (st.resistance_ohm > 0.0f) {
+                e.has_resistance = true;
+                e.resistance_ohm = st.resistance_ohm;
+            }
+            e.warnings = st.warnings;
+            e.outlier_cell = st.outlier_cell;
+            out.push_back(e);
+        }
+        return out;
+    };
+    return col;
+}
+
+EstimatorColumn baseline_column() {
+    EstimatorColumn col;
+    col.name = "baseline";
+    col.description = "coulomb counting from full, rated capacity, 50 s average current (ArduPilot/PX4 style)";
+    col.run = [](const FlightInput& in) {
+        core::CoulombBaseline b;
+        core::CoulombBaseline::Config c;
+        c.rated_capacity_ah = in.config->monitor.battery.capacity_ah;
+        b.configure(c);
+        std::vector<Estimate> out;
+        out.reserve(in.samples->size());
+        bool have_time = false;
+        uint64_t last_us = 0;
+        for (const core::Sample& s : *in.samples) {
+            const float dt = have_time && s.time_us > last_us ? static_cast<float>(s.time_us - last_us) * 1e-6f : 0.0f;
+            have_time = true;
+            last_us = s.time_us;
+            b.update(s.current_a, dt);
+            Estimate e;
+            e.time_s = static_cast<double>(s.time_us) * 1e-6;
+            e.has_remaining_time = b.status().time_valid;
+            e.remaining_time_s = b.status().remaining_time_s;
+            e.has_capacity = true;  // it assumes the rated capacity
+            e.capacity_ah = c.rated_capacity_ah;
+            out.push_back(e);
+        }
+        return out;
+    };
+    return col;
+}
+
+EstimatorColumn oracle_column() {
+    EstimatorColumn col;
+    col.name = "oracle";
+    col.description = "knows the true pack and state, assumes the flight's average power so far continues";
+    col.run = [](const FlightInput& in) {
+        const sim::SimulationResult& r = *in.truth;
+        const sim::Truth& t = r.truth;
+        const sim::Scenario& s = r.scenario;
+        std::vector<Estimate> out;
+        out.reserve(in.samples->size());
+        // It raises exactly the warnings the pack justifies, from take-off.
+        uint8_t bits = 0;
+        for (const std::string& w : t.justified_warnings) {
+            if (w == "low_capacity") bits |= 1u << core::kWarnLowCapacity;
+            if (w == "high_resistance") bits |= 1u << core::kWarnHighResistance;
+            if (w == "cell_outlier") bits |= 1u << core::kWarnCellOutlier;
+        }
+        if (t.sensor_faulty) bits |= 1u << core::kWarnSensorFault;
+        sim::Plant plant;
+        plant.configure(t.plant, 1.0, s.ambient_c);
+        bool have_run = false;
+        double run_time_s = 0.0, run_remaining_s = 0.0, run_energy_wh = 0.0, run_power_w = 0.0;
+        size_t k = 0;
+        for (const core::Sample& smp : *in.samples) {
+            Estimate e;
+            e.time_s = static_cast<double>(smp.time_us) * 1e-6;
+            const int64_t ms = static_cast<int64_t>(smp.time_us / 1000);
+            while (k < r.snapshots.size() && r.snapshots[k].time_ms < ms) ++k;
+            if (k < r.snapshots.size() && r.snapshots[k].time_ms == ms) {
+                const sim::RowSnapshot& snap = r.snapshots[k];
+                plant.set_state(snap.state);
+                e.has_capacity = true;
+                e.capacity_ah = t.pack_capacity_ah;
+                e.has_resistance = true;
+                e.resistance_ohm = plant.pack_r0_ohm();
+                const double flown_s = snap.time_s - t.takeoff_s;
+                if (snap.in_flight && flown_s >= 1.0) {
+                    const double power = snap.flight_energy_wh * 3600.0 / flown_s;
+                    // A forward run every quarter second; between runs the same answer
+                    // aged by the time passed (at a constant demand it falls 1 s per s).
+                    if (!have_run || snap.time_s - run_time_s >= 0.25) {
+                        const sim::ForwardResult f =
+                            sim::fly_to_cutoff(t.plant, snap.state, snap.cutoff_filter_v, power,
+                                               s.cutoff_v_per_cell * s.pack.cells, s.cutoff_filter_s, 0.5,
+                                               s.max_continuation_s + s.profile.flight_s);
+                        have_run = true;
+                        run_time_s = snap.time_s;
+                        run_remaining_s = f.time_s;
+                        run_energy_wh = f.energy_wh;
+                        run_power_w = power;
+                    }
+                    const double aged_s = snap.time_s - run_time_s;
+                    e.has_remaining_time = true;
+                    e.remaining_time_s = std::max(0.0, run_remaining_s - aged_s);
+                    e.has_remaining_energy = true;
+                    e.remaining_energy_wh = std::max(0.0, run_energy_wh - run_power_w * aged_s / 3600.0);
+                }
+                if (e.time_s >= t.takeoff_s) {
+                    e.warnings = bits;
+                    e.outlier_cell = static_cast<int8_t>(t.weak_cell);
+                }
+            }
+            out.push_back(e);
+        }
+        return out;
+    };
+    return col;
+}
+
+}  // namespace score
+}  // namespace host
+}  // namespace battsim

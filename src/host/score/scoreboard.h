@@ -1,0 +1,93 @@
+// `battsim score`: fly every scenario, run every column's estimator over the log, and
+// judge the estimates against the truth. One table (text or JSON); deterministic however
+// many threads run it.
+//
+// Definitions (also in the JSON's "definitions"):
+// - flight fractions are of the true total flight time T (take-off to the pack's cutoff
+//   flying on): "at 20 %" is the last sample at or before take-off + 0.2·T; a point past
+//   the logged landing is left out;
+// - remaining-time error = (estimate − true remaining) / T, in % of T; against the floor,
+//   per flight |error| − the oracle's |error| (median and largest, in points);
+// - remaining-energy error = (estimate − true energy to cutoff) / true energy to cutoff;
+// - capacity error against the weakest cell's capacity; resistance error against the
+//   pack's series ohmic resistance at that instant (temperature and charge included);
+//   "end" is the last flying sample;
+// - a short flight has T < 0.8 × the healthy twin's; it is warned in time when a
+//   warning the pack justifies (low capacity, high resistance, or the weak cell named)
+//   is active at or before 20 % of T;
+// - a false health warning is a low-capacity or high-resistance warning the pack does not
+//   justify (capacity above 0.9 × nominal, resistance below 1.2 × nominal at 25 °C), or a
+//   short-flight warning on a flight that is not short.
+#pragma once
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "host/score/estimator.h"
+#include "host/sim/scenario.h"
+
+namespace battsim {
+namespace host {
+namespace score {
+
+constexpr const char* kScoreSchema = "battsim.score";
+constexpr int kScoreVersion = 1;
+
+struct ScoreOptions {
+    int jobs = 1;
+    std::string logs_dir;  // non-empty: estimators read DIR/NAME.csv instead of the in-memory log
+};
+
+// Per flight and column.
+struct ColumnFlight {
+    bool has_rt[3] = {false, false, false};  // 10, 20, 50 %
+    double rt_err[3] = {0, 0, 0};
+    bool has_energy20 = false;
+    double energy_err20 = 0;
+    bool has_cap20 = false, has_cap_end = false, has_res20 = false, has_res_end = false;
+    double cap_err20 = 0, cap_err_end = 0, res_err20 = 0, res_err_end = 0;
+    bool warned_in_time = false;
+    std::vector<std::string> false_warnings;
+    bool cell_warning = false;
+    int named_cell = -1;
+    bool sensor_warning = false;
+    double first_warning_s[core::kWarnCount];  // since take-off (0 = on the ground), −1 never
+    ColumnFlight() {
+        for (double& t : first_warning_s) t = -1.0;
+    }
+};
+
+struct FlightScore {
+    std::string name;
+    std::string kind;
+    int cells = 0;
+    double total_flight_time_s = 0, healthy_total_flight_time_s = 0, flown_s = 0;
+    bool short_flight = false, degraded = false, sensor_faulty = false;
+    int weak_cell = -1;
+    std::vector<std::string> justified;
+    std::vector<std::string> notes;
+    std::vector<ColumnFlight> columns;
+};
+
+struct ScoreResult {
+    std::vector<std::string> columns;
+    std::vector<std::string> descriptions;
+    std::vector<FlightScore> flights;
+};
+
+// Throws sim::ScenarioError (a scenario cannot be flown) or InputError (a log cannot be read).
+ScoreResult score_scenarios(const std::vector<sim::Scenario>& scenarios, const std::vector<EstimatorColumn>& columns,
+                            const ScoreOptions& options);
+
+// One flight (exposed for tests).
+FlightScore score_flight(const sim::SimulationResult& sim, const std::vector<core::Sample>& samples,
+                         const std::vector<EstimatorColumn>& columns);
+
+// The table: one row per metric, one column per estimator.
+std::string format_table(const ScoreResult& r);
+nlohmann::json to_json(const ScoreResult& r);
+
+}  // namespace score
+}  // namespace host
+}  // namespace battsim

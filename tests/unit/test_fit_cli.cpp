@@ -1,0 +1,74 @@
+// battsim fit on the command line: outputs, determinism, evaluation-only runs and the
+// documented exit codes.
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+#include "host/config_extensions.h"
+#include "test_fit_synthetic.h"
+
+namespace {
+std::string slurp(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+int run(const std::string& args) {
+    const int status = std::system((std::string(BATTSIM_BINARY) + " fit " + args + " > /dev/null 2>&1").c_str());
+    return WEXITSTATUS(status);
+}
+const std::string kConfig = std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-modified.json";
+}  // namespace
+
+TEST_CASE("battsim fit writes a loadable config, byte-identical on a rerun", "[fit][cli]") {
+    synth::Options o;
+    o.rc_resistance_ohm = 0.01;
+    o.rc_time_constant_s = 4;
+    o.flight_s = 120;
+    o.seed = 31;
+    const std::string log = synth::write_log("cli-fit", o);
+    const std::string out1 = log + ".1.json", out2 = log + ".2.json", report = log + ".report.json", png = log + ".png";
+    const std::string args = log + " -c " + kConfig + " --add rc --test " + log + " --plot " + png + " --report " + report + " -o ";
+    REQUIRE(run(args + out1) == 0);
+    REQUIRE(run(args + out2) == 0);
+    CHECK(slurp(out1) == slurp(out2));
+    const battsim::host::ExtendedConfig c = battsim::host::load_extended_config_file(out1);
+    CHECK(c.extensions.rc_count == 1);
+    CHECK(c.extensions.rc[0].time_constant_s == Approx(4.0).epsilon(0.2));
+    std::ifstream rin(report);
+    const nlohmann::json r = nlohmann::json::parse(rin);
+    CHECK(r["schema"] == "battsim.fit");
+    CHECK(r["rmse_v"].get<double>() < 0.004);
+    CHECK(r["test"][0]["monitor"]["all"]["rmse_v"].get<double>() < 0.01);
+    bool have_sigma = false;
+    for (const auto& p : r["parameters"]) {
+        if (p["name"] == "rc1_tau") have_sigma = p["sigma"].is_number() && p["sigma"].get<double>() > 0;
+    }
+    CHECK(have_sigma);
+    CHECK(slurp(png).compare(1, 3, "PNG") == 0);
+    // Evaluation only: nothing fitted, the config's own errors reported.
+    REQUIRE(run(log + " -c " + out1 + " --params none --initial monitor --report " + report) == 0);
+    std::ifstream ein(report);
+    const nlohmann::json e = nlohmann::json::parse(ein);
+    CHECK(e["parameters"].empty());
+    CHECK(e["logs"][0]["monitor"]["all"]["rmse_v"] == e["start_monitor"][0]["all"]["rmse_v"]);
+    for (const std::string& f : {log, out1, out2, report, png}) std::remove(f.c_str());
+}
+
+TEST_CASE("battsim fit exit codes", "[fit][cli]") {
+    synth::Options o;
+    o.flight_s = 30;
+    const std::string log = synth::write_log("cli-exit", o);
+    CHECK(run("/nonexistent.csv") == 3);
+    CHECK(run(log + " -c /nonexistent.json") == 4);
+    CHECK(run(log + " --params e0,resistance") == 2);
+    CHECK(run(log + " --initial guess") == 2);
+    CHECK(run(log + " --add warp") == 2);
+    CHECK(run(log + " --per-log r -o /tmp/x.json") == 2);  // per-log parameters need --output-dir
+    CHECK(run(log + " -o /nonexistent-dir/out.json") == 5);
+    std::remove(log.c_str());
+}

@@ -1,0 +1,192 @@
+// The fit: its simulation equals the monitor, its parameter encoding round-trips, the
+// Levenberg–Marquardt solver and its covariance are right, and a fit recovers known
+// parameters from a generated log.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "host/fit/fit.h"
+#include "host/replay.h"
+#include "host/report/summary.h"
+#include "test_fit_synthetic.h"
+
+using namespace battsim;
+using namespace battsim::host;
+using namespace battsim::host::fit;
+
+namespace {
+const std::string kFlights = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/";
+
+LoadedConfig modified_config() { return load_config_file(std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-modified.json"); }
+}  // namespace
+
+TEST_CASE("The fit's simulation is the monitor's model, bit for bit", "[fit]") {
+    const LoadedConfig config = modified_config();
+    ReaderOptions reader;
+    reader.shunt = config.monitor.shunt;
+    for (const char* flight : {"30.csv", "34.csv"}) {
+        INFO(flight);
+        const Trace t = load_trace(kFlights + flight, reader, config);
+        ModelSpec spec = spec_from_config(ExtendedConfig{config, {}});
+        SimResult sim;
+        simulate(t, spec, InitialMode::Monitor, 0.0f, sim);
+        size_t compared = 0;
+        for (size_t k = 0; k < t.points.size(); ++k) {
+            const TracePoint& p = t.points[k];
+            if (!p.valid || !p.initialised) {
+                REQUIRE(std::isnan(sim.model_v[k]));
+                continue;
+            }
+            REQUIRE(sim.model_v[k] == p.monitor_model_v);
+            ++compared;
+        }
+        CHECK(compared > 3000);
+        CHECK(sim.initial_ah == t.monitor_initial_ah);
+        // And the flight window's MAE is the replay summary's.
+        ReplayOptions ro;
+        ro.reader = reader;
+        ro.config = config;
+        const nlohmann::json summary = replay_log(kFlights + flight, ro);
+        const ErrorStats s = error_stats(t, sim.model_v, Window::Flight);
+        CHECK(round_sig(s.mae_v) == summary["flight"]["voltage_error_v"]["model"]["mean_abs"].get<double>());
+    }
+}
+
+TEST_CASE("Natural parameters and the config's curve points round-trip", "[fit]") {
+    core::TremblayParams original;
+    original.exponential_capacity_ah = 0.8f;
+    original.nominal_zone_capacity_ah = 1.42f;
+    original.internal_resistance_ohm = 0.0208f;
+    original.curve_current_a = 0.0634f;
+    for (const core::TremblayParams& p : {core::TremblayParams{}, original}) {
+        const NaturalParams n = natural_from_params(p);
+        const core::TremblayParams back = params_from_natural(n, p);
+        core::TremblayModel a, b;
+        a.configure(p);
+        b.configure(back);
+        CHECK(b.e0_v() == Approx(a.e0_v()).epsilon(1e-5));
+        CHECK(b.k_v() == Approx(a.k_v()).epsilon(1e-4));
+        CHECK(k_of(n) == Approx(a.k_v()).epsilon(1e-4));
+        for (float used = 0.0f; used < 1.5f; used += 0.1f) CHECK(b.voltage_v(used, 20.0f, 15.0f) == Approx(a.voltage_v(used, 20.0f, 15.0f)).margin(2e-4));
+    }
+}
+
+TEST_CASE("Levenberg-Marquardt: linear regression and its covariance", "[fit]") {
+    // y = 2 + 3x + noise: the solution and s²(XᵀX)⁻¹ are known in closed form.
+    std::mt19937 gen(7);
+    std::normal_distribution<double> noise(0.0, 0.1);
+    const int m = 200;
+    Eigen::VectorXd x(m), y(m);
+    for (int i = 0; i < m; ++i) {
+        x[i] = i / 20.0;
+        y[i] = 2 + 3 * x[i] + noise(gen);
+    }
+    LmProblem p;
+    p.n_params = 2;
+    p.group_sizes = {m};
+    p.lower = Eigen::Vector2d(-100, -100);
+    p.upper = Eigen::Vector2d(100, 100);
+    p.typical = Eigen::Vector2d(1, 1);
+    p.residuals = [&](const Eigen::VectorXd& b, int, double* r) {
+        for (int i = 0; i < m; ++i) r[i] = y[i] - (b[0] + b[1] * x[i]);
+    };
+    const LmResult res = levenberg_marquardt(p, Eigen::Vector2d(0, 0), LmOptions{});
+    Eigen::MatrixXd X(m, 2);
+    X.col(0).setOnes();
+    X.col(1) = x;
+    const Eigen::Vector2d ols = (X.transpose() * X).ldlt().solve(X.transpose() * y);
+    CHECK(res.x[0] == Approx(ols[0]).epsilon(1e-6));
+    CHECK(res.x[1] == Approx(ols[1]).epsilon(1e-6));
+    const double s2 = (y - X * ols).squaredNorm() / (m - 2);
+    const Eigen::Matrix2d expected = s2 * (X.transpose() * X).inverse();
+    const Eigen::MatrixXd cov = covariance(res);
+    CHECK(cov(0, 0) == Approx(expected(0, 0)).epsilon(1e-4));
+    CHECK(cov(1, 1) == Approx(expected(1, 1)).epsilon(1e-4));
+    CHECK(cov(0, 1) == Approx(expected(0, 1)).epsilon(1e-4));
+
+    // A bound that binds: the intercept may not go below 2.5.
+    p.lower[0] = 2.5;
+    const LmResult bounded = levenberg_marquardt(p, Eigen::Vector2d(3, 0), LmOptions{});
+    CHECK(bounded.x[0] == 2.5);
+    CHECK(bounded.at_bound[0]);
+    CHECK_FALSE(bounded.at_bound[1]);
+}
+
+TEST_CASE("A fit recovers the parameters of a generated log, with honest uncertainty", "[fit]") {
+    synth::Options o;
+    o.params.internal_resistance_ohm = 0.03f;  // the "true" pack differs from the start config
+    o.params.capacity_ah = 1.45f;
+    o.params.full_voltage_v = 16.7f;
+    o.noise_v = 0.005;
+    o.quantum_v = 0;
+    o.flight_s = 200;
+    o.seed = 11;
+    const std::string path = synth::write_log("fit-recover", o);
+    const LoadedConfig config = default_config();
+    const Trace t = load_trace(path, ReaderOptions{}, config);
+    FitOptions fo;
+    fo.params = default_parameters(spec_from_config(ExtendedConfig{config, {}}));
+    fo.lm.max_iterations = 300;
+    const FitResult r = fit_model({t}, {spec_from_config(ExtendedConfig{config, {}})}, fo);
+    std::remove(path.c_str());
+    CHECK(r.rmse_v < 0.0056);  // the noise level: nothing systematic left
+    const ParamEstimate* rr = nullptr;
+    for (const ParamEstimate& p : r.params) {
+        if (p.name == "r") rr = &p;
+    }
+    REQUIRE(rr != nullptr);
+    CHECK(rr->value == Approx(0.03).epsilon(0.02));
+    CHECK(std::fabs(rr->value - 0.03) < 4 * rr->sigma_ar1);
+    CHECK(rr->sigma > 0);
+    CHECK(r.logs[0].fit_all.rmse_v < 0.0056);
+}
+
+TEST_CASE("Fits are deterministic and per-log parameters separate packs", "[fit]") {
+    synth::Options a, b;
+    a.params.internal_resistance_ohm = 0.02f;
+    b.params.internal_resistance_ohm = 0.045f;
+    a.seed = 3;
+    b.seed = 4;
+    a.flight_s = b.flight_s = 150;
+    const std::string pa = synth::write_log("pack-a", a), pb = synth::write_log("pack-b", b);
+    const LoadedConfig config = default_config();
+    const std::vector<Trace> traces = {load_trace(pa, ReaderOptions{}, config), load_trace(pb, ReaderOptions{}, config)};
+    std::remove(pa.c_str());
+    std::remove(pb.c_str());
+    FitOptions fo;
+    // The config's curve-point encoding ties E0 to R (E0 = full + R·i − A), so two packs that
+    // differ in R alone differ in E0 too: both are per log.
+    fo.params = {"kappa", "a", "b", "q"};
+    fo.per_log_params = {"r", "e0"};
+    const ModelSpec start = spec_from_config(ExtendedConfig{config, {}});
+    const FitResult r1 = fit_model(traces, {start}, fo);
+    const FitResult r2 = fit_model(traces, {start}, fo);
+    REQUIRE(r1.params.size() == r2.params.size());
+    for (size_t j = 0; j < r1.params.size(); ++j) CHECK(r1.params[j].value == r2.params[j].value);
+    CHECK(r1.specs[0].battery.internal_resistance_ohm == Approx(0.02).epsilon(0.03));
+    CHECK(r1.specs[1].battery.internal_resistance_ohm == Approx(0.045).epsilon(0.03));
+    CHECK(r1.rmse_v < 0.004);  // 10 mV quantisation alone: 2.9 mV
+    CHECK(fit_result_to_json(r1, fo).dump() == fit_result_to_json(r2, fo).dump());
+}
+
+TEST_CASE("Fit options are checked", "[fit]") {
+    synth::Options o;
+    o.flight_s = 30;
+    const std::string path = synth::write_log("options", o);
+    const LoadedConfig config = default_config();
+    const std::vector<Trace> traces = {load_trace(path, ReaderOptions{}, config)};
+    std::remove(path.c_str());
+    const ModelSpec start = spec_from_config(ExtendedConfig{config, {}});
+    FitOptions fo;
+    fo.params = {"e0", "resistance"};
+    CHECK_THROWS_WITH(fit_model(traces, {start}, fo), Catch::Contains("unknown parameter \"resistance\""));
+    fo.params = {"rc1_r"};
+    CHECK_THROWS_WITH(fit_model(traces, {start}, fo), Catch::Contains("RC branch 1 is not enabled"));
+    fo.params = {"temp_r"};
+    CHECK_THROWS_WITH(fit_model(traces, {start}, fo), Catch::Contains("temperature extension is not enabled"));
+    fo.params = {"r", "r"};
+    CHECK_THROWS_WITH(fit_model(traces, {start}, fo), Catch::Contains("given twice"));
+    CHECK_THROWS_AS(parse_initial_mode("guess"), std::invalid_argument);
+    CHECK_THROWS_AS(parse_window("half"), std::invalid_argument);
+}

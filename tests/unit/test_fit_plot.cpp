@@ -1,0 +1,95 @@
+// Plots: files appear atomically as PNG/SVG, identical for identical input, and the replay
+// plot reads the series CSV that `battsim replay --series` writes.
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+#include "host/plot/plot.h"
+#include "host/replay.h"
+
+using namespace battsim::host;
+
+namespace {
+std::string temp(const std::string& name) { return "/tmp/battsim-test-" + std::to_string(::getpid()) + "-" + name; }
+std::string slurp(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+plot::Panel sine_panel() {
+    plot::Panel p;
+    p.title = "a sine with a gap";
+    p.xlabel = "x";
+    p.ylabel = "y";
+    p.y2label = "y2";
+    plot::Series s, t;
+    s.title = "sin";
+    t.title = "cos on y2";
+    t.y2 = true;
+    for (int i = 0; i < 500; ++i) {
+        s.x.push_back(i * 0.02);
+        s.y.push_back(i > 200 && i < 220 ? NAN : std::sin(i * 0.02));
+        t.x.push_back(i * 0.02);
+        t.y.push_back(std::cos(i * 0.02));
+    }
+    p.series = {s, t};
+    p.vertical_marks.push_back({5.0, "it's a mark"});  // a quote in a label must not break the script
+    return p;
+}
+}  // namespace
+
+TEST_CASE("render writes PNG and SVG, the same bytes for the same input", "[plot]") {
+    const std::string png = temp("a.png"), svg = temp("a.svg"), png2 = temp("b.png");
+    plot::render({sine_panel(), sine_panel()}, "title with 'quotes'", png);
+    plot::render({sine_panel()}, "t", svg);
+    plot::render({sine_panel(), sine_panel()}, "title with 'quotes'", png2);
+    const std::string a = slurp(png), b = slurp(png2), c = slurp(svg);
+    REQUIRE(a.size() > 1000);
+    CHECK(a.compare(1, 3, "PNG") == 0);
+    CHECK(a == b);
+    CHECK(c.find("<svg") != std::string::npos);
+    // No temporary left behind.
+    CHECK_FALSE(std::ifstream(png + ".tmp-" + std::to_string(::getpid())).good());
+    for (const std::string& f : {png, svg, png2}) std::remove(f.c_str());
+    CHECK_THROWS_AS(plot::render({sine_panel()}, "t", temp("a.pdf")), std::invalid_argument);
+    CHECK_THROWS_AS(plot::render({}, "t", temp("c.png")), std::invalid_argument);
+    CHECK_THROWS_AS(plot::render({sine_panel()}, "t", "/nonexistent-dir/x.png"), std::runtime_error);
+}
+
+TEST_CASE("Envelope thinning keeps the extremes", "[plot]") {
+    std::vector<double> x, y, xo, yo;
+    for (int i = 0; i < 100000; ++i) {
+        x.push_back(i);
+        y.push_back(i == 54321 ? 10.0 : (i % 2 ? 1.0 : -1.0));
+    }
+    plot::thin_envelope(x, y, 1000, xo, yo);
+    CHECK(xo.size() <= 1000);
+    CHECK(*std::max_element(yo.begin(), yo.end()) == 10.0);
+    CHECK(*std::min_element(yo.begin(), yo.end()) == -1.0);
+    for (size_t i = 1; i < xo.size(); ++i) CHECK(xo[i] >= xo[i - 1]);
+}
+
+TEST_CASE("plot_replay from memory and from the replay's series CSV", "[plot]") {
+    const std::string log = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/30.csv";
+    const std::string series = temp("series.csv"), png1 = temp("r1.png"), png2 = temp("r2.png");
+    ReplayOptions ro;
+    ro.config = load_config_file(std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-modified.json");
+    ro.reader.shunt = ro.config.monitor.shunt;
+    ro.series_path = series;
+    plot::ReplaySeries memory;
+    replay_log(log, ro, [&](const battsim::core::Sample& s, const battsim::core::MonitorStatus& st) { memory.add(s, st); });
+    const plot::ReplaySeries from_csv = plot::read_replay_series_csv(series);
+    CHECK(from_csv.time_s.size() == memory.time_s.size());
+    CHECK(from_csv.cell_v.size() == 4);
+    CHECK(memory.cell_v.size() == 4);
+    CHECK(from_csv.voltage_v[1000] == Approx(memory.voltage_v[1000]).margin(1e-4));
+    plot::plot_replay(memory, "flight 30", png1);
+    plot::plot_replay(from_csv, "flight 30", png2);
+    CHECK(slurp(png1).size() > 10000);
+    CHECK(slurp(png2).size() > 10000);
+    for (const std::string& f : {series, png1, png2}) std::remove(f.c_str());
+    CHECK_THROWS_AS(plot::read_replay_series_csv(log), InputError);  // a flight log is not a series
+}

@@ -1,0 +1,201 @@
+// The scoreboard: the coulomb-counting baseline by hand, the judging arithmetic with
+// columns whose answers are known, the table and JSON, and determinism across threads.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/estimate/coulomb_baseline.h"
+#include "host/config_json.h"
+#include "host/io/sample_reader.h"
+#include "host/score/estimator.h"
+#include "host/score/scoreboard.h"
+#include "host/sim/scenario.h"
+#include "host/sim/simulate.h"
+
+using namespace battsim;
+using namespace battsim::host;
+using namespace battsim::host::score;
+using nlohmann::json;
+
+namespace {
+
+sim::Scenario scenario(const std::string& name, const std::string& extra_json = "{}") {
+    json j = json::parse(R"({
+      "schema": "battsim.scenario", "version": 1, "seed": 5, "monitor_config": "embedded",
+      "pack": {"cells": 4, "capacity_ah": 1.55},
+      "profile": {"kind": "racing", "idle_before_s": 20, "armed_s": 2, "flight_s": 80, "idle_after_s": 5,
+                  "mean_power_w": 400}
+    })");
+    j["name"] = name;
+    j.merge_patch(json::parse(extra_json));
+    const json cfg = config_to_json(default_config());
+    return sim::scenario_from_json(j, name + ".json", "", &cfg);
+}
+
+// A column that answers from the truth, with a chosen bias and chosen warnings.
+EstimatorColumn known_column(double time_bias_s, double capacity_factor, uint8_t warnings, double warn_at_fraction) {
+    EstimatorColumn c;
+    c.name = "known";
+    c.run = [=](const FlightInput& in) {
+        const sim::Truth& t = in.truth->truth;
+        std::vector<Estimate> out;
+        for (const core::Sample& s : *in.samples) {
+            Estimate e;
+            e.time_s = s.time_us * 1e-6;
+            if (e.time_s >= t.takeoff_s) {
+                e.has_remaining_time = true;
+                e.remaining_time_s = t.cutoff_s - e.time_s + time_bias_s;
+                e.has_capacity = true;
+                e.capacity_ah = t.pack_capacity_ah * capacity_factor;
+            }
+            if (e.time_s >= t.takeoff_s + warn_at_fraction * t.total_flight_time_s) e.warnings = warnings;
+            out.push_back(e);
+        }
+        return out;
+    };
+    return c;
+}
+
+}  // namespace
+
+TEST_CASE("Coulomb baseline: rated capacity, 50 s average current, by hand", "[score][estimate]") {
+    core::CoulombBaseline b;
+    core::CoulombBaseline::Config c;
+    c.rated_capacity_ah = 1.5f;
+    b.configure(c);
+    CHECK(b.status().remaining_mah == Approx(1500.0f));
+    CHECK_FALSE(b.status().time_valid);
+    b.update(0.0f, 0.0f);  // the first sample seeds the average
+    CHECK(b.status().average_current_a == 0.0f);
+    CHECK_FALSE(b.status().time_valid);
+    for (int k = 0; k < 50; ++k) b.update(10.0f, 1.0f);
+    // 10 A for 50 s = 138.89 mAh; average 10·(1 − 0.98^50) = 6.3583 A.
+    CHECK(b.status().consumed_mah == Approx(138.889f).epsilon(1e-5));
+    CHECK(b.status().average_current_a == Approx(10.0 * (1.0 - std::pow(0.98, 50))).epsilon(1e-5));
+    CHECK(b.status().remaining_time_s == Approx((1500.0 - 138.889) * 3.6 / 6.35830).epsilon(1e-4));
+    CHECK(b.status().soc == Approx((1500.0 - 138.889) / 1500.0).epsilon(1e-5));
+    for (int k = 0; k < 3600; ++k) b.update(10.0f, 1.0f);
+    CHECK(b.status().remaining_mah == 0.0f);  // never negative
+    CHECK(b.status().remaining_time_s == 0.0f);
+    b.update(NAN, 1.0f);  // a bad sample changes nothing
+    CHECK(b.status().consumed_mah == Approx(10138.9f).epsilon(1e-4));
+}
+
+TEST_CASE("Judging: known answers give known errors, hits and false warnings", "[score]") {
+    sim::SimulateOptions so;
+    so.keep_snapshots = true;
+    const sim::SimulationResult aged = sim::simulate(scenario("aged", R"({"pack": {"capacity_factor": 0.65}})"), so);
+    REQUIRE(aged.truth.short_flight());
+    // The samples as the reader would give them: one per logged row, at the row's time.
+    std::vector<core::Sample> samples;
+    for (const sim::RowSnapshot& r : aged.snapshots) {
+        core::Sample s;
+        s.time_us = static_cast<uint64_t>(r.time_ms) * 1000u;
+        samples.push_back(s);
+    }
+    const uint8_t low_cap = 1u << core::kWarnLowCapacity, high_r = 1u << core::kWarnHighResistance;
+    const double total = aged.truth.total_flight_time_s;
+    const FlightScore f = score_flight(aged, samples,
+                                       {known_column(0.0, 1.0, low_cap, 0.1), known_column(0.05 * total, 1.1, high_r, 0.1),
+                                        known_column(0.0, 1.0, low_cap, 0.3)});
+    REQUIRE(f.columns.size() == 3);
+    const ColumnFlight& exact = f.columns[0];
+    for (int p = 0; p < 3; ++p) {
+        if (!exact.has_rt[p]) continue;  // past the landing
+        CHECK(exact.rt_err[p] == Approx(0.0).margin(1e-9));
+    }
+    CHECK(exact.has_rt[0]);
+    CHECK(exact.has_rt[1]);
+    CHECK(exact.cap_err20 == Approx(0.0).margin(1e-9));
+    CHECK_FALSE(exact.has_res20);
+    CHECK(exact.warned_in_time);
+    CHECK(exact.false_warnings.empty());
+    const ColumnFlight& biased = f.columns[1];
+    CHECK(biased.rt_err[1] == Approx(5.0).epsilon(1e-9));
+    CHECK(biased.cap_err20 == Approx(10.0).epsilon(1e-9));
+    CHECK_FALSE(biased.warned_in_time);  // the wrong cause
+    CHECK(biased.false_warnings == std::vector<std::string>{"high_resistance"});
+    CHECK_FALSE(f.columns[2].warned_in_time);  // the right cause, too late
+    CHECK(f.columns[2].first_warning_s[core::kWarnLowCapacity] == Approx(0.3 * total).margin(0.4));
+}
+
+TEST_CASE("Scoreboard: table and JSON, every column; the same output on any thread count", "[score]") {
+    const std::vector<sim::Scenario> suite = {
+        scenario("healthy"),
+        scenario("aged", R"({"pack": {"capacity_factor": 0.7}, "seed": 6})"),
+        scenario("weak", R"({"pack": {"weak_cells": [{"cell": 2, "capacity_factor": 0.7}]}, "seed": 7})"),
+        scenario("fault", R"({"sensor": {"faults": {"loose_tap": 1}}, "seed": 8})"),
+    };
+    const std::vector<EstimatorColumn> cols = standard_columns();
+    ScoreOptions one, three;
+    one.jobs = 1;
+    three.jobs = 3;
+    const ScoreResult a = score_scenarios(suite, cols, one);
+    const ScoreResult b = score_scenarios(suite, cols, three);
+    const json ja = to_json(a);
+    CHECK(ja.dump() == to_json(b).dump());
+    CHECK(format_table(a) == format_table(b));
+
+    REQUIRE(ja["flights"].size() == 4);
+    CHECK(ja["schema"] == kScoreSchema);
+    std::vector<std::string> names;
+    for (const auto& c : ja["columns"]) names.push_back(c["name"]);
+    CHECK(names.size() >= 3);
+    CHECK(names[0] == "reference");
+    CHECK(names[1] == "baseline");
+    CHECK(names[2] == "oracle");
+    for (const char* key : {"remaining_time_10", "remaining_time_20", "remaining_time_20_above_oracle", "remaining_time_50", "remaining_energy_20", "capacity_20",
+                            "capacity_end", "resistance_20", "resistance_end", "early_warnings", "false_warnings",
+                            "cell_outlier_true_positives", "cell_outlier_false_positives", "sensor_faults_flagged",
+                            "sensor_faults_blamed_on_cells"}) {
+        INFO(key);
+        REQUIRE(ja["summary"].contains(key));
+        for (const std::string& n : names) CHECK(ja["summary"][key].contains(n));
+    }
+    // The oracle knows the pack: its capacity and resistance are exact, its warnings right.
+    CHECK(ja["summary"]["capacity_20"]["oracle"]["median_abs"] == 0.0);
+    CHECK(ja["summary"]["resistance_end"]["oracle"]["worst"] == 0.0);
+    CHECK(ja["summary"]["early_warnings"]["oracle"]["count"] == ja["summary"]["early_warnings"]["oracle"]["of"]);
+    CHECK(ja["summary"]["early_warnings"]["oracle"]["of"] == 2);  // aged and weak are short
+    // The baseline estimates no resistance and never warns.
+    CHECK(ja["summary"]["resistance_20"]["baseline"]["median_abs"].is_null());
+    CHECK(ja["summary"]["false_warnings"]["baseline"]["count"] == 0);
+    CHECK(ja["summary"]["remaining_time_20"]["reference"]["n"] == 4);
+    CHECK(ja["summary"]["remaining_time_20_above_oracle"]["oracle"]["median"] == 0.0);
+
+    // The text table: a header naming every column, then one line per metric.
+    const std::string table = format_table(a);
+    std::stringstream in(table);
+    std::string title, header, line;
+    std::getline(in, title);
+    std::getline(in, header);
+    CHECK(title.find("4 flights") != std::string::npos);
+    for (const std::string& n : names) CHECK(header.find(n) != std::string::npos);
+    int lines = 0;
+    while (std::getline(in, line)) {
+        ++lines;
+        CHECK(line.size() == header.size());
+    }
+    CHECK(lines >= 20);
+}
+
+TEST_CASE("Scoreboard: reading the logs from files gives the same result as in memory", "[score]") {
+    const std::vector<sim::Scenario> suite = {scenario("one"), scenario("two", R"({"pack": {"cells": 4}, "seed": 9})")};
+    char tmpl[] = "/tmp/battsim-score-test-XXXXXX";
+    const std::string dir = mkdtemp(tmpl);
+    for (const sim::Scenario& s : suite) {
+        const sim::SimulationResult r = sim::simulate(s);
+        sim::write_simulation(r, dir + "/" + s.name + ".csv", dir + "/" + s.name + ".truth.json");
+    }
+    ScoreOptions mem, files;
+    files.logs_dir = dir;
+    const std::vector<EstimatorColumn> cols = standard_columns();
+    const ScoreResult a = score_scenarios(suite, cols, mem), b = score_scenarios(suite, cols, files);
+    CHECK(to_json(a).dump() == to_json(b).dump());
+    ScoreOptions missing;
+    missing.logs_dir = dir + "/nowhere";
+    CHECK_THROWS_AS(score_scenarios(suite, cols, missing), InputError);
+}

@@ -1,0 +1,104 @@
+// `battsim simulate` and `battsim score` from the outside: files written, exit codes,
+// messages, and a simulated log that `battsim replay` takes.
+#include <catch2/catch.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include "../cli/cli_util.h"
+
+using clitest::q;
+using clitest::run;
+
+namespace {
+
+struct Dir {
+    std::string path = clitest::temp_dir();
+    std::string at(const std::string& name) const { return path + "/" + name; }
+};
+
+std::string scenario_json(const std::string& name, int seed, const std::string& extra = "") {
+    return R"({"schema": "battsim.scenario", "version": 1, "name": ")" + name + R"(", "seed": )" + std::to_string(seed) +
+           R"(, "monitor_config": ")" + std::string(BATTSIM_SOURCE_DIR) + R"(/configs/reference-modified.json",
+  "profile": {"kind": "racing", "idle_before_s": 15, "armed_s": 2, "flight_s": 50, "idle_after_s": 5, "mean_power_w": 450})" +
+           extra + "}";
+}
+
+}  // namespace
+
+TEST_CASE("battsim simulate writes a log and its truth; replay reads the log", "[cli][sim]") {
+    Dir d;
+    clitest::write_file(d.at("a.json"), scenario_json("a", 1));
+    const auto r = run("simulate " + q(d.at("a.json")) + " -o " + q(d.at("a.csv")));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.out.find("a: ") == 0);
+    const nlohmann::json truth = nlohmann::json::parse(clitest::read_file(d.at("a.truth.json")));
+    CHECK(truth["schema"] == "battsim.truth");
+    CHECK(truth["flight"]["total_flight_time_s"].get<double>() > 50.0);
+    CHECK(truth["series"]["time_s"].size() == truth["series"]["remaining_flight_time_s"].size());
+    const std::string log = clitest::read_file(d.at("a.csv"));
+    CHECK(log.size() > 30000);
+    // Same scenario, same seed: byte-identical log.
+    REQUIRE(run("simulate " + q(d.at("a.json")) + " -o " + q(d.at("b.csv")) + " --truth " + q(d.at("b.json"))).exit_code == 0);
+    CHECK(clitest::read_file(d.at("b.csv")) == log);
+    // A different seed from the command line changes it.
+    REQUIRE(run("simulate " + q(d.at("a.json")) + " --seed 99 -o " + q(d.at("c.csv"))).exit_code == 0);
+    CHECK(clitest::read_file(d.at("c.csv")) != log);
+
+    const auto rep = run("replay " + q(d.at("a.csv")) + " -c " + q(std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-modified.json") + " --json");
+    INFO(rep.err);
+    REQUIRE(rep.exit_code == 0);
+    const nlohmann::json summary = nlohmann::json::parse(rep.out);
+    CHECK(summary["input"]["format"] == "raw");
+    CHECK_FALSE(summary["flight"].is_null());
+}
+
+TEST_CASE("battsim simulate: usage and scenario errors", "[cli][sim]") {
+    Dir d;
+    clitest::write_file(d.at("a.json"), scenario_json("a", 1));
+    clitest::write_file(d.at("b.json"), scenario_json("b", 2, R"(, "pack": {"capacity_factor": 0.8})"));
+    CHECK(run("simulate " + q(d.at("a.json"))).exit_code == 2);  // neither -o nor --out-dir
+    CHECK(run("simulate " + q(d.path) + " -o " + q(d.at("x.csv"))).exit_code == 2);  // two scenarios, one file
+    CHECK(run("simulate " + q(d.at("a.json")) + " -o " + q(d.at("x.csv")) + " --format xml").exit_code == 2);
+    const auto missing = run("simulate " + q(d.at("none.json")) + " -o " + q(d.at("x.csv")));
+    CHECK(missing.exit_code == 4);
+    CHECK(missing.err.find(d.at("none.json") + ": no such scenario file or directory") != std::string::npos);
+    clitest::write_file(d.at("bad.txt"), R"({"schema": "battsim.scenario", "version": 1, "name": "bad", "monitor_config": "x.json", "sede": 3})");
+    const auto bad = run("simulate " + q(d.at("bad.txt")) + " -o " + q(d.at("x.csv")));
+    CHECK(bad.exit_code == 4);
+    CHECK(bad.err.find(d.at("bad.txt") + ": $.sede: unknown key") != std::string::npos);
+    const auto unwritable = run("simulate " + q(d.at("a.json")) + " -o " + q(d.at("no/such/dir/x.csv")));
+    CHECK(unwritable.exit_code == 5);
+
+    Dir out;
+    const auto all = run("simulate " + q(d.at("a.json")) + " " + q(d.at("b.json")) + " --out-dir " + q(out.path));
+    INFO(all.err);
+    REQUIRE(all.exit_code == 0);
+    for (const char* f : {"a.csv", "a.truth.json", "b.csv", "b.truth.json"}) CHECK_FALSE(clitest::read_file(out.at(f)).empty());
+}
+
+TEST_CASE("battsim score prints a table or JSON and checks its arguments", "[cli][score]") {
+    Dir d;
+    clitest::write_file(d.at("a.json"), scenario_json("a", 1));
+    clitest::write_file(d.at("b.json"), scenario_json("b", 2, R"(, "pack": {"capacity_factor": 0.7})"));
+    const auto js = run("score " + q(d.path) + " --json -j 2");
+    INFO(js.err);
+    REQUIRE(js.exit_code == 0);
+    const nlohmann::json j = nlohmann::json::parse(js.out);
+    CHECK(j["flights"].size() == 2);
+    CHECK(j["flights"][0]["name"] == "a");
+    CHECK(j["flights"][1]["short_flight"] == true);
+    const auto table = run("score " + q(d.path) + " --columns reference,oracle -o " + q(d.at("score.txt")));
+    REQUIRE(table.exit_code == 0);
+    const std::string text = clitest::read_file(d.at("score.txt"));
+    CHECK(text.find("2 flights") != std::string::npos);
+    CHECK(text.find("reference") != std::string::npos);
+    CHECK(text.find("baseline") == std::string::npos);
+    const auto cols = run("score " + q(d.path) + " --columns reference,nonesuch");
+    CHECK(cols.exit_code == 2);
+    CHECK(cols.err.find("unknown estimator \"nonesuch\"") != std::string::npos);
+    clitest::write_file(d.at("c.json"), "{\"schema\": \"battsim.scenario\"");
+    const auto broken = run("score " + q(d.path));
+    CHECK(broken.exit_code == 4);
+    CHECK(broken.err.find(d.at("c.json") + ":1:") != std::string::npos);
+}
