@@ -1,6 +1,7 @@
 // Small numeric helpers for the core: float only, no heap, no exceptions.
 #pragma once
 #include <math.h>
+#include <stdint.h>
 
 namespace battsim {
 namespace core {
@@ -28,6 +29,18 @@ private:
     float sum_ = 0.0f;
     float carry_ = 0.0f;
 };
+
+// Index in a ring of time stamps (newest at head − 1) of the newest entry at least
+// `lag_us` older than `now_us`; −1 if there is none or the gap to it is far longer than the
+// lag (a logging gap must not pair two unrelated samples). Shared by the difference-based
+// resistance estimators.
+inline int pick_lagged(const uint64_t* t_us, int head, int count, int capacity, uint64_t now_us, uint64_t lag_us) {
+    for (int n = 0; n < count; ++n) {
+        const int k = (head - 1 - n + capacity) % capacity;
+        if (now_us >= t_us[k] + lag_us) return now_us - t_us[k] <= 3 * lag_us + 200000u ? k : -1;
+    }
+    return -1;
+}
 
 }  // namespace core
 }  // namespace battsim

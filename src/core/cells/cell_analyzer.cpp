@@ -42,14 +42,7 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     }
     // Resistance: pair with the newest sample at least `lag` old.
     const uint64_t lag_us = static_cast<uint64_t>(config_.lag_s * 1.0e6f);
-    int pick = -1;
-    for (int n = 0; n < count_; ++n) {
-        const int k = (head_ - 1 - n + kHistory) % kHistory;
-        if (time_us >= t_us_[k] + lag_us) {
-            if (time_us - t_us_[k] <= 3 * lag_us + 200000u) pick = k;
-            break;
-        }
-    }
+    const int pick = pick_lagged(t_us_, head_, count_, kHistory, time_us, lag_us);
     if (pick >= 0) {
         const float di = current_a - i_[pick];
         if (fabsf(di) >= config_.min_step_a) {

@@ -20,14 +20,7 @@ void DifferenceResistanceEstimator::update(uint64_t time_us, float voltage_v, fl
     last_us_ = time_us;
     const uint64_t lag_us = static_cast<uint64_t>(config_.lag_s * 1.0e6f);
     // Newest sample at least `lag` old; a gap much longer than the lag breaks the pair.
-    int pick = -1;
-    for (int n = 0; n < count_; ++n) {
-        const int k = (head_ - 1 - n + kHistory) % kHistory;
-        if (time_us >= t_us_[k] + lag_us) {
-            if (time_us - t_us_[k] <= 3 * lag_us + 200000u) pick = k;
-            break;
-        }
-    }
+    const int pick = pick_lagged(t_us_, head_, count_, kHistory, time_us, lag_us);
     t_us_[head_] = time_us;
     v_[head_] = voltage_v;
     i_[head_] = current_a;

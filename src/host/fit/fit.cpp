@@ -74,10 +74,8 @@ std::vector<Def> expand(const std::string& name, const ModelSpec& s, double full
     }
     // Hysteresis lowers the voltage after discharge and raises it after charge: M ≥ 0.
     if (name == "hyst_m") return one(Kind::HystM, "V", 0, 0.02 * v_full, 1e-3);
-    if (name == "hyst_rate") {
-        need(s.ext.hysteresis.magnitude_v != 0.0f, "hysteresis");
-        return one(Kind::HystRate, "1/Ah", 0.01, 1e5, 1);
-    }
+    // The rate is harmless with a zero magnitude (a fit may drive M to its bound of 0).
+    if (name == "hyst_rate") return one(Kind::HystRate, "1/Ah", 0.01, 1e5, 1);
     if (name == "ocv") {
         need(s.ext.ocv.count >= 2, "ocv_correction");
         std::vector<Def> v;
