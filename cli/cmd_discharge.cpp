@@ -49,6 +49,7 @@ std::function<int()> setup(CLI::App& sub) {
             std::cerr << "battsim discharge: config: " << e.what() << "\n";
             return kExitConfigError;
         }
+        if (!a->input.estimator.empty()) config.config.monitor.estimator = unused.monitor.estimator;  // --estimator wins
         opt.reader.shunt = config.config.monitor.shunt;
         opt.min_voltage_v = a->min_v > 0 ? a->min_v : config.config.monitor.min_voltage_v;
         opt.max_voltage_v = a->max_v > 0 ? a->max_v : config.config.monitor.max_voltage_v;
@@ -79,10 +80,7 @@ std::function<int()> setup(CLI::App& sub) {
             if (!a->summary.empty()) host::write_file_atomic(a->summary, summary.dump(2) + "\n");
             if (!a->plot.empty()) host::discharge::plot_discharge(result, a->plot);
             if (!a->config_out.empty()) {
-                host::ExtendedConfig out = config;
-                out.config.monitor.battery = host::discharge::params_from_discharge(result, config.config.monitor.battery);
-                out.config.name = "discharge-" + a->log.substr(a->log.find_last_of('/') + 1);
-                out.config.description = "Tremblay points read off the discharge " + a->log + " by battsim discharge";
+                const host::ExtendedConfig out = host::discharge::start_config_from_discharge(result, config);
                 host::write_file_atomic(a->config_out, host::extended_config_to_json(out).dump(2) + "\n");
             }
         } catch (const std::invalid_argument& e) {

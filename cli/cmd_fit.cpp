@@ -64,6 +64,7 @@ std::function<int()> setup(CLI::App& sub) {
             std::cerr << "battsim fit: config: " << e.what() << "\n";
             return kExitConfigError;
         }
+        if (!a->input.estimator.empty()) job.config.config.monitor.estimator = unused.monitor.estimator;  // --estimator wins
         job.logs = a->logs;
         job.options.max_capacity_factor = a->max_capacity_factor;
         job.test_logs = a->tests;

@@ -36,7 +36,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--window", a->window, "Samples analysed: all (initialised) or flight")->capture_default_str();
     sub.add_option("--initial", a->initial, "Initial charge: free (fitted per log; flights) or zero (logs start full: constant-current discharges)")
         ->capture_default_str();
-    sub.add_option("--blocks", a->blocks, "Blocks per log; even ones are fitted, odd ones held out")->capture_default_str();
+    sub.add_option("--blocks", a->blocks, "Blocks per log; odd ones (but the last) are held out, the others fitted")->capture_default_str();
     sub.add_option("--max-effects", a->max_effects, "Most effects added")->capture_default_str();
     sub.add_option("--min-gain", a->min_gain, "Least share of the held-out error variance an effect must remove")->capture_default_str();
     sub.add_option("--max-p", a->max_p, "Significance level of the Wilcoxon signed-rank test over the held-out blocks")->capture_default_str();
@@ -62,6 +62,7 @@ std::function<int()> setup(CLI::App& sub) {
             std::cerr << "battsim residual: config: " << e.what() << "\n";
             return kExitConfigError;
         }
+        if (!a->input.estimator.empty()) job.config.config.monitor.estimator = unused.monitor.estimator;  // --estimator wins
         job.logs = a->logs;
         job.options.max_capacity_factor = a->max_capacity_factor;
         job.output_config = a->output;
