@@ -3,7 +3,7 @@
 
 #include "command.h"
 #include "common_options.h"
-#include "host/config_extensions.h"
+#include "host/config_json.h"
 #include "host/discharge/discharge.h"
 #include "host/io/atomic_file.h"
 #include "host/plot/plot.h"
@@ -42,17 +42,17 @@ std::function<int()> setup(CLI::App& sub) {
         host::LoadedConfig unused;
         int rc = resolve_input(no_config, opt.reader, unused);
         if (rc != kExitOk) return rc;
-        host::ExtendedConfig config{host::default_config(), {}};
+        host::LoadedConfig config = host::default_config();
         try {
-            if (!a->input.config.empty()) config = host::load_extended_config_file(a->input.config);
+            if (!a->input.config.empty()) config = host::load_config_file(a->input.config);
         } catch (const host::ConfigError& e) {
             std::cerr << "battsim discharge: config: " << e.what() << "\n";
             return kExitConfigError;
         }
-        if (!a->input.estimator.empty()) config.config.monitor.estimator = unused.monitor.estimator;  // --estimator wins
-        opt.reader.shunt = config.config.monitor.shunt;
-        opt.min_voltage_v = a->min_v > 0 ? a->min_v : config.config.monitor.min_voltage_v;
-        opt.max_voltage_v = a->max_v > 0 ? a->max_v : config.config.monitor.max_voltage_v;
+        if (!a->input.estimator.empty()) config.monitor.estimator = unused.monitor.estimator;  // --estimator wins
+        opt.reader.shunt = config.monitor.shunt;
+        opt.min_voltage_v = a->min_v > 0 ? a->min_v : config.monitor.min_voltage_v;
+        opt.max_voltage_v = a->max_v > 0 ? a->max_v : config.monitor.max_voltage_v;
         opt.reaction_s = a->reaction_s;
         opt.alpha = a->alpha;
         opt.decimate = a->decimate;
@@ -80,8 +80,8 @@ std::function<int()> setup(CLI::App& sub) {
             if (!a->summary.empty()) host::write_file_atomic(a->summary, summary.dump(2) + "\n");
             if (!a->plot.empty()) host::discharge::plot_discharge(result, a->plot);
             if (!a->config_out.empty()) {
-                const host::ExtendedConfig out = host::discharge::start_config_from_discharge(result, config);
-                host::write_file_atomic(a->config_out, host::extended_config_to_json(out).dump(2) + "\n");
+                const host::LoadedConfig out = host::discharge::start_config_from_discharge(result, config);
+                host::write_file_atomic(a->config_out, host::config_to_json(out).dump(2) + "\n");
             }
         } catch (const std::invalid_argument& e) {
             std::cerr << "battsim discharge: " << e.what() << "\n";

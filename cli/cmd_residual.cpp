@@ -56,13 +56,13 @@ std::function<int()> setup(CLI::App& sub) {
         int rc = resolve_input(no_config, job.reader, unused);
         if (rc != kExitOk) return rc;
         try {
-            job.config = a->input.config.empty() ? host::ExtendedConfig{host::default_config(), {}}
-                                                 : host::load_extended_config_file(a->input.config);
+            job.config = a->input.config.empty() ? host::default_config()
+                                                 : host::load_config_file(a->input.config);
         } catch (const host::ConfigError& e) {
             std::cerr << "battsim residual: config: " << e.what() << "\n";
             return kExitConfigError;
         }
-        if (!a->input.estimator.empty()) job.config.config.monitor.estimator = unused.monitor.estimator;  // --estimator wins
+        if (!a->input.estimator.empty()) job.config.monitor.estimator = unused.monitor.estimator;  // --estimator wins
         job.logs = a->logs;
         job.options.max_capacity_factor = a->max_capacity_factor;
         job.output_config = a->output;

@@ -14,6 +14,7 @@
 #include "core/estimate/reference_capacity.h"
 #include "core/estimate/resistance_estimator.h"
 #include "core/estimate/rolling_average.h"
+#include "core/model/extensions/extended_model.h"
 #include "core/model/tremblay.h"
 #include "core/sensor.h"
 
@@ -48,6 +49,7 @@ struct MonitorConfig {
     EstimatorKind estimator = EstimatorKind::Reference;
     int cells_in_series = 4;
     TremblayParams battery;
+    ModelExtensions extensions;   // optional effects on top of the model (all off by default)
     float max_voltage_v = 16.8f;  // pack range used for state of charge
     float min_voltage_v = 13.3f;
     LowPassFilter::Config current_filter;  // i* of the model: the reaction time

@@ -22,6 +22,7 @@ void Monitor::configure(const MonitorConfig& config) {
     current_filter_ = LowPassFilter{};
     current_filter_.configure(config.current_filter);
     counter_.reset(0.0f, 0.0f);
+    model_.configure(config.battery, config.extensions);
     resistance_.configure(config.resistance);
     capacity_.configure(config.capacity, config.battery);
     flight_time_.configure(config.flight_time, capacity_.adapted_model().capacity_ah());
@@ -93,53 +94,75 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
     last_time_us_ = sample.time_us;
     status_.dt_s = dt_s;
     status_.voltage_v = sample.voltage_v;
-    status_.current_a = sample.current_a;
+    // A configured current-sensor correction applies before anything sees the current.
+    const bool extended = model_.active();
+    const float current_a = extended ? model_.corrected_current_a(sample.current_a) : sample.current_a;
+    status_.current_a = current_a;
 
-    const bool flying = flying_.update(sample.current_a, dt_s);
+    const bool flying = flying_.update(current_a, dt_s);
     status_.flying = flying;
-    const float filtered_a = current_filter_.update(sample.current_a, dt_s);
+    const float filtered_a = current_filter_.update(current_a, dt_s);
     status_.filtered_current_a = filtered_a;
+    // The extension states (RC branches, temperature, hysteresis) run on every valid sample,
+    // also before the initial state is known: they start relaxing from the first one.
+    if (extended) model_.update(current_a, dt_s, sample.has_temperature, sample.temperature_c);
     // Only under load: at ground idle the current steps are noise-sized and would make
     // −ΔV/ΔI meaningless (the reference monitor also ran it only while flying).
     const bool reference = config_.estimator == EstimatorKind::Reference;
-    if (flying && reference) resistance_.update(sample.voltage_v, sample.current_a, dt_s);
+    if (flying && reference) resistance_.update(sample.voltage_v, current_a, dt_s);
     status_.resistance_ohm = resistance_.status().resistance_ohm;
 
     if (!status_.initialised) {
         const TremblayModel& model = capacity_.fixed_model();
-        initial_.update(model, sample.voltage_v, sample.current_a, dt_s);
-        if (!initial_.status().done && flying) initial_.force(model, sample.voltage_v, sample.current_a);
+        initial_.update(model, sample.voltage_v, current_a, dt_s);
+        if (!initial_.status().done && flying) initial_.force(model, sample.voltage_v, current_a);
         if (!initial_.status().done) return status_;
         status_.initialised = true;
         status_.initial_forced = initial_.status().forced;
-        counter_.reset(initial_.status().used_ah * 1000.0f, initial_.status().used_wh * 1000.0f);
-        if (config_.estimator == EstimatorKind::Joint) joint_.start(sample.voltage_v, sample.current_a);
+        float initial_ah = initial_.status().used_ah;
+        float initial_wh = initial_.status().used_wh;
+        if (extended) {
+            // The charge drawn from the extended model (its RC and temperature states at this
+            // moment); the energy to it from the plain model's closed form.
+            initial_ah = model_.used_ah_at_voltage(sample.voltage_v, current_a);
+            initial_wh = model.energy_wh_to(initial_ah, current_a);
+        }
+        counter_.reset(initial_ah * 1000.0f, initial_wh * 1000.0f);
+        if (config_.estimator == EstimatorKind::Joint) joint_.start(sample.voltage_v, current_a);
     } else {
-        counter_.update(sample.current_a, sample.voltage_v, dt_s);
+        counter_.update(current_a, sample.voltage_v, dt_s);
     }
     const CoulombCounter::Status counted = counter_.status();
     status_.consumed_mah = counted.consumed_mah;
     status_.consumed_mwh = counted.consumed_mwh;
     const float used_ah = counted.consumed_mah * 0.001f;
 
+    // What the extensions add to the plain model's voltage; the adapted model carries it too.
+    float extended_v = 0.0f;
+    float extension_v = 0.0f;
+    if (extended) {
+        extended_v = model_.voltage_v(used_ah, current_a, filtered_a);
+        extension_v = extended_v - model_.base().voltage_v(used_ah, current_a, filtered_a);
+    }
+
     // The joint estimator replaces the reference's capacity, flight-time and cell parts;
     // only the fixed model's voltage is kept for the outputs (each skipped part saves
     // model evaluations, which are soft-float exponentials on the ESP8266).
     if (flying) {
-        current_average_.update(sample.current_a, dt_s);
-        power_average_.update(sample.current_a * sample.voltage_v, dt_s);
+        current_average_.update(current_a, dt_s);
+        power_average_.update(current_a * sample.voltage_v, dt_s);
     }
     if (flying && reference) {
-        capacity_.update(used_ah, sample.current_a, filtered_a, sample.voltage_v, status_.resistance_ohm);
+        capacity_.update(used_ah, current_a, filtered_a, sample.voltage_v, status_.resistance_ohm, extension_v);
         flight_time_.track(capacity_.adapted_model(), power_average_.status().short_avg);
         if (status_.cells_valid) cells_.update(sample.cell_voltage_v, sample.cell_count);
     } else if (reference) {
-        capacity_.evaluate(used_ah, sample.current_a, filtered_a);
+        capacity_.evaluate(used_ah, current_a, filtered_a, extension_v);
     } else {
-        capacity_.evaluate_fixed(used_ah, sample.current_a, filtered_a);
+        capacity_.evaluate_fixed(used_ah, current_a, filtered_a, extension_v);
     }
     const ReferenceCapacityEstimator::Status& cap = capacity_.status();
-    status_.model_voltage_v = cap.fixed_model_voltage_v;
+    status_.model_voltage_v = extended ? extended_v : cap.fixed_model_voltage_v;
     status_.adapted_model_voltage_v = cap.adapted_model_voltage_v;
     status_.capacity_ah = cap.capacity_ah;
     status_.soc = cap.capacity_ah > 0.0f ? clampf(1.0f - used_ah / cap.capacity_ah, 0.0f, 1.0f) : 0.0f;
@@ -162,7 +185,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
                                                 ? ca.capacity_deficit[ca.flagged_cell]
                                                 : 0.0f);
         }
-        joint_.update(sample.time_us, sample.voltage_v, sample.current_a, dt_s, flying);
+        joint_.update(sample.time_us, sample.voltage_v, current_a, dt_s, flying);
         const JointEstimator::Status& js = joint_.status();
         status_.capacity_ah = js.capacity_ah;
         status_.resistance_ohm = js.resistance_ohm;
@@ -175,7 +198,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         status_.short_flight_cause = js.cause;
         short_flight = js.short_flight;
         if (flying && status_.cells_valid) {
-            cell_analyzer_.update(sample.time_us, sample.cell_voltage_v, sample.cell_count, sample.current_a, used_ah,
+            cell_analyzer_.update(sample.time_us, sample.cell_voltage_v, sample.cell_count, current_a, used_ah,
                                   joint_.ocv().slope_v_per_soc(js.soc), js.capacity_ah);
         } else {
             cell_analyzer_.break_history();

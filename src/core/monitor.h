@@ -78,6 +78,7 @@ private:
 
     MonitorConfig config_;
     MonitorStatus status_;
+    ExtendedModel model_;  // the configured model with its extensions (plain if none)
     LowPassFilter current_filter_;
     CoulombCounter counter_;
     ResistanceEstimator resistance_;

@@ -13,38 +13,23 @@
 //   }
 //
 // A missing member leaves that extension off; "temperature" and "thermal" are enabled by
-// being present. Unknown keys are errors, as in the rest of the config.
-//
-// Until config_json.cpp parses this itself, load_extended_config*() take the extensions out
-// of the JSON, hand the rest to config_from_json() and parse them here.
+// being present. Unknown keys are errors, as in the rest of the config. config_json.cpp
+// reads and writes this block as part of the battery section (core::MonitorConfig::extensions).
 #pragma once
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "core/model/extensions/extended_model.h"
-#include "host/config_json.h"
 
 namespace battsim {
 namespace host {
-
-struct ExtendedConfig {
-    LoadedConfig config;
-    core::ModelExtensions extensions;
-};
 
 // Parses the "extensions" object; `where` is its JSON path for messages. Throws ConfigError.
 core::ModelExtensions extensions_from_json(const nlohmann::json& j, const std::string& origin,
                                            const std::string& where = "$.battery.extensions");
 // Only the extensions that are on; an empty object when none is.
 nlohmann::json extensions_to_json(const core::ModelExtensions& e);
-// True if any extension changes the model voltage or the current.
-bool extensions_active(const core::ModelExtensions& e);
-
-ExtendedConfig extended_config_from_json(const nlohmann::json& j, const std::string& origin);
-ExtendedConfig load_extended_config_file(const std::string& path);
-// config_to_json() plus "battery.extensions" when any is on.
-nlohmann::json extended_config_to_json(const ExtendedConfig& c);
 
 }  // namespace host
 }  // namespace battsim

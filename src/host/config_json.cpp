@@ -1,9 +1,11 @@
 #include "host/config_json.h"
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
-#include <set>
-#include <sstream>
+
+#include "host/config_extensions.h"
 
 namespace battsim {
 namespace host {
@@ -15,61 +17,31 @@ using nlohmann::json;
 constexpr const char* kSchema = "battsim.config";
 constexpr int kVersion = 1;
 
-// Reads an object's members, remembering which keys were consumed so that leftovers can
-// be reported as unknown.
-class ObjectReader {
-public:
-    ObjectReader(const json& j, std::string path, const std::string& origin)
-        : j_(j), path_(std::move(path)), origin_(origin) {
-        if (!j.is_object()) fail(path_, "expected an object");
-    }
-    ~ObjectReader() noexcept(false) {
-        if (std::uncaught_exceptions() > 0) return;
-        for (auto it = j_.begin(); it != j_.end(); ++it) {
-            if (!used_.count(it.key())) fail(path_ + "." + it.key(), "unknown key");
-        }
-    }
-    template <typename T>
-    void number(const char* key, T& out, double lo, double hi) {
-        used_.insert(key);
-        auto it = j_.find(key);
-        if (it == j_.end()) return;  // keep the default
-        const std::string p = path_ + "." + key;
-        if (!it->is_number()) fail(p, "expected a number");
-        const double v = it->get<double>();
-        if (!std::isfinite(v) || v < lo || v > hi) {
-            std::ostringstream m;
-            m << "value " << v << " out of range [" << lo << ", " << hi << "]";
-            fail(p, m.str());
-        }
-        out = static_cast<T>(v);
-    }
-    void string(const char* key, std::string& out) {
-        used_.insert(key);
-        auto it = j_.find(key);
-        if (it == j_.end()) return;
-        if (!it->is_string()) fail(path_ + "." + key, "expected a string");
-        out = it->get<std::string>();
-    }
-    const json* object(const char* key) {
-        used_.insert(key);
-        auto it = j_.find(key);
-        return it == j_.end() ? nullptr : &*it;
-    }
-    std::string child(const char* key) const { return path_ + "." + key; }
-    [[noreturn]] void fail(const std::string& where, const std::string& what) const {
-        throw ConfigError(origin_ + ": " + where + ": " + what);
-    }
-
-private:
-    const json& j_;
-    std::string path_;
-    const std::string& origin_;
-    std::set<std::string> used_;
-};
+using ObjectReader = ConfigObjectReader;
 
 constexpr double kBig = 1e9;
 
+}  // namespace
+
+json config_number(float x) {
+    char buf[32];
+    for (int digits = 6; digits <= 9; ++digits) {
+        std::snprintf(buf, sizeof buf, "%.*g", digits, static_cast<double>(x));
+        const double y = std::strtod(buf, nullptr);
+        if (static_cast<float>(y) == x) return json(y);
+    }
+    return json(static_cast<double>(x));
+}
+
+namespace {
+// Every float of the config in its shortest exact form (the fields are all float).
+void shorten_floats(json& j) {
+    if (j.is_number_float()) {
+        j = config_number(static_cast<float>(j.get<double>()));
+    } else if (j.is_structured()) {
+        for (auto& v : j) shorten_floats(v);
+    }
+}
 }  // namespace
 
 LoadedConfig default_config() {
@@ -91,7 +63,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
     root.string("name", out.name);
     root.string("description", out.description);
 
-    if (const json* b = root.object("battery")) {
+    if (const json* b = root.member("battery")) {
         ObjectReader r(*b, root.child("battery"), origin);
         core::TremblayParams& p = m.battery;
         r.number("cells_in_series", m.cells_in_series, 1, core::kMaxCells);
@@ -110,8 +82,9 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
             r.fail(r.child("exponential_voltage_v"), "must be below full_voltage_v");
         if (!(p.exponential_capacity_ah < p.capacity_ah))
             r.fail(r.child("exponential_capacity_ah"), "must be below capacity_ah");
+        if (const json* e = r.member("extensions")) m.extensions = extensions_from_json(*e, origin, r.child("extensions"));
     }
-    if (const json* s = root.object("monitor")) {
+    if (const json* s = root.member("monitor")) {
         ObjectReader r(*s, root.child("monitor"), origin);
         r.number("reaction_time_s", m.current_filter.time_constant_s, 0, kBig);
         r.number("min_flight_voltage_v", m.flight_time.min_flight_voltage_v, 0, 1000);
@@ -119,6 +92,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         m.flight_time.step_fraction = m.capacity.capacity_step_fraction;
         r.number("max_voltage_variance_v", m.capacity.max_voltage_variance_v, 0, 100);
         r.number("variance_persistence_updates", m.capacity.persistence_updates, 1, 1e6);
+        r.boolean("resistance_keeps_e0", m.capacity.resistance_keeps_e0);
         r.number("short_average_time_s", m.power_average.short_time_s, 0, kBig);
         r.number("long_average_time_s", m.power_average.long_time_s, 0, kBig);
         m.current_average.short_time_s = m.power_average.short_time_s;
@@ -129,14 +103,14 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("takeoff_confirm_s", m.flying.takeoff_confirm_s, 0, kBig);
         r.number("max_resting_current_a", m.initial.max_resting_current_a, 0, kBig);
         r.number("stabilisation_time_s", m.initial.stabilisation_time_s, 0, kBig);
-        if (const json* e = r.object("resistance")) {
+        if (const json* e = r.member("resistance")) {
             ObjectReader rr(*e, r.child("resistance"), origin);
             rr.number("filter_time_constant_s", m.resistance.filter_time_constant_s, 0, kBig);
             rr.number("max_filter_alpha", m.resistance.max_filter_alpha, 0, 1);
             rr.number("blend_gain", m.resistance.blend_gain, 0, kBig);
             rr.number("initial_resistance_ohm", m.resistance.initial_resistance_ohm, 0, 100);
         }
-        if (const json* w = r.object("warnings")) {
+        if (const json* w = r.member("warnings")) {
             ObjectReader rw(*w, r.child("warnings"), origin);
             rw.number("low_capacity_fraction", m.warnings.low_capacity_fraction, 0, 10);
             rw.number("high_resistance_factor", m.warnings.high_resistance_factor, 0, 1000);
@@ -150,7 +124,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
     if (estimator == "reference") m.estimator = core::EstimatorKind::Reference;
     else if (estimator == "joint") m.estimator = core::EstimatorKind::Joint;
     else root.fail("$.estimator", "expected \"reference\" or \"joint\", found \"" + estimator + "\"");
-    if (const json* s = root.object("joint")) {
+    if (const json* s = root.member("joint")) {
         ObjectReader r(*s, root.child("joint"), origin);
         core::JointEstimator::Config& jc = m.joint;
         r.number("resistance_lag_s", jc.resistance.lag_s, 0, 60);
@@ -178,13 +152,8 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("cell_capacity_deficit", ca.capacity_deficit, 0, 1);
         r.number("cell_significance_sigmas", ca.significance_sigmas, 0, 100);
         r.number("cell_min_charge_ah", ca.min_charge_ah, 0, kBig);
-        bool lead = ca.last_cell_includes_lead;
-        if (const json* b = r.object("last_cell_includes_lead")) {
-            if (!b->is_boolean()) r.fail(r.child("last_cell_includes_lead"), "expected true or false");
-            lead = b->get<bool>();
-        }
-        ca.last_cell_includes_lead = lead;
-        if (const json* t = r.object("ocv_cell_voltage_v")) {
+        r.boolean("last_cell_includes_lead", ca.last_cell_includes_lead);
+        if (const json* t = r.member("ocv_cell_voltage_v")) {
             if (!t->is_array() || t->size() < 2 || t->size() > static_cast<size_t>(core::kOcvTableMaxPoints))
                 r.fail(r.child("ocv_cell_voltage_v"), "expected an array of 2.." + std::to_string(core::kOcvTableMaxPoints) +
                                                           " cell voltages at evenly spaced SOC from 0 to 1");
@@ -199,7 +168,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
             }
         }
     }
-    if (const json* s = root.object("sensor")) {
+    if (const json* s = root.member("sensor")) {
         ObjectReader r(*s, root.child("sensor"), origin);
         r.number("shunt_offset_ma", m.shunt.offset_ma, -kBig, kBig);
         r.number("shunt_scale_mv_per_10a", m.shunt.scale_mv_per_10a, 1e-9, kBig);
@@ -248,12 +217,14 @@ json config_to_json(const LoadedConfig& c) {
         {"max_voltage_v", m.max_voltage_v},
         {"min_voltage_v", m.min_voltage_v},
     };
+    if (core::extensions_active(m.extensions)) j["battery"]["extensions"] = extensions_to_json(m.extensions);
     j["monitor"] = {
         {"reaction_time_s", m.current_filter.time_constant_s},
         {"min_flight_voltage_v", m.flight_time.min_flight_voltage_v},
         {"capacity_step_fraction", m.capacity.capacity_step_fraction},
         {"max_voltage_variance_v", m.capacity.max_voltage_variance_v},
         {"variance_persistence_updates", m.capacity.persistence_updates},
+        {"resistance_keeps_e0", m.capacity.resistance_keeps_e0},
         {"short_average_time_s", m.power_average.short_time_s},
         {"long_average_time_s", m.power_average.long_time_s},
         {"remembered_average_power_w", m.power_average.initial_value},
@@ -322,6 +293,7 @@ json config_to_json(const LoadedConfig& c) {
         {"max_cell_voltage_v", m.sensor.max_cell_voltage_v},
         {"max_cell_sum_error_v", m.sensor.max_cell_sum_error_v},
     };
+    shorten_floats(j);
     return j;
 }
 

@@ -1,20 +1,15 @@
 // Monitor configuration from and to JSON (schema "battsim.config", version 1). Unknown
 // keys are errors, so a typo never silently falls back to a default.
 #pragma once
-#include <stdexcept>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "core/config.h"
+#include "host/config_reader.h"  // ConfigError
 
 namespace battsim {
 namespace host {
-
-class ConfigError : public std::runtime_error {
-public:
-    using std::runtime_error::runtime_error;
-};
 
 struct LoadedConfig {
     std::string name;

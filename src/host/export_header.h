@@ -33,6 +33,32 @@ void visit_monitor_config(Config& c, F&& f) {
     f("battery.capacity_ah", c.battery.capacity_ah);
     f("battery.internal_resistance_ohm", c.battery.internal_resistance_ohm);
     f("battery.curve_current_a", c.battery.curve_current_a);
+    f("extensions.rc_count", c.extensions.rc_count);
+    for (int i = 0; i < core::kMaxRcBranches; ++i) {
+        const std::string b = "extensions.rc[" + std::to_string(i) + "].";
+        f(b + "resistance_ohm", c.extensions.rc[i].resistance_ohm);
+        f(b + "time_constant_s", c.extensions.rc[i].time_constant_s);
+    }
+    f("extensions.temperature.enabled", c.extensions.temperature.enabled);
+    f("extensions.temperature.reference_c", c.extensions.temperature.reference_c);
+    f("extensions.temperature.resistance_activation_k", c.extensions.temperature.resistance_activation_k);
+    f("extensions.temperature.polarisation_activation_k", c.extensions.temperature.polarisation_activation_k);
+    f("extensions.temperature.capacity_ah_per_c", c.extensions.temperature.capacity_ah_per_c);
+    f("extensions.temperature.e0_v_per_c", c.extensions.temperature.e0_v_per_c);
+    f("extensions.thermal.enabled", c.extensions.thermal.enabled);
+    f("extensions.thermal.ambient_c", c.extensions.thermal.ambient_c);
+    f("extensions.thermal.thermal_resistance_k_per_w", c.extensions.thermal.thermal_resistance_k_per_w);
+    f("extensions.thermal.time_constant_s", c.extensions.thermal.time_constant_s);
+    f("extensions.hysteresis.magnitude_v", c.extensions.hysteresis.magnitude_v);
+    f("extensions.hysteresis.rate_per_ah", c.extensions.hysteresis.rate_per_ah);
+    f("extensions.ocv.count", c.extensions.ocv.count);
+    f("extensions.ocv.span_ah", c.extensions.ocv.span_ah);
+    for (int i = 0; i < core::kMaxOcvPoints; ++i) {
+        f("extensions.ocv.delta_v[" + std::to_string(i) + "]", c.extensions.ocv.delta_v[i]);
+    }
+    f("extensions.current_sensor.gain", c.extensions.current_sensor.gain);
+    f("extensions.current_sensor.offset_a", c.extensions.current_sensor.offset_a);
+    f("extensions.current_sensor.lead_s", c.extensions.current_sensor.lead_s);
     f("max_voltage_v", c.max_voltage_v);
     f("min_voltage_v", c.min_voltage_v);
     f("current_filter.time_constant_s", c.current_filter.time_constant_s);
@@ -46,6 +72,7 @@ void visit_monitor_config(Config& c, F&& f) {
     f("capacity.persistence_updates", c.capacity.persistence_updates);
     f("capacity.min_capacity_fraction", c.capacity.min_capacity_fraction);
     f("capacity.max_capacity_fraction", c.capacity.max_capacity_fraction);
+    f("capacity.resistance_keeps_e0", c.capacity.resistance_keeps_e0);
     f("flight_time.min_flight_voltage_v", c.flight_time.min_flight_voltage_v);
     f("flight_time.nominal_voltage_v", c.flight_time.nominal_voltage_v);
     f("flight_time.step_fraction", c.flight_time.step_fraction);

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <unistd.h>
 
-#include "host/config_extensions.h"
+#include "host/config_json.h"
 #include "test_fit_synthetic.h"
 
 namespace {
@@ -36,9 +36,9 @@ TEST_CASE("battsim fit writes a loadable config, byte-identical on a rerun", "[f
     REQUIRE(run(args + out1) == 0);
     REQUIRE(run(args + out2) == 0);
     CHECK(slurp(out1) == slurp(out2));
-    const battsim::host::ExtendedConfig c = battsim::host::load_extended_config_file(out1);
-    CHECK(c.extensions.rc_count == 1);
-    CHECK(c.extensions.rc[0].time_constant_s == Approx(4.0).epsilon(0.2));
+    const battsim::host::LoadedConfig c = battsim::host::load_config_file(out1);
+    CHECK(c.monitor.extensions.rc_count == 1);
+    CHECK(c.monitor.extensions.rc[0].time_constant_s == Approx(4.0).epsilon(0.2));
     std::ifstream rin(report);
     const nlohmann::json r = nlohmann::json::parse(rin);
     CHECK(r["schema"] == "battsim.fit");

@@ -28,7 +28,7 @@ TEST_CASE("The fit's simulation is the monitor's model, bit for bit", "[fit]") {
     for (const char* flight : {"30.csv", "34.csv"}) {
         INFO(flight);
         const Trace t = load_trace(kFlights + flight, reader, config);
-        ModelSpec spec = spec_from_config(ExtendedConfig{config, {}});
+        ModelSpec spec = spec_from_config(config);
         SimResult sim;
         simulate(t, spec, InitialMode::Monitor, 0.0f, sim);
         size_t compared = 0;
@@ -126,9 +126,9 @@ TEST_CASE("A fit recovers the parameters of a generated log, with honest uncerta
     const LoadedConfig config = default_config();
     const Trace t = load_trace(path, ReaderOptions{}, config);
     FitOptions fo;
-    fo.params = default_parameters(spec_from_config(ExtendedConfig{config, {}}));
+    fo.params = default_parameters(spec_from_config(config));
     fo.lm.max_iterations = 300;
-    const FitResult r = fit_model({t}, {spec_from_config(ExtendedConfig{config, {}})}, fo);
+    const FitResult r = fit_model({t}, {spec_from_config(config)}, fo);
     std::remove(path.c_str());
     CHECK(r.rmse_v < 0.0056);  // the noise level: nothing systematic left
     const ParamEstimate* rr = nullptr;
@@ -159,7 +159,7 @@ TEST_CASE("Fits are deterministic and per-log parameters separate packs", "[fit]
     // differ in R alone differ in E0 too: both are per log.
     fo.params = {"kappa", "a", "b", "q"};
     fo.per_log_params = {"r", "e0"};
-    const ModelSpec start = spec_from_config(ExtendedConfig{config, {}});
+    const ModelSpec start = spec_from_config(config);
     const FitResult r1 = fit_model(traces, {start}, fo);
     const FitResult r2 = fit_model(traces, {start}, fo);
     REQUIRE(r1.params.size() == r2.params.size());
@@ -177,7 +177,7 @@ TEST_CASE("Fit options are checked", "[fit]") {
     const LoadedConfig config = default_config();
     const std::vector<Trace> traces = {load_trace(path, ReaderOptions{}, config)};
     std::remove(path.c_str());
-    const ModelSpec start = spec_from_config(ExtendedConfig{config, {}});
+    const ModelSpec start = spec_from_config(config);
     FitOptions fo;
     fo.params = {"e0", "resistance"};
     CHECK_THROWS_WITH(fit_model(traces, {start}, fo), Catch::Contains("unknown parameter \"resistance\""));

@@ -19,7 +19,7 @@ ResidualReport run(const synth::Options& o, const std::string& name, const Resid
     const LoadedConfig config = default_config();  // the modified reference set: no extensions
     const std::vector<Trace> traces = {load_trace(path, ReaderOptions{}, config)};
     std::remove(path.c_str());
-    return analyse(traces, spec_from_config(ExtendedConfig{config, {}}), ro);
+    return analyse(traces, spec_from_config(config), ro);
 }
 }  // namespace
 

@@ -16,28 +16,32 @@ void ReferenceCapacityEstimator::configure(const Config& config, const TremblayP
     status_.resistance_ohm = adapted_.resistance_ohm();
 }
 
-void ReferenceCapacityEstimator::evaluate(float used_ah, float current_a, float filtered_current_a) {
-    status_.fixed_model_voltage_v = fixed_.voltage_v(used_ah, current_a, filtered_current_a);
-    status_.adapted_model_voltage_v = adapted_.voltage_v(used_ah, current_a, filtered_current_a);
+void ReferenceCapacityEstimator::evaluate(float used_ah, float current_a, float filtered_current_a,
+                                          float extension_v) {
+    extension_v_ = extension_v;
+    status_.fixed_model_voltage_v = fixed_.voltage_v(used_ah, current_a, filtered_current_a) + extension_v;
+    status_.adapted_model_voltage_v = adapted_voltage_v(used_ah, current_a, filtered_current_a);
 }
 
-void ReferenceCapacityEstimator::evaluate_fixed(float used_ah, float current_a, float filtered_current_a) {
-    status_.fixed_model_voltage_v = fixed_.voltage_v(used_ah, current_a, filtered_current_a);
+void ReferenceCapacityEstimator::evaluate_fixed(float used_ah, float current_a, float filtered_current_a,
+                                                float extension_v) {
+    extension_v_ = extension_v;
+    status_.fixed_model_voltage_v = fixed_.voltage_v(used_ah, current_a, filtered_current_a) + extension_v;
     status_.adapted_model_voltage_v = status_.fixed_model_voltage_v;
 }
 
 void ReferenceCapacityEstimator::update(float used_ah, float current_a, float filtered_current_a,
-                                        float measured_v, float resistance_ohm) {
-    evaluate(used_ah, current_a, filtered_current_a);
+                                        float measured_v, float resistance_ohm, float extension_v) {
+    evaluate(used_ah, current_a, filtered_current_a, extension_v);
     float error_v = measured_v - status_.adapted_model_voltage_v;
     if (fabsf(error_v) <= config_.max_voltage_variance_v) {
         beyond_count_ = 0;
         return;
     }
     if (resistance_ohm > 0.0f && resistance_ohm != adapted_.resistance_ohm()) {
-        adapted_.set_resistance_ohm(resistance_ohm);
+        adapted_.set_resistance_ohm(resistance_ohm, config_.resistance_keeps_e0);
         status_.resistance_ohm = resistance_ohm;
-        status_.adapted_model_voltage_v = adapted_.voltage_v(used_ah, current_a, filtered_current_a);
+        status_.adapted_model_voltage_v = adapted_voltage_v(used_ah, current_a, filtered_current_a);
         error_v = measured_v - status_.adapted_model_voltage_v;
         if (fabsf(error_v) <= config_.max_voltage_variance_v) {
             beyond_count_ = 0;
@@ -55,7 +59,7 @@ void ReferenceCapacityEstimator::update(float used_ah, float current_a, float fi
         status_.capacity_steps += error_v > 0.0f ? 1 : -1;
         adapted_.set_capacity_ah(next);
         status_.capacity_ah = next;
-        status_.adapted_model_voltage_v = adapted_.voltage_v(used_ah, current_a, filtered_current_a);
+        status_.adapted_model_voltage_v = adapted_voltage_v(used_ah, current_a, filtered_current_a);
     }
 }
 

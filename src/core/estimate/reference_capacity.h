@@ -17,6 +17,9 @@ public:
         int persistence_updates = 5;
         float min_capacity_fraction = 0.2f;    // bounds on the estimate, of the configured capacity
         float max_capacity_fraction = 3.0f;
+        // Adopting a resistance keeps the model's E0 (see TremblayModel::set_resistance_ohm);
+        // off = the dissertation's behaviour, on for fitted models with a large curve current.
+        bool resistance_keeps_e0 = false;
     };
     struct Status {
         float capacity_ah = 0.0f;
@@ -28,23 +31,31 @@ public:
 
     void configure(const Config& config, const TremblayParams& params);
     // used_ah: charge drawn since full; resistance_ohm: the online estimate (≤ 0 = none yet).
-    void update(float used_ah, float current_a, float filtered_current_a, float measured_v, float resistance_ohm);
+    // extension_v: what the configured model extensions add to the plain model's voltage
+    // (RC branches, temperature, ...); both models carry it, so only the capacity and the
+    // resistance are adapted.
+    void update(float used_ah, float current_a, float filtered_current_a, float measured_v, float resistance_ohm,
+                float extension_v = 0.0f);
     // Model outputs without adapting (used while not flying).
-    void evaluate(float used_ah, float current_a, float filtered_current_a);
+    void evaluate(float used_ah, float current_a, float filtered_current_a, float extension_v = 0.0f);
     // The fixed model only (the adapted output then mirrors it).
-    void evaluate_fixed(float used_ah, float current_a, float filtered_current_a);
+    void evaluate_fixed(float used_ah, float current_a, float filtered_current_a, float extension_v = 0.0f);
 
     const Status& status() const { return status_; }
     const TremblayModel& fixed_model() const { return fixed_; }
     const TremblayModel& adapted_model() const { return adapted_; }
 
 private:
+    float adapted_voltage_v(float used_ah, float current_a, float filtered_current_a) const {
+        return adapted_.voltage_v(used_ah, current_a, filtered_current_a) + extension_v_;
+    }
     Config config_;
     Status status_;
     TremblayModel fixed_;
     TremblayModel adapted_;
     float rated_capacity_ah_ = 0.0f;
     int beyond_count_ = 0;
+    float extension_v_ = 0.0f;
 };
 
 }  // namespace core

@@ -53,7 +53,17 @@ void TremblayModel::set_capacity_ah(float capacity_ah) {
     derive();
 }
 
-void TremblayModel::set_resistance_ohm(float resistance_ohm) {
+void TremblayModel::set_resistance_ohm(float resistance_ohm, bool keep_e0) {
+    if (keep_e0) {
+        // E0 = V_exp + R·i of the curve points: to keep the open-circuit voltage, the points
+        // (measured at the curve current) move by −ΔR·i. With a fitted large curve current
+        // the re-derived E0 would otherwise move by volts.
+        const float r_ohm = resistance_ohm >= 0.0f ? resistance_ohm : 0.0f;
+        const float shift_v = (r_ohm - params_.internal_resistance_ohm) * params_.curve_current_a;
+        params_.full_voltage_v -= shift_v;
+        params_.exponential_voltage_v -= shift_v;
+        params_.nominal_zone_voltage_v -= shift_v;
+    }
     params_.internal_resistance_ohm = resistance_ohm;
     derive();
 }

@@ -33,8 +33,10 @@ public:
 
     // Scales Q and the exponential- and nominal-zone capacities by the same ratio.
     void set_capacity_ah(float capacity_ah);
-    // Re-derives E0 (and K) for a new internal resistance.
-    void set_resistance_ohm(float resistance_ohm);
+    // Re-derives E0 (and K) for a new internal resistance: E0 moves by ΔR × the curve
+    // current (the reference monitor's behaviour), or, with keep_e0, the curve points move
+    // instead so that the open-circuit voltage stays.
+    void set_resistance_ohm(float resistance_ohm, bool keep_e0 = false);
 
     // Charge drawn at which the model, at a steady current, gives `voltage_v`
     // (bisection; the model is monotonic in it). Clamped to the model's range.

@@ -334,12 +334,12 @@ core::TremblayParams params_from_discharge(const DischargeResult& r, const core:
     return p;
 }
 
-ExtendedConfig start_config_from_discharge(const DischargeResult& r, const ExtendedConfig& base) {
-    ExtendedConfig out = base;
-    out.config.monitor.battery = params_from_discharge(r, base.config.monitor.battery);
+LoadedConfig start_config_from_discharge(const DischargeResult& r, const LoadedConfig& base) {
+    LoadedConfig out = base;
+    out.monitor.battery = params_from_discharge(r, base.monitor.battery);
     const size_t slash = r.path.find_last_of('/');
-    out.config.name = "discharge-" + (slash == std::string::npos ? r.path : r.path.substr(slash + 1));
-    out.config.description = "Tremblay points read off the discharge " + r.path + " by battsim discharge " BATTSIM_VERSION
+    out.name = "discharge-" + (slash == std::string::npos ? r.path : r.path.substr(slash + 1));
+    out.description = "Tremblay points read off the discharge " + r.path + " by battsim discharge " BATTSIM_VERSION
                              " (start values for battsim fit; the resistance is the base config's)";
     return out;
 }

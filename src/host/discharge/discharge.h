@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/model/tremblay.h"
-#include "host/config_extensions.h"
+#include "host/config_json.h"
 #include "host/io/sample_reader.h"
 
 namespace battsim {
@@ -85,7 +85,7 @@ void plot_discharge(const DischargeResult& r, const std::string& path);
 // cannot separate it from E0). Throws std::invalid_argument if no zones were found.
 core::TremblayParams params_from_discharge(const DischargeResult& r, const core::TremblayParams& keep);
 // `base` with params_from_discharge() written in, named after the log: a start for `battsim fit`.
-ExtendedConfig start_config_from_discharge(const DischargeResult& r, const ExtendedConfig& base);
+LoadedConfig start_config_from_discharge(const DischargeResult& r, const LoadedConfig& base);
 
 }  // namespace discharge
 }  // namespace host

@@ -90,7 +90,7 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
     std::vector<Trace> traces;
     for (const std::string& path : job.logs) {
         if (progress) *progress << "battsim fit: reading " << path << "\n";
-        traces.push_back(load_trace(path, job.reader, job.config.config));
+        traces.push_back(load_trace(path, job.reader, job.config));
     }
     ModelSpec start = spec_from_config(job.config);
     FitOptions options = job.options;
@@ -122,7 +122,7 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
     const FitResult result = fit_model(traces, {start}, options);
     nlohmann::json report = fit_result_to_json(result, options);
     report["battsim_version"] = BATTSIM_VERSION;
-    report["config_start"] = job.config.config.name;
+    report["config_start"] = job.config.name;
     report["extensions_added"] = job.add;
 
     // Baseline: the starting config as the monitor runs it, for the before/after numbers.
@@ -138,7 +138,7 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
     nlohmann::json test_json = nlohmann::json::array();
     for (const std::string& path : job.test_logs) {
         if (progress) *progress << "battsim fit: testing on " << path << "\n";
-        tests.push_back(load_trace(path, job.reader, job.config.config));
+        tests.push_back(load_trace(path, job.reader, job.config));
         // A test log starts like the fitted ones: full (zero) or as the monitor finds it.
         const InitialMode mode = options.initial == InitialMode::Zero ? InitialMode::Zero : InitialMode::Monitor;
         const LogFitStats s = evaluate(tests.back(), result.specs[0], mode, 0.0f);
@@ -152,25 +152,25 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
 
     // Configs: the start config with the fitted model written in.
     auto make_config = [&](const ModelSpec& spec, const std::string& name) {
-        ExtendedConfig c = job.config;
+        LoadedConfig c = job.config;
         spec_to_config(spec, c);
-        c.config.name = name;
-        c.config.description = "Fitted by battsim fit " BATTSIM_VERSION " on " + join_labels(traces) +
+        c.name = name;
+        c.description = "Fitted by battsim fit " BATTSIM_VERSION " on " + join_labels(traces) +
                                " (initial " + to_string(options.initial) + ", window " + to_string(options.window) +
-                               ", RMSE " + std::to_string(round_sig(result.rmse_v, 4)) + " V) from " + job.config.config.name;
+                               ", RMSE " + std::to_string(round_sig(result.rmse_v, 4)) + " V) from " + job.config.name;
         return c;
     };
     nlohmann::json written = nlohmann::json::array();
     if (!job.output_config.empty()) {
         const std::string name = job.name.empty() ? "fitted-" + join_labels(traces) : job.name;
-        write_file_atomic(job.output_config, extended_config_to_json(make_config(result.specs[0], name)).dump(2) + "\n");
+        write_file_atomic(job.output_config, config_to_json(make_config(result.specs[0], name)).dump(2) + "\n");
         written.push_back(job.output_config);
     }
     if (!job.output_dir.empty()) {
         for (size_t t = 0; t < traces.size(); ++t) {
             const std::string name = (job.name.empty() ? std::string("fitted") : job.name) + "-" + traces[t].label;
             const std::string path = job.output_dir + "/" + name + ".json";
-            write_file_atomic(path, extended_config_to_json(make_config(result.specs[t], name)).dump(2) + "\n");
+            write_file_atomic(path, config_to_json(make_config(result.specs[t], name)).dump(2) + "\n");
             written.push_back(path);
         }
     }

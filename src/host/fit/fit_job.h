@@ -7,7 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "host/config_extensions.h"
+#include "host/config_json.h"
 #include "host/fit/fit.h"
 #include "host/io/sample_reader.h"
 
@@ -30,7 +30,7 @@ struct FitJob {
     std::vector<std::string> logs;
     std::vector<std::string> test_logs;  // evaluated with the fitted model, not fitted
     ReaderOptions reader;
-    ExtendedConfig config;              // start values and everything not fitted
+    LoadedConfig config;              // start values and everything not fitted
     std::vector<std::string> add;       // enable_extension() arguments
     FitOptions options;                 // params empty = default_parameters()
     std::string output_config;          // fitted config (shared parameters only)

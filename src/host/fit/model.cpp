@@ -11,20 +11,21 @@ namespace battsim {
 namespace host {
 namespace fit {
 
-ModelSpec spec_from_config(const ExtendedConfig& c) {
+ModelSpec spec_from_config(const LoadedConfig& c) {
     ModelSpec s;
-    s.battery = c.config.monitor.battery;
-    s.ext = c.extensions;
-    s.reaction_time_s = c.config.monitor.current_filter.time_constant_s;
+    s.battery = c.monitor.battery;
+    s.ext = c.monitor.extensions;
+    s.reaction_time_s = c.monitor.current_filter.time_constant_s;
     return s;
 }
 
-void spec_to_config(const ModelSpec& s, ExtendedConfig& c) {
-    c.config.monitor.battery = s.battery;
-    c.extensions = s.ext;
-    c.config.monitor.current_filter.time_constant_s = s.reaction_time_s;
-    // The online resistance estimate starts from zero unless told otherwise; the warning
-    // threshold is relative to the configured resistance, which is now the fitted one.
+void spec_to_config(const ModelSpec& s, LoadedConfig& c) {
+    c.monitor.battery = s.battery;
+    c.monitor.extensions = s.ext;
+    c.monitor.current_filter.time_constant_s = s.reaction_time_s;
+    // Fitted curve points encode E0 and K, often with a large curve current: the reference
+    // estimator must keep E0 when it adopts a resistance (TremblayModel::set_resistance_ohm).
+    c.monitor.capacity.resistance_keeps_e0 = true;
 }
 
 NaturalParams natural_from_params(const core::TremblayParams& p) {

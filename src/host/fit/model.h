@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "core/model/extensions/extended_model.h"
-#include "host/config_extensions.h"
+#include "host/config_json.h"
 #include "host/fit/trace.h"
 
 namespace battsim {
@@ -18,9 +18,9 @@ struct ModelSpec {
     float reaction_time_s = 30.0f;  // time constant of the filtered current i*
 };
 
-ModelSpec spec_from_config(const ExtendedConfig& c);
+ModelSpec spec_from_config(const LoadedConfig& c);
 // Writes the battery parameters, the extensions and the reaction time into `c`.
-void spec_to_config(const ModelSpec& s, ExtendedConfig& c);
+void spec_to_config(const ModelSpec& s, LoadedConfig& c);
 
 // The Tremblay model's own parameters V = E0 − R·i − K·Q/(Q−it)·(i* + it) + A·e^(−B·it),
 // with K written as kappa·K_max: the config's curve-point encoding can only express

@@ -23,6 +23,9 @@ Trace load_trace(const std::string& path, const ReaderOptions& reader, const Loa
     ReplayOptions options;
     options.reader = reader;
     options.config = config;
+    // The trace is the measurement: replay it with the plain model, so the flight window and
+    // the settling point do not depend on the extensions being fitted.
+    options.config.monitor.extensions = core::ModelExtensions{};
     bool first = true;
     uint64_t t0_us = 0;
     auto observe = [&](const core::Sample& s, const core::MonitorStatus& st) {

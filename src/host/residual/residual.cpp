@@ -969,22 +969,22 @@ nlohmann::json run_residual_job(const ResidualJob& job, ResidualReport* out, std
     std::vector<Trace> traces;
     for (const std::string& path : job.logs) {
         if (progress) *progress << "battsim residual: reading " << path << "\n";
-        traces.push_back(fit::load_trace(path, job.reader, job.config.config));
+        traces.push_back(fit::load_trace(path, job.reader, job.config));
     }
     const ModelSpec spec = fit::spec_from_config(job.config);
     if (progress) *progress << "battsim residual: analysing\n";
     ResidualReport rep = analyse(traces, spec, job.options);
     nlohmann::json j = report_to_json(rep, job.options);
-    j["config"] = job.config.config.name;
+    j["config"] = job.config.name;
     if (!job.output_config.empty()) {
-        ExtendedConfig c = job.config;
+        LoadedConfig c = job.config;
         fit::spec_to_config(rep.final_specs[0], c);
-        c.config.name = job.name.empty() ? job.config.config.name + "-residual" : job.name;
+        c.name = job.name.empty() ? job.config.name + "-residual" : job.name;
         std::string effects;
         for (const std::string& e : rep.effects) effects += (effects.empty() ? "" : ", ") + e;
-        c.config.description = "battsim residual " BATTSIM_VERSION " on " + std::to_string(traces.size()) + " log(s) from " +
-                               job.config.config.name + "; effects added: " + (effects.empty() ? "none" : effects);
-        write_file_atomic(job.output_config, extended_config_to_json(c).dump(2) + "\n");
+        c.description = "battsim residual " BATTSIM_VERSION " on " + std::to_string(traces.size()) + " log(s) from " +
+                               job.config.name + "; effects added: " + (effects.empty() ? "none" : effects);
+        write_file_atomic(job.output_config, config_to_json(c).dump(2) + "\n");
         j["config_written"] = job.output_config;
     }
     if (!job.plot_path.empty()) {

@@ -17,7 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "host/config_extensions.h"
+#include "host/config_json.h"
 #include "host/fit/fit.h"
 #include "host/io/sample_reader.h"
 
@@ -114,7 +114,7 @@ void plot_residual(const std::vector<fit::Trace>& traces, const ResidualReport& 
 struct ResidualJob {
     std::vector<std::string> logs;
     ReaderOptions reader;
-    ExtendedConfig config;
+    LoadedConfig config;
     ResidualOptions options;
     std::string output_config;  // the final model written into the config
     std::string name;

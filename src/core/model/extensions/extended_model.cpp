@@ -16,6 +16,12 @@ constexpr float kHysteresisMinCurrentA = 1.0e-3f;
 constexpr float kMinTimeConstantS = 1.0e-3f;
 }  // namespace
 
+bool extensions_active(const ModelExtensions& e) {
+    return e.rc_count > 0 || e.temperature.enabled || e.thermal.enabled || e.hysteresis.magnitude_v != 0.0f ||
+           e.ocv.count >= 2 || e.current_sensor.gain != 1.0f || e.current_sensor.offset_a != 0.0f ||
+           e.current_sensor.lead_s != 0.0f;
+}
+
 void ExtendedModel::configure(const TremblayParams& params, const ModelExtensions& extensions) {
     base_.configure(params);
     ext_ = extensions;
@@ -29,6 +35,7 @@ void ExtendedModel::configure(const TremblayParams& params, const ModelExtension
     if (!(ext_.ocv.span_ah > 0.0f)) ext_.ocv.count = 0;
     if (!(ext_.thermal.time_constant_s > kMinTimeConstantS)) ext_.thermal.time_constant_s = kMinTimeConstantS;
     if (!(ext_.hysteresis.rate_per_ah >= 0.0f)) ext_.hysteresis.rate_per_ah = 0.0f;
+    active_ = extensions_active(ext_);
     reset();
 }
 

@@ -78,6 +78,9 @@ struct ModelExtensions {
     CurrentSensorCorrection current_sensor;
 };
 
+// True if any extension changes the model voltage or the current (all-zero = plain model).
+bool extensions_active(const ModelExtensions& e);
+
 class ExtendedModel {
 public:
     struct Status {
@@ -107,6 +110,7 @@ public:
     // (bisection over the model's range), for the monitor's initial state.
     float used_ah_at_voltage(float voltage_v, float current_a) const;
 
+    bool active() const { return active_; }
     const TremblayModel& base() const { return base_; }
     const ModelExtensions& extensions() const { return ext_; }
     const Status& status() const { return status_; }
@@ -124,6 +128,7 @@ private:
     float previous_current_a_ = 0.0f;
     float current_slope_a_per_s_ = 0.0f;
     bool have_current_ = false;
+    bool active_ = false;
 };
 
 }  // namespace core

@@ -1,0 +1,90 @@
+// The strict JSON object reader behind every config section: each member read is
+// remembered, so that leftovers are reported as unknown keys when the reader goes out of
+// scope (a typo never silently falls back to a default), and every number must be finite
+// and in range. Messages name the file and the JSON path: "cfg.json: $.battery.x: ...".
+#pragma once
+#include <cmath>
+#include <exception>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace battsim {
+namespace host {
+
+class ConfigError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+class ConfigObjectReader {
+public:
+    ConfigObjectReader(const nlohmann::json& j, std::string path, const std::string& origin)
+        : j_(j), path_(std::move(path)), origin_(origin) {
+        if (!j.is_object()) fail(path_, "expected an object");
+    }
+    ConfigObjectReader(const ConfigObjectReader&) = delete;
+    ConfigObjectReader& operator=(const ConfigObjectReader&) = delete;
+    // Unknown keys are found when the section has been read; not while another error unwinds.
+    ~ConfigObjectReader() noexcept(false) {
+        if (std::uncaught_exceptions() > 0) return;
+        for (auto it = j_.begin(); it != j_.end(); ++it) {
+            if (!used_.count(it.key())) fail(path_ + "." + it.key(), "unknown key");
+        }
+    }
+    // A missing member keeps `out` (the default).
+    template <typename T>
+    void number(const char* key, T& out, double lo, double hi) {
+        if (const nlohmann::json* v = member(key)) out = static_cast<T>(check(*v, child(key), lo, hi));
+    }
+    void string(const char* key, std::string& out) {
+        if (const nlohmann::json* v = member(key)) {
+            if (!v->is_string()) fail(child(key), "expected a string");
+            out = v->get<std::string>();
+        }
+    }
+    void boolean(const char* key, bool& out) {
+        if (const nlohmann::json* v = member(key)) {
+            if (!v->is_boolean()) fail(child(key), "expected true or false");
+            out = v->get<bool>();
+        }
+    }
+    // The member, or nullptr when absent; marked as known either way.
+    const nlohmann::json* member(const char* key) {
+        used_.insert(key);
+        auto it = j_.find(key);
+        return it == j_.end() ? nullptr : &*it;
+    }
+    // A number anywhere below this object (array elements), checked like number().
+    double check(const nlohmann::json& v, const std::string& where, double lo, double hi) const {
+        if (!v.is_number()) fail(where, "expected a number");
+        const double x = v.get<double>();
+        if (!std::isfinite(x) || x < lo || x > hi) {
+            std::ostringstream m;
+            m << "value " << x << " out of range [" << lo << ", " << hi << "]";
+            fail(where, m.str());
+        }
+        return x;
+    }
+    std::string child(const char* key) const { return path_ + "." + key; }
+    const std::string& origin() const { return origin_; }
+    [[noreturn]] void fail(const std::string& where, const std::string& what) const {
+        throw ConfigError(origin_ + ": " + where + ": " + what);
+    }
+
+private:
+    const nlohmann::json& j_;
+    std::string path_;
+    const std::string& origin_;
+    std::set<std::string> used_;
+};
+
+// The shortest decimal that reads back as the same float, so written configs stay readable
+// (0.004, not 0.004000000189989805) and still round-trip exactly.
+nlohmann::json config_number(float x);
+
+}  // namespace host
+}  // namespace battsim
