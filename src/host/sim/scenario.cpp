@@ -119,9 +119,9 @@ void resolve_defaults(Scenario& s) {
     const double cap = p.capacity_ah;
     // Generic high-rate LiPo: resistances inversely proportional to capacity (6.2 mΩ·Ah
     // ohmic, 1.55 and 2.3 mΩ·Ah in the two polarisation branches at 25 °C).
-    if (p.r0_ohm <= 0.0) p.r0_ohm = 0.0062 / cap;
-    if (p.r1_ohm <= 0.0) p.r1_ohm = 0.00155 / cap;
-    if (p.r2_ohm <= 0.0) p.r2_ohm = 0.0023 / cap;
+    if (p.r0_ohm < 0.0) p.r0_ohm = 0.0062 / cap;
+    if (p.r1_ohm < 0.0) p.r1_ohm = 0.00155 / cap;
+    if (p.r2_ohm < 0.0) p.r2_ohm = 0.0023 / cap;
     const double size = p.cells * cap;  // cell·Ah: mass and heat capacity scale with it
     if (p.heat_capacity_j_per_k <= 0.0) p.heat_capacity_j_per_k = 30.6 * size;
     if (p.conductance_ground_w_per_k <= 0.0) p.conductance_ground_w_per_k = 0.4 * pow23(size / 6.2);

@@ -36,8 +36,9 @@ struct WeakCell {
 struct PackSpec {
     int cells = 4;
     double capacity_ah = 1.55;  // healthy cell capacity, empty (3.3 V rest) to full (4.2 V)
-    // Per-cell resistances at 25 °C; 0 = derived from the capacity (a generic high-rate LiPo).
-    double r0_ohm = 0.0, r1_ohm = 0.0, r2_ohm = 0.0;
+    // Per-cell resistances at 25 °C; unset (< 0) = derived from the capacity (a generic
+    // high-rate LiPo); 0 = no such branch (a plant without polarisation is a valid control).
+    double r0_ohm = -1.0, r1_ohm = -1.0, r2_ohm = -1.0;
     double tau1_s = 1.5, tau2_s = 40.0;
     double capacity_spread = 0.015;    // cell-to-cell relative standard deviation (seeded)
     double resistance_spread = 0.04;
