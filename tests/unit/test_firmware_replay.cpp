@@ -191,6 +191,41 @@ TEST_CASE("firmware monitor's SD series equals battsim replay of the firmware lo
     }
 }
 
+TEST_CASE("firmware built with a fitted config runs its model extensions as battsim replay does, byte for byte",
+          "[firmware][replay][extension]") {
+    // configs/fitted/pbms-flight30-cnhl5.json: two RC branches, self-heating, Arrhenius R and K.
+    const std::string dir = fwtest::temp_dir("fwfitted");
+    const int flight = 30;
+    const std::string sd = dir + "/sd";
+    REQUIRE(mkdir(sd.c_str(), 0755) == 0);
+    const std::string logger_uart = dir + "/logger.uart";
+    const fwtest::Run m = fwtest::run(BATTSIM_FW_HOST_FITTED_BINARY, "--sd " + fwtest::q(sd) + " " + fwtest::q(flight_path(flight)));
+    INFO(m.err);
+    REQUIRE(m.exit_code == 0);
+    run_fw_host("--program logger --uart " + fwtest::q(logger_uart) + " " + fwtest::q(flight_path(flight)));
+    const host::serial::DecodedStream rec = host::serial::decode_device_stream(fwtest::read_file(logger_uart));
+    REQUIRE(rec.corrupt == 0);
+    std::string csv;
+    for (const std::string& l : rec.csv_lines) csv += l + "\n";
+    const std::string logged = dir + "/logger.csv";
+    fwtest::write_file(logged, csv);
+    const std::string replay_series = dir + "/replay.csv";
+    const fwtest::Run r = fwtest::run(BATTSIM_BINARY, "replay " + fwtest::q(logged) + " --config " +
+                                                          fwtest::q(BATTSIM_FW_FITTED_CONFIG) + " --series " +
+                                                          fwtest::q(replay_series));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const std::string expected = fwtest::read_file(replay_series);
+    const std::string sd_series = fwtest::read_file(sd + "/battsim/log0001.csv");
+    REQUIRE(sd_series.size() == expected.size());
+    REQUIRE(sd_series == expected);
+    // And the extensions were really on: the plain build's series differs.
+    const std::string plain_sd = dir + "/sd-plain";
+    REQUIRE(mkdir(plain_sd.c_str(), 0755) == 0);
+    run_fw_host("--sd " + fwtest::q(plain_sd) + " " + fwtest::q(flight_path(flight)));
+    CHECK(fwtest::read_file(plain_sd + "/battsim/log0001.csv") != sd_series);
+}
+
 TEST_CASE("firmware statuses equal replay's bit for bit on the logger's record, cells included", "[firmware][replay]") {
     const host::LoadedConfig config = reference_config();
     const std::string dir = fwtest::temp_dir("fwexact");
