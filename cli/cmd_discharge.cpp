@@ -37,19 +37,8 @@ std::function<int()> setup(CLI::App& sub) {
     add_input_options(sub, a->input);
     return [a]() -> int {
         host::discharge::DischargeOptions opt;
-        InputArgs no_config = a->input;
-        no_config.config.clear();
-        host::LoadedConfig unused;
-        int rc = resolve_input(no_config, opt.reader, unused);
-        if (rc != kExitOk) return rc;
-        host::ExtendedConfig config{host::default_config(), {}};
-        try {
-            if (!a->input.config.empty()) config = host::load_extended_config_file(a->input.config);
-        } catch (const host::ConfigError& e) {
-            std::cerr << "battsim discharge: config: " << e.what() << "\n";
-            return kExitConfigError;
-        }
-        if (!a->input.estimator.empty()) config.config.monitor.estimator = unused.monitor.estimator;  // --estimator wins
+        host::ExtendedConfig config;
+        if (int rc = resolve_extended_input(a->input, "battsim discharge", opt.reader, config)) return rc;
         opt.reader.shunt = config.config.monitor.shunt;
         opt.min_voltage_v = a->min_v > 0 ? a->min_v : config.config.monitor.min_voltage_v;
         opt.max_voltage_v = a->max_v > 0 ? a->max_v : config.config.monitor.max_voltage_v;

@@ -4,7 +4,6 @@
 #include "command.h"
 #include "common_options.h"
 #include "host/fit/fit_job.h"
-#include "host/io/atomic_file.h"
 
 namespace battsim {
 namespace cli {
@@ -51,20 +50,9 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_flag("--json", a->json, "Print the fit report JSON on standard output");
     add_input_options(sub, a->input);
     return [a]() -> int {
+        const char* me = "battsim fit";
         host::fit::FitJob job;
-        InputArgs no_config = a->input;
-        no_config.config.clear();
-        host::LoadedConfig unused;
-        int rc = resolve_input(no_config, job.reader, unused);
-        if (rc != kExitOk) return rc;
-        try {
-            job.config = a->input.config.empty() ? host::ExtendedConfig{host::default_config(), {}}
-                                                 : host::load_extended_config_file(a->input.config);
-        } catch (const host::ConfigError& e) {
-            std::cerr << "battsim fit: config: " << e.what() << "\n";
-            return kExitConfigError;
-        }
-        if (!a->input.estimator.empty()) job.config.config.monitor.estimator = unused.monitor.estimator;  // --estimator wins
+        if (int rc = resolve_extended_input(a->input, me, job.reader, job.config)) return rc;
         job.logs = a->logs;
         job.options.max_capacity_factor = a->max_capacity_factor;
         job.test_logs = a->tests;
@@ -78,39 +66,15 @@ std::function<int()> setup(CLI::App& sub) {
         job.options.max_points_per_log = a->max_points;
         job.options.lm.max_iterations = a->max_iterations;
         job.options.equal_log_weights = !a->sample_weights;
-        try {
+        nlohmann::json report;
+        const int rc = run_job(me, [&] {
             job.options.initial = host::fit::parse_initial_mode(a->initial);
             job.options.window = host::fit::parse_window(a->window);
-        } catch (const std::invalid_argument& e) {
-            std::cerr << "battsim fit: " << e.what() << "\n";
-            return kExitUsage;
-        }
-        nlohmann::json report;
-        try {
             report = host::fit::run_fit_job(job, &std::cerr);
-        } catch (const host::InputError& e) {
-            std::cerr << "battsim fit: " << e.what() << "\n";
-            return kExitInputError;
-        } catch (const std::invalid_argument& e) {
-            std::cerr << "battsim fit: " << e.what() << "\n";
-            return kExitUsage;
-        } catch (const std::runtime_error& e) {
-            std::cerr << "battsim fit: " << e.what() << "\n";
-            return kExitOutputError;
-        }
-        const std::string text = report.dump(2) + "\n";
-        try {
-            if (!a->report.empty()) host::write_file_atomic(a->report, text);
-        } catch (const std::runtime_error& e) {
-            std::cerr << "battsim fit: " << e.what() << "\n";
-            return kExitOutputError;
-        }
-        if (a->json) {
-            std::cout << text;
-        } else {
-            host::fit::print_fit_brief(report, std::cout);
-        }
-        return kExitOk;
+        });
+        if (rc != kExitOk) return rc;
+        return finish_report(me, report, a->report, a->json,
+                             [&](std::ostream& out) { host::fit::print_fit_brief(report, out); });
     };
 }
 

@@ -3,7 +3,6 @@
 
 #include "command.h"
 #include "common_options.h"
-#include "host/io/atomic_file.h"
 #include "host/residual/residual.h"
 
 namespace battsim {
@@ -49,20 +48,9 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_flag("--json", a->json, "Print the report JSON on standard output");
     add_input_options(sub, a->input);
     return [a]() -> int {
+        const char* me = "battsim residual";
         host::residual::ResidualJob job;
-        InputArgs no_config = a->input;
-        no_config.config.clear();
-        host::LoadedConfig unused;
-        int rc = resolve_input(no_config, job.reader, unused);
-        if (rc != kExitOk) return rc;
-        try {
-            job.config = a->input.config.empty() ? host::ExtendedConfig{host::default_config(), {}}
-                                                 : host::load_extended_config_file(a->input.config);
-        } catch (const host::ConfigError& e) {
-            std::cerr << "battsim residual: config: " << e.what() << "\n";
-            return kExitConfigError;
-        }
-        if (!a->input.estimator.empty()) job.config.config.monitor.estimator = unused.monitor.estimator;  // --estimator wins
+        if (int rc = resolve_extended_input(a->input, me, job.reader, job.config)) return rc;
         job.logs = a->logs;
         job.options.max_capacity_factor = a->max_capacity_factor;
         job.output_config = a->output;
@@ -77,33 +65,14 @@ std::function<int()> setup(CLI::App& sub) {
         job.options.max_iterations = a->max_iterations;
         host::residual::ResidualReport report;
         nlohmann::json j;
-        try {
+        const int rc = run_job(me, [&] {
             job.options.window = host::fit::parse_window(a->window);
             job.options.initial = host::fit::parse_initial_mode(a->initial);
             j = host::residual::run_residual_job(job, &report, &std::cerr);
-        } catch (const host::InputError& e) {
-            std::cerr << "battsim residual: " << e.what() << "\n";
-            return kExitInputError;
-        } catch (const std::invalid_argument& e) {
-            std::cerr << "battsim residual: " << e.what() << "\n";
-            return kExitUsage;
-        } catch (const std::runtime_error& e) {
-            std::cerr << "battsim residual: " << e.what() << "\n";
-            return kExitOutputError;
-        }
-        const std::string text = j.dump(2) + "\n";
-        try {
-            if (!a->report.empty()) host::write_file_atomic(a->report, text);
-        } catch (const std::runtime_error& e) {
-            std::cerr << "battsim residual: " << e.what() << "\n";
-            return kExitOutputError;
-        }
-        if (a->json) {
-            std::cout << text;
-        } else {
-            host::residual::print_report(report, std::cout);
-        }
-        return kExitOk;
+        });
+        if (rc != kExitOk) return rc;
+        return finish_report(me, j, a->report, a->json,
+                             [&](std::ostream& out) { host::residual::print_report(report, out); });
     };
 }
 

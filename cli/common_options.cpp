@@ -1,8 +1,10 @@
 #include "common_options.h"
 
 #include <iostream>
+#include <stdexcept>
 
 #include "command.h"
+#include "host/io/atomic_file.h"
 
 namespace battsim {
 namespace cli {
@@ -74,6 +76,75 @@ int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedC
     } else if (!a.estimator.empty()) {
         std::cerr << "battsim: --estimator: expected reference or joint, found \"" << a.estimator << "\"\n";
         return kExitUsage;
+    }
+    return kExitOk;
+}
+
+host::LogSettingStrings setting_strings(const InputArgs& a) {
+    host::LogSettingStrings s;
+    s.config = a.config;
+    s.format = a.format;
+    s.current_source = a.current_source;
+    s.time_col = a.time_col;
+    s.time_unit = a.time_unit;
+    s.voltage_col = a.voltage_col;
+    s.current_col = a.current_col;
+    s.current_unit = a.current_unit;
+    s.temperature_col = a.temperature_col;
+    s.cell_cols = a.cell_cols;
+    s.negative_discharge = a.negative_discharge;
+    s.estimator = a.estimator;
+    return s;
+}
+
+int resolve_extended_input(const InputArgs& a, const std::string& command, host::ReaderOptions& reader,
+                           host::ExtendedConfig& config) {
+    // Everything but the config through resolve_input; the config is loaded here with its
+    // extensions.
+    InputArgs no_config = a;
+    no_config.config.clear();
+    host::LoadedConfig plain;
+    const int rc = resolve_input(no_config, reader, plain);
+    if (rc != kExitOk) return rc;
+    try {
+        config = a.config.empty() ? host::ExtendedConfig{host::default_config(), {}} : host::load_extended_config_file(a.config);
+    } catch (const host::ConfigError& e) {
+        std::cerr << command << ": config: " << e.what() << "\n";
+        return kExitConfigError;
+    }
+    if (!a.estimator.empty()) config.config.monitor.estimator = plain.monitor.estimator;  // --estimator wins
+    return kExitOk;
+}
+
+int run_job(const std::string& command, const std::function<void()>& job) {
+    try {
+        job();
+    } catch (const host::InputError& e) {
+        std::cerr << command << ": " << e.what() << "\n";
+        return kExitInputError;
+    } catch (const std::invalid_argument& e) {
+        std::cerr << command << ": " << e.what() << "\n";
+        return kExitUsage;
+    } catch (const std::runtime_error& e) {
+        std::cerr << command << ": " << e.what() << "\n";
+        return kExitOutputError;
+    }
+    return kExitOk;
+}
+
+int finish_report(const std::string& command, const nlohmann::json& report, const std::string& path, bool json,
+                  const std::function<void(std::ostream&)>& brief) {
+    const std::string text = report.dump(2) + "\n";
+    try {
+        if (!path.empty()) host::write_file_atomic(path, text);
+    } catch (const std::runtime_error& e) {
+        std::cerr << command << ": " << e.what() << "\n";
+        return kExitOutputError;
+    }
+    if (json) {
+        std::cout << text;
+    } else {
+        brief(std::cout);
     }
     return kExitOk;
 }

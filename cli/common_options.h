@@ -1,11 +1,14 @@
 // Options shared by the commands that read logs: config, format, column mapping.
 #pragma once
+#include <functional>
 #include <ostream>
 #include <string>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "host/batch/manifest.h"
+#include "host/config_extensions.h"
 #include "host/config_json.h"
 #include "host/io/sample_reader.h"
 
@@ -27,6 +30,20 @@ void add_input_options(CLI::App& sub, InputArgs& a);
 // Fills reader options and loads the config; prints the error and returns an exit code
 // other than kExitOk on failure.
 int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedConfig& config);
+// The options as typed, for the batch planner, which validates them like a manifest's
+// fields (batch, bench).
+host::LogSettingStrings setting_strings(const InputArgs& a);
+// As resolve_input, but -c may hold model extensions: the commands that fit or trace the
+// model (fit, residual, discharge). `command` prefixes the messages ("battsim fit").
+int resolve_extended_input(const InputArgs& a, const std::string& command, host::ReaderOptions& reader,
+                           host::ExtendedConfig& config);
+// Runs `job`, turning the host library's exceptions into exit codes with a message:
+// bad input 3, bad arguments 2, anything else (outputs) 5.
+int run_job(const std::string& command, const std::function<void()>& job);
+// Writes the report JSON to `path` (if given) atomically, then prints it (`json`) or the
+// brief; returns the exit code.
+int finish_report(const std::string& command, const nlohmann::json& report, const std::string& path, bool json,
+                  const std::function<void(std::ostream&)>& brief);
 // Human-readable few lines about a summary.
 void print_brief(const nlohmann::json& summary, std::ostream& out);
 
