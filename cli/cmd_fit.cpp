@@ -11,15 +11,13 @@ namespace {
 
 struct FitArgs {
     std::vector<std::string> logs, tests, add, params, per_log;
-    std::string output, output_dir, report, plot, name;
+    std::string output, output_dir, name;
     std::string initial = "free";
     std::string window = "all";
     size_t max_points = 20000;
     int max_iterations = 100;
     bool sample_weights = false;
-    double max_capacity_factor = 1.5;
-    bool json = false;
-    InputArgs input;
+    ModelJobArgs common;
 };
 
 std::function<int()> setup(CLI::App& sub) {
@@ -42,25 +40,19 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--max-points", a->max_points, "At most this many samples per log in the objective (thinned evenly)")->capture_default_str();
     sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iteration limit")->capture_default_str();
     sub.add_flag("--sample-weights", a->sample_weights, "Weight logs by their sample count instead of equally");
-    sub.add_option("--max-capacity-factor", a->max_capacity_factor,
-                   "The fitted capacity stays at or below this x the config's (and above the charge drawn)")
-        ->capture_default_str();
-    sub.add_option("--report", a->report, "Write the fit report JSON here");
-    sub.add_option("--plot", a->plot, "Plot measured and model voltage per log (.png or .svg)");
-    sub.add_flag("--json", a->json, "Print the fit report JSON on standard output");
-    add_input_options(sub, a->input);
+    add_model_job_options(sub, a->common, "fit report", "Plot measured and model voltage per log (.png or .svg)");
     return [a]() -> int {
         const char* me = "battsim fit";
         host::fit::FitJob job;
-        if (int rc = resolve_extended_input(a->input, me, job.reader, job.config)) return rc;
+        if (int rc = resolve_extended_input(a->common.input, me, job.reader, job.config)) return rc;
         job.logs = a->logs;
-        job.options.max_capacity_factor = a->max_capacity_factor;
+        job.options.max_capacity_factor = a->common.max_capacity_factor;
         job.test_logs = a->tests;
         job.add = a->add;
         job.output_config = a->output;
         job.output_dir = a->output_dir;
         job.name = a->name;
-        job.plot_path = a->plot;
+        job.plot_path = a->common.plot;
         job.options.params = a->params;
         job.options.per_log_params = a->per_log;
         job.options.max_points_per_log = a->max_points;
@@ -73,7 +65,7 @@ std::function<int()> setup(CLI::App& sub) {
             report = host::fit::run_fit_job(job, &std::cerr);
         });
         if (rc != kExitOk) return rc;
-        return finish_report(me, report, a->report, a->json,
+        return finish_report(me, report, a->common.report, a->common.json,
                              [&](std::ostream& out) { host::fit::print_fit_brief(report, out); });
     };
 }

@@ -11,14 +11,12 @@ namespace {
 
 struct ResidualArgs {
     std::vector<std::string> logs, candidates, fixed;
-    std::string output, report, plot, name;
+    std::string output, name;
     std::string window = "all";
     std::string initial = "free";
     int blocks = 20, max_effects = 4, max_iterations = 100;
     double min_gain = 0.02, max_p = 0.05;
-    double max_capacity_factor = 1.5;
-    bool json = false;
-    InputArgs input;
+    ModelJobArgs common;
 };
 
 std::function<int()> setup(CLI::App& sub) {
@@ -40,22 +38,16 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--min-gain", a->min_gain, "Least share of the held-out error variance an effect must remove")->capture_default_str();
     sub.add_option("--max-p", a->max_p, "Significance level of the Wilcoxon signed-rank test over the held-out blocks")->capture_default_str();
     sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iterations per refit")->capture_default_str();
-    sub.add_option("--max-capacity-factor", a->max_capacity_factor,
-                   "The fitted capacity stays at or below this x the config's (and above the charge drawn)")
-        ->capture_default_str();
-    sub.add_option("--report", a->report, "Write the report JSON here");
-    sub.add_option("--plot", a->plot, "Plot voltage, residual before/after, autocorrelation, histogram (.png or .svg)");
-    sub.add_flag("--json", a->json, "Print the report JSON on standard output");
-    add_input_options(sub, a->input);
+    add_model_job_options(sub, a->common, "report", "Plot voltage, residual before/after, autocorrelation, histogram (.png or .svg)");
     return [a]() -> int {
         const char* me = "battsim residual";
         host::residual::ResidualJob job;
-        if (int rc = resolve_extended_input(a->input, me, job.reader, job.config)) return rc;
+        if (int rc = resolve_extended_input(a->common.input, me, job.reader, job.config)) return rc;
         job.logs = a->logs;
-        job.options.max_capacity_factor = a->max_capacity_factor;
+        job.options.max_capacity_factor = a->common.max_capacity_factor;
         job.output_config = a->output;
         job.name = a->name;
-        job.plot_path = a->plot;
+        job.plot_path = a->common.plot;
         job.options.candidates = a->candidates;
         job.options.fixed = a->fixed;
         job.options.blocks = a->blocks;
@@ -71,7 +63,7 @@ std::function<int()> setup(CLI::App& sub) {
             j = host::residual::run_residual_job(job, &report, &std::cerr);
         });
         if (rc != kExitOk) return rc;
-        return finish_report(me, j, a->report, a->json,
+        return finish_report(me, j, a->common.report, a->common.json,
                              [&](std::ostream& out) { host::residual::print_report(report, out); });
     };
 }

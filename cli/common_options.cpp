@@ -26,6 +26,16 @@ void add_input_options(CLI::App& sub, InputArgs& a) {
     sub.add_flag("--negative-discharge", a.negative_discharge, "CSV: the log's current is negative while discharging");
 }
 
+void add_model_job_options(CLI::App& sub, ModelJobArgs& a, const std::string& report, const std::string& plot_help) {
+    sub.add_option("--max-capacity-factor", a.max_capacity_factor,
+                   "The fitted capacity stays at or below this x the config's (and above the charge drawn)")
+        ->capture_default_str();
+    sub.add_option("--report", a.report, "Write the " + report + " JSON here");
+    sub.add_option("--plot", a.plot, plot_help);
+    sub.add_flag("--json", a.json, "Print the " + report + " JSON on standard output");
+    add_input_options(sub, a.input);
+}
+
 int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedConfig& config) {
     try {
         reader.format = host::parse_log_format(a.format);

@@ -27,6 +27,17 @@ struct InputArgs {
 };
 
 void add_input_options(CLI::App& sub, InputArgs& a);
+
+// What fit and residual share: the capacity bound, the report, the plot and the input.
+struct ModelJobArgs {
+    double max_capacity_factor = 1.5;
+    std::string report, plot;
+    bool json = false;
+    InputArgs input;
+};
+// Adds those options after the command's own; `report` names the report in the help
+// ("fit report"), `plot_help` says what the plot shows.
+void add_model_job_options(CLI::App& sub, ModelJobArgs& a, const std::string& report, const std::string& plot_help);
 // Fills reader options and loads the config; prints the error and returns an exit code
 // other than kExitOk on failure.
 int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedConfig& config);
