@@ -47,23 +47,11 @@ std::string raw_flight(double amps, double sag_v_per_s, int load_rows = 400) {
     return s;
 }
 
-// Removes the temp dirs this file made when the test program exits.
-std::string scratch_dir() {
-    struct Registry {
-        std::vector<std::string> dirs;
-        ~Registry() {
-            std::error_code ec;
-            for (const std::string& d : dirs) std::filesystem::remove_all(d, ec);
-        }
-    };
-    static Registry registry;
-    registry.dirs.push_back(clitest::temp_dir());
-    return registry.dirs.back();
-}
+using clitest::temp_dir;
 
 // A directory with `good` distinct flights g1..gN and, if asked, one unreadable log.
 std::string fleet_dir(int good, bool with_bad) {
-    const std::string dir = scratch_dir();
+    const std::string dir = temp_dir();
     for (int k = 1; k <= good; ++k)
         clitest::write_file(dir + "/g" + std::to_string(k) + ".csv", raw_flight(12 + 3 * k, 0.0006 * k));
     if (with_bad) clitest::write_file(dir + "/bad.csv", "627,16.57,4.14,4.14,4.14,4.16,47.99,0.39,\n628,oops,4.1,4.1,4.1,4.1,1,1,\n");
@@ -258,7 +246,7 @@ TEST_CASE("batch on the shared dissertation flights matches the committed golden
         WARN("shared data not found at " << kData << "; skipped");
         return;
     }
-    const std::string dir = scratch_dir();
+    const std::string dir = temp_dir();
     // The manifest finds the data through BATTSIM_DATA_DIR (its fallback is ../shared/data
     // beside the repository); point it at the data this build was configured with.
     ::setenv("BATTSIM_DATA_DIR", kData.c_str(), 1);

@@ -3,9 +3,6 @@
 // the thread pool's determinism. Logs are small synthetic raw logs in a temp dir.
 #include <catch2/catch.hpp>
 
-#include <unistd.h>
-
-#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -18,6 +15,7 @@
 #include "host/batch/manifest.h"
 #include "host/batch/table.h"
 #include "host/config_json.h"
+#include "test_files.h"
 
 using namespace battsim::host;
 using nlohmann::json;
@@ -25,30 +23,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-class TempDir {
-public:
-    TempDir() {
-        static std::atomic<int> counter{0};
-        dir_ = fs::temp_directory_path() /
-               ("battsim_batch_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-        fs::create_directories(dir_);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(dir_, ec);
-    }
-    std::string write(const std::string& name, const std::string& content) const {
-        const fs::path p = dir_ / name;
-        fs::create_directories(p.parent_path());
-        std::ofstream out(p, std::ios::binary);
-        out << content;
-        return p.string();
-    }
-    std::string path(const std::string& name = "") const { return name.empty() ? dir_.string() : (dir_ / name).string(); }
-
-private:
-    fs::path dir_;
-};
+using TempDir = testsupport::TempDir;
 
 // A raw predictive-bms log: rest, then a load whose voltage sags with the charge drawn.
 // `amps` and `sag` make each log's numbers different.

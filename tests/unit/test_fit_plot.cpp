@@ -5,20 +5,17 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <unistd.h>
 
 #include "host/plot/plot.h"
 #include "host/replay.h"
+#include "test_files.h"
 
 using namespace battsim::host;
 
 namespace {
-std::string temp(const std::string& name) { return "/tmp/battsim-test-" + std::to_string(::getpid()) + "-" + name; }
-std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
+std::string temp(const std::string& name) {
+    static const std::string dir = testsupport::scratch_dir("plot");
+    return dir + "/" + name;
 }
 plot::Panel sine_panel() {
     plot::Panel p;
@@ -47,7 +44,7 @@ TEST_CASE("render writes PNG and SVG, the same bytes for the same input", "[plot
     plot::render({sine_panel(), sine_panel()}, "title with 'quotes'", png);
     plot::render({sine_panel()}, "t", svg);
     plot::render({sine_panel(), sine_panel()}, "title with 'quotes'", png2);
-    const std::string a = slurp(png), b = slurp(png2), c = slurp(svg);
+    const std::string a = testsupport::read_file(png), b = testsupport::read_file(png2), c = testsupport::read_file(svg);
     REQUIRE(a.size() > 1000);
     CHECK(a.compare(1, 3, "PNG") == 0);
     CHECK(a == b);
@@ -90,8 +87,8 @@ TEST_CASE("plot_replay from memory and from the replay's series CSV", "[plot]") 
     CHECK(from_csv.voltage_v[1000] == Approx(memory.voltage_v[1000]).margin(1e-4));
     plot::plot_replay(memory, "flight 30", png1);
     plot::plot_replay(from_csv, "flight 30", png2);
-    CHECK(slurp(png1).size() > 10000);
-    CHECK(slurp(png2).size() > 10000);
+    CHECK(testsupport::read_file(png1).size() > 10000);
+    CHECK(testsupport::read_file(png2).size() > 10000);
     for (const std::string& f : {series, png1, png2}) std::remove(f.c_str());
     CHECK_THROWS_AS(plot::read_replay_series_csv(log), InputError);  // a flight log is not a series
 }
