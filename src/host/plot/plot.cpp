@@ -348,9 +348,8 @@ ReplaySeries read_replay_series_csv(const std::string& path) {
     return s;
 }
 
-namespace {
 Series line_series(const std::string& title, const std::vector<double>& x, const std::vector<double>& y,
-                   const std::string& color, bool y2 = false, double width = 1.0) {
+                   const std::string& color, bool y2, double width) {
     Series s;
     s.title = title;
     thin_envelope(x, y, 8000, s.x, s.y);
@@ -359,7 +358,6 @@ Series line_series(const std::string& title, const std::vector<double>& x, const
     s.width = width;
     return s;
 }
-}  // namespace
 
 namespace {
 // The range of a panel axis's data with a margin, so no line runs along the frame.

@@ -38,6 +38,10 @@ struct Panel {
 
 // Throws std::invalid_argument unless `path` ends in .png or .svg.
 void check_plot_path(const std::string& path);
+// A line of `x`, `y` thinned to about 8000 points for drawing (spikes kept).
+Series line_series(const std::string& title, const std::vector<double>& x, const std::vector<double>& y,
+                   const std::string& color, bool y2 = false, double width = 1.0);
+
 // Renders the panels one above the other. Throws std::runtime_error if gnuplot is missing
 // or fails (with its message); the target is only replaced on success.
 void render(const std::vector<Panel>& panels, const std::string& title, const std::string& path,
