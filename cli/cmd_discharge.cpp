@@ -45,12 +45,7 @@ std::function<int()> setup(CLI::App& sub) {
         opt.reaction_s = a->reaction_s;
         opt.alpha = a->alpha;
         opt.decimate = a->decimate;
-        try {
-            if (!a->plot.empty()) host::plot::check_plot_path(a->plot);
-        } catch (const std::invalid_argument& e) {
-            std::cerr << "battsim discharge: " << e.what() << "\n";
-            return kExitUsage;
-        }
+        if (int rc = check_plot_option("battsim discharge", a->plot)) return rc;
         host::discharge::DischargeResult result;
         try {
             result = host::discharge::process_discharge(a->log, opt);

@@ -36,15 +36,8 @@ std::function<int()> setup(CLI::App& sub) {
     add_input_options(sub, a->input);
     return [a]() -> int {
         host::ReplayOptions opt;
-        int rc = resolve_input(a->input, opt.reader, opt.config);
-        if (rc != kExitOk) return rc;
-        // A bad plot name is a command-line error, found before a long replay rather than after.
-        try {
-            if (!a->plot.empty()) host::plot::check_plot_path(a->plot);
-        } catch (const std::invalid_argument& e) {
-            std::cerr << "battsim replay: --plot: " << e.what() << "\n";
-            return kExitUsage;
-        }
+        if (int rc = resolve_input(a->input, opt.reader, opt.config)) return rc;
+        if (int rc = check_plot_option("battsim replay", a->plot)) return rc;
         opt.series_path = a->series;
         if (a->realtime_flag) opt.realtime_speed = a->realtime > 0 ? a->realtime : 1.0;
         nlohmann::json summary;
@@ -72,7 +65,7 @@ std::function<int()> setup(CLI::App& sub) {
                 host::plot::plot_replay(plotted, title, a->plot);
             }
         } catch (const std::invalid_argument& e) {
-            std::cerr << "battsim replay: --plot: " << e.what() << "\n";  // e.g. no valid sample to draw
+            std::cerr << "battsim replay: " << e.what() << "\n";  // e.g. no valid sample to draw
             return kExitInputError;
         } catch (const std::runtime_error& e) {
             std::cerr << "battsim replay: " << e.what() << "\n";

@@ -5,6 +5,7 @@
 
 #include "command.h"
 #include "host/io/atomic_file.h"
+#include "host/plot/plot.h"
 
 namespace battsim {
 namespace cli {
@@ -155,6 +156,16 @@ int finish_report(const std::string& command, const nlohmann::json& report, cons
         std::cout << text;
     } else {
         brief(std::cout);
+    }
+    return kExitOk;
+}
+
+int check_plot_option(const std::string& command, const std::string& path) {
+    try {
+        if (!path.empty()) host::plot::check_plot_path(path);
+    } catch (const std::invalid_argument& e) {
+        std::cerr << command << ": " << e.what() << "\n";
+        return kExitUsage;
     }
     return kExitOk;
 }

@@ -55,6 +55,9 @@ int run_job(const std::string& command, const std::function<void()>& job);
 // brief; returns the exit code.
 int finish_report(const std::string& command, const nlohmann::json& report, const std::string& path, bool json,
                   const std::function<void(std::ostream&)>& brief);
+// kExitOk if `path` is empty or a plot name (.png, .svg); else says why, kExitUsage. Checked
+// before the work, so a typo does not cost a long run.
+int check_plot_option(const std::string& command, const std::string& path);
 // Human-readable few lines about a summary.
 void print_brief(const nlohmann::json& summary, std::ostream& out);
 

@@ -157,8 +157,7 @@ TEST_CASE("replay --plot draws the replay as SVG, and rejects other names", "[cl
     // Only .png and .svg: a usage error before any replay, and no file.
     auto bad = run("replay " + q(dir + "/short.csv") + " -c " + q(kConfig) + " --plot " + q(dir + "/replay.pdf"));
     CHECK(bad.exit_code == 2);
-    CHECK(bad.err.find("--plot") != std::string::npos);
-    CHECK(bad.err.find(".png or .svg") != std::string::npos);
+    CHECK(bad.err.find("plot file \"" + dir + "/replay.pdf\": expected a name ending in .png or .svg") != std::string::npos);
     CHECK(clitest::read_file(dir + "/replay.pdf").empty());
     // A directory that cannot take the file is an output error.
     auto unwritable = run("replay " + q(dir + "/short.csv") + " -c " + q(kConfig) + " --plot " + q(dir + "/none/replay.png"));
