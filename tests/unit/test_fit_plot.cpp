@@ -58,6 +58,26 @@ TEST_CASE("render writes PNG and SVG, the same bytes for the same input", "[plot
     CHECK_THROWS_AS(plot::render({sine_panel()}, "t", "/nonexistent-dir/x.png"), std::runtime_error);
 }
 
+TEST_CASE("render keeps a series without values as a legend entry, even a whole empty panel", "[plot]") {
+    plot::Panel empty;
+    empty.title = "nothing yet";
+    plot::Series none, gaps;
+    none.title = "never estimated";
+    gaps.title = "only gaps";
+    gaps.y2 = true;
+    gaps.x = {0.0, 1.0};
+    gaps.y = {NAN, NAN};
+    empty.series = {none, gaps};
+    plot::Panel mixed = sine_panel();
+    mixed.series.push_back(none);
+    const std::string svg = temp("empty.svg");
+    plot::render({empty, mixed}, "t", svg);  // gnuplot stops at an empty series if it is plotted
+    const std::string text = testsupport::read_file(svg);
+    CHECK(text.find(">never estimated (no values)<") != std::string::npos);
+    CHECK(text.find(">only gaps (no values)<") != std::string::npos);
+    CHECK(text.find(">sin<") != std::string::npos);
+}
+
 TEST_CASE("Envelope thinning keeps the extremes", "[plot]") {
     std::vector<double> x, y, xo, yo;
     for (int i = 0; i < 100000; ++i) {

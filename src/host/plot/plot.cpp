@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <gnuplot-iostream.h>
@@ -215,8 +216,10 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
             script += "set arrow from " + x + ", graph 0 to " + x + ", graph 1 nohead dt 2 lw 1.5 lc rgb 'black'\n";
             script += "set label " + quoted(m.second) + " at " + x + ", graph 0.06 rotate by 90 offset -1,0 front\n";
         }
-        std::string cmd = "plot ";
-        bool first = true;
+        // A plot of legend entries alone trips an assertion in gnuplot 5.4: an undefined
+        // function, drawn as nothing, comes first.
+        std::string cmd = p.has_points() ? "plot " : "plot NaN notitle";
+        bool first = p.has_points();
         for (const Series& s : p.series) {
             if (!first) cmd += ", ";
             first = false;
