@@ -1,4 +1,5 @@
-// Options shared by the commands that read logs: config, format, column mapping.
+// What the subcommands share: the input options (config, format, column mapping), the
+// options and the error-to-exit-code plumbing of the model jobs, the --plot name check.
 #pragma once
 #include <functional>
 #include <ostream>
