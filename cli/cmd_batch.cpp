@@ -32,23 +32,6 @@ struct BatchArgs {
     InputArgs input;
 };
 
-host::LogSettingStrings setting_strings(const InputArgs& a) {
-    host::LogSettingStrings s;
-    s.config = a.config;
-    s.format = a.format;
-    s.current_source = a.current_source;
-    s.time_col = a.time_col;
-    s.time_unit = a.time_unit;
-    s.voltage_col = a.voltage_col;
-    s.current_col = a.current_col;
-    s.current_unit = a.current_unit;
-    s.temperature_col = a.temperature_col;
-    s.cell_cols = a.cell_cols;
-    s.negative_discharge = a.negative_discharge;
-    s.estimator = a.estimator;
-    return s;
-}
-
 int run(const BatchArgs& a) {
     const char* me = "battsim batch: ";
     host::TableFormat format;

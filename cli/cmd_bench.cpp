@@ -1,5 +1,6 @@
 // battsim bench monitor|replay|batch: the figures in docs/benchmarks.md (scripts/bench.sh
 // runs them all, and the callgrind count of instructions per monitor update).
+#include <functional>
 #include <iostream>
 #include <thread>
 
@@ -22,23 +23,6 @@ struct BenchArgs {
     bool json = false;
     InputArgs input;
 };
-
-host::LogSettingStrings setting_strings(const InputArgs& a) {
-    host::LogSettingStrings s;
-    s.config = a.config;
-    s.format = a.format;
-    s.current_source = a.current_source;
-    s.time_col = a.time_col;
-    s.time_unit = a.time_unit;
-    s.voltage_col = a.voltage_col;
-    s.current_col = a.current_col;
-    s.current_unit = a.current_unit;
-    s.temperature_col = a.temperature_col;
-    s.cell_cols = a.cell_cols;
-    s.negative_discharge = a.negative_discharge;
-    s.estimator = a.estimator;
-    return s;
-}
 
 // The logs with their settings, exactly as `battsim batch` would plan them.
 int plan(const BenchArgs& a, std::vector<host::BatchItem>& items) {
@@ -79,22 +63,12 @@ void print(const nlohmann::json& j, bool as_json) {
     for (auto it = j.begin(); it != j.end(); ++it) std::cout << it.key() << ": " << it.value().dump() << "\n";
 }
 
-int run_monitor(const BenchArgs& a) {
+// Times the first planned log with `bench`, which returns the figures to print.
+int bench_first_log(const BenchArgs& a, const std::function<nlohmann::json(const host::BatchItem&)>& bench) {
     std::vector<host::BatchItem> items;
     if (int rc = plan(a, items)) return rc;
-    const host::BatchItem& it = items.front();
     try {
-        const host::MonitorBench r = host::bench_monitor(it.path, it.replay, a.passes, a.min_time);
-        print({{"log", it.path},
-               {"samples_per_pass", r.samples},
-               {"passes", r.passes},
-               {"updates", r.samples * r.passes},
-               {"seconds", r.seconds},
-               {"cpu_seconds", r.cpu_seconds},
-               {"ns_per_update", r.ns_per_update},
-               {"cpu_ns_per_update", r.cpu_ns_per_update},
-               {"peak_rss_kib", host::peak_rss_kib()}},
-              a.json);
+        print(bench(items.front()), a.json);
     } catch (const host::InputError& e) {
         std::cerr << "battsim bench: " << e.what() << "\n";
         return kExitInputError;
@@ -102,30 +76,37 @@ int run_monitor(const BenchArgs& a) {
     return kExitOk;
 }
 
+int run_monitor(const BenchArgs& a) {
+    return bench_first_log(a, [&a](const host::BatchItem& it) -> nlohmann::json {
+        const host::MonitorBench r = host::bench_monitor(it.path, it.replay, a.passes, a.min_time);
+        return {{"log", it.path},
+                {"samples_per_pass", r.samples},
+                {"passes", r.passes},
+                {"updates", r.samples * r.passes},
+                {"seconds", r.seconds},
+                {"cpu_seconds", r.cpu_seconds},
+                {"ns_per_update", r.ns_per_update},
+                {"cpu_ns_per_update", r.cpu_ns_per_update},
+                {"peak_rss_kib", host::peak_rss_kib()}};
+    });
+}
+
 int run_replay(const BenchArgs& a) {
-    std::vector<host::BatchItem> items;
-    if (int rc = plan(a, items)) return rc;
-    const host::BatchItem& it = items.front();
-    try {
+    return bench_first_log(a, [&a](const host::BatchItem& it) -> nlohmann::json {
         const host::ThroughputBench r = host::bench_replay(it.path, it.replay, a.min_time, a.min_runs);
-        print({{"log", it.path},
-               {"runs", r.runs},
-               {"samples", r.samples},
-               {"bytes", r.bytes},
-               {"seconds", r.seconds},
-               {"cpu_seconds", r.cpu_seconds},
-               {"samples_per_s", r.samples_per_second()},
-               {"mb_per_s", r.megabytes_per_second()},
-               {"mb_per_cpu_s", r.megabytes_per_cpu_second()},
-               {"ns_per_sample", r.samples ? r.seconds * 1e9 / r.samples : 0.0},
-               {"cpu_ns_per_sample", r.samples ? r.cpu_seconds * 1e9 / r.samples : 0.0},
-               {"peak_rss_kib", host::peak_rss_kib()}},
-              a.json);
-    } catch (const host::InputError& e) {
-        std::cerr << "battsim bench: " << e.what() << "\n";
-        return kExitInputError;
-    }
-    return kExitOk;
+        return {{"log", it.path},
+                {"runs", r.runs},
+                {"samples", r.samples},
+                {"bytes", r.bytes},
+                {"seconds", r.seconds},
+                {"cpu_seconds", r.cpu_seconds},
+                {"samples_per_s", r.samples_per_second()},
+                {"mb_per_s", r.megabytes_per_second()},
+                {"mb_per_cpu_s", r.megabytes_per_cpu_second()},
+                {"ns_per_sample", r.samples ? r.seconds * 1e9 / r.samples : 0.0},
+                {"cpu_ns_per_sample", r.samples ? r.cpu_seconds * 1e9 / r.samples : 0.0},
+                {"peak_rss_kib", host::peak_rss_kib()}};
+    });
 }
 
 int run_batch(const BenchArgs& a) {

@@ -37,31 +37,15 @@ std::function<int()> setup(CLI::App& sub) {
     add_input_options(sub, a->input);
     return [a]() -> int {
         host::discharge::DischargeOptions opt;
-        InputArgs no_config = a->input;
-        no_config.config.clear();
-        host::LoadedConfig unused;
-        int rc = resolve_input(no_config, opt.reader, unused);
-        if (rc != kExitOk) return rc;
-        host::LoadedConfig config = host::default_config();
-        try {
-            if (!a->input.config.empty()) config = host::load_config_file(a->input.config);
-        } catch (const host::ConfigError& e) {
-            std::cerr << "battsim discharge: config: " << e.what() << "\n";
-            return kExitConfigError;
-        }
-        if (!a->input.estimator.empty()) config.monitor.estimator = unused.monitor.estimator;  // --estimator wins
+        host::LoadedConfig config;
+        if (int rc = resolve_input(a->input, opt.reader, config, "battsim discharge")) return rc;
         opt.reader.shunt = config.monitor.shunt;
         opt.min_voltage_v = a->min_v > 0 ? a->min_v : config.monitor.min_voltage_v;
         opt.max_voltage_v = a->max_v > 0 ? a->max_v : config.monitor.max_voltage_v;
         opt.reaction_s = a->reaction_s;
         opt.alpha = a->alpha;
         opt.decimate = a->decimate;
-        try {
-            if (!a->plot.empty()) host::plot::check_plot_path(a->plot);
-        } catch (const std::invalid_argument& e) {
-            std::cerr << "battsim discharge: " << e.what() << "\n";
-            return kExitUsage;
-        }
+        if (int rc = check_plot_option("battsim discharge", a->plot)) return rc;
         host::discharge::DischargeResult result;
         try {
             result = host::discharge::process_discharge(a->log, opt);

@@ -4,7 +4,6 @@
 #include "command.h"
 #include "common_options.h"
 #include "host/fit/fit_job.h"
-#include "host/io/atomic_file.h"
 
 namespace battsim {
 namespace cli {
@@ -12,15 +11,13 @@ namespace {
 
 struct FitArgs {
     std::vector<std::string> logs, tests, add, params, per_log;
-    std::string output, output_dir, report, plot, name;
+    std::string output, output_dir, name;
     std::string initial = "free";
     std::string window = "all";
     size_t max_points = 20000;
     int max_iterations = 100;
     bool sample_weights = false;
-    double max_capacity_factor = 1.5;
-    bool json = false;
-    InputArgs input;
+    ModelJobArgs common;
 };
 
 std::function<int()> setup(CLI::App& sub) {
@@ -43,74 +40,33 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--max-points", a->max_points, "At most this many samples per log in the objective (thinned evenly)")->capture_default_str();
     sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iteration limit")->capture_default_str();
     sub.add_flag("--sample-weights", a->sample_weights, "Weight logs by their sample count instead of equally");
-    sub.add_option("--max-capacity-factor", a->max_capacity_factor,
-                   "The fitted capacity stays at or below this x the config's (and above the charge drawn)")
-        ->capture_default_str();
-    sub.add_option("--report", a->report, "Write the fit report JSON here");
-    sub.add_option("--plot", a->plot, "Plot measured and model voltage per log (.png or .svg)");
-    sub.add_flag("--json", a->json, "Print the fit report JSON on standard output");
-    add_input_options(sub, a->input);
+    add_model_job_options(sub, a->common, "fit report", "Plot measured and model voltage per log (.png or .svg)");
     return [a]() -> int {
+        const char* me = "battsim fit";
         host::fit::FitJob job;
-        InputArgs no_config = a->input;
-        no_config.config.clear();
-        host::LoadedConfig unused;
-        int rc = resolve_input(no_config, job.reader, unused);
-        if (rc != kExitOk) return rc;
-        try {
-            job.config = a->input.config.empty() ? host::default_config()
-                                                 : host::load_config_file(a->input.config);
-        } catch (const host::ConfigError& e) {
-            std::cerr << "battsim fit: config: " << e.what() << "\n";
-            return kExitConfigError;
-        }
-        if (!a->input.estimator.empty()) job.config.monitor.estimator = unused.monitor.estimator;  // --estimator wins
+        if (int rc = resolve_input(a->common.input, job.reader, job.config, me)) return rc;
         job.logs = a->logs;
-        job.options.max_capacity_factor = a->max_capacity_factor;
+        job.options.max_capacity_factor = a->common.max_capacity_factor;
         job.test_logs = a->tests;
         job.add = a->add;
         job.output_config = a->output;
         job.output_dir = a->output_dir;
         job.name = a->name;
-        job.plot_path = a->plot;
+        job.plot_path = a->common.plot;
         job.options.params = a->params;
         job.options.per_log_params = a->per_log;
         job.options.max_points_per_log = a->max_points;
         job.options.lm.max_iterations = a->max_iterations;
         job.options.equal_log_weights = !a->sample_weights;
-        try {
+        nlohmann::json report;
+        const int rc = run_job(me, [&] {
             job.options.initial = host::fit::parse_initial_mode(a->initial);
             job.options.window = host::fit::parse_window(a->window);
-        } catch (const std::invalid_argument& e) {
-            std::cerr << "battsim fit: " << e.what() << "\n";
-            return kExitUsage;
-        }
-        nlohmann::json report;
-        try {
             report = host::fit::run_fit_job(job, &std::cerr);
-        } catch (const host::InputError& e) {
-            std::cerr << "battsim fit: " << e.what() << "\n";
-            return kExitInputError;
-        } catch (const std::invalid_argument& e) {
-            std::cerr << "battsim fit: " << e.what() << "\n";
-            return kExitUsage;
-        } catch (const std::runtime_error& e) {
-            std::cerr << "battsim fit: " << e.what() << "\n";
-            return kExitOutputError;
-        }
-        const std::string text = report.dump(2) + "\n";
-        try {
-            if (!a->report.empty()) host::write_file_atomic(a->report, text);
-        } catch (const std::runtime_error& e) {
-            std::cerr << "battsim fit: " << e.what() << "\n";
-            return kExitOutputError;
-        }
-        if (a->json) {
-            std::cout << text;
-        } else {
-            host::fit::print_fit_brief(report, std::cout);
-        }
-        return kExitOk;
+        });
+        if (rc != kExitOk) return rc;
+        return finish_report(me, report, a->common.report, a->common.json,
+                             [&](std::ostream& out) { host::fit::print_fit_brief(report, out); });
     };
 }
 

@@ -3,7 +3,6 @@
 
 #include "command.h"
 #include "common_options.h"
-#include "host/io/atomic_file.h"
 #include "host/residual/residual.h"
 
 namespace battsim {
@@ -12,14 +11,12 @@ namespace {
 
 struct ResidualArgs {
     std::vector<std::string> logs, candidates, fixed;
-    std::string output, report, plot, name;
+    std::string output, name;
     std::string window = "all";
     std::string initial = "free";
     int blocks = 20, max_effects = 4, max_iterations = 100;
     double min_gain = 0.02, max_p = 0.05;
-    double max_capacity_factor = 1.5;
-    bool json = false;
-    InputArgs input;
+    ModelJobArgs common;
 };
 
 std::function<int()> setup(CLI::App& sub) {
@@ -41,33 +38,16 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--min-gain", a->min_gain, "Least share of the held-out error variance an effect must remove")->capture_default_str();
     sub.add_option("--max-p", a->max_p, "Significance level of the Wilcoxon signed-rank test over the held-out blocks")->capture_default_str();
     sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iterations per refit")->capture_default_str();
-    sub.add_option("--max-capacity-factor", a->max_capacity_factor,
-                   "The fitted capacity stays at or below this x the config's (and above the charge drawn)")
-        ->capture_default_str();
-    sub.add_option("--report", a->report, "Write the report JSON here");
-    sub.add_option("--plot", a->plot, "Plot voltage, residual before/after, autocorrelation, histogram (.png or .svg)");
-    sub.add_flag("--json", a->json, "Print the report JSON on standard output");
-    add_input_options(sub, a->input);
+    add_model_job_options(sub, a->common, "report", "Plot voltage, residual before/after, autocorrelation, histogram (.png or .svg)");
     return [a]() -> int {
+        const char* me = "battsim residual";
         host::residual::ResidualJob job;
-        InputArgs no_config = a->input;
-        no_config.config.clear();
-        host::LoadedConfig unused;
-        int rc = resolve_input(no_config, job.reader, unused);
-        if (rc != kExitOk) return rc;
-        try {
-            job.config = a->input.config.empty() ? host::default_config()
-                                                 : host::load_config_file(a->input.config);
-        } catch (const host::ConfigError& e) {
-            std::cerr << "battsim residual: config: " << e.what() << "\n";
-            return kExitConfigError;
-        }
-        if (!a->input.estimator.empty()) job.config.monitor.estimator = unused.monitor.estimator;  // --estimator wins
+        if (int rc = resolve_input(a->common.input, job.reader, job.config, me)) return rc;
         job.logs = a->logs;
-        job.options.max_capacity_factor = a->max_capacity_factor;
+        job.options.max_capacity_factor = a->common.max_capacity_factor;
         job.output_config = a->output;
         job.name = a->name;
-        job.plot_path = a->plot;
+        job.plot_path = a->common.plot;
         job.options.candidates = a->candidates;
         job.options.fixed = a->fixed;
         job.options.blocks = a->blocks;
@@ -77,33 +57,14 @@ std::function<int()> setup(CLI::App& sub) {
         job.options.max_iterations = a->max_iterations;
         host::residual::ResidualReport report;
         nlohmann::json j;
-        try {
+        const int rc = run_job(me, [&] {
             job.options.window = host::fit::parse_window(a->window);
             job.options.initial = host::fit::parse_initial_mode(a->initial);
             j = host::residual::run_residual_job(job, &report, &std::cerr);
-        } catch (const host::InputError& e) {
-            std::cerr << "battsim residual: " << e.what() << "\n";
-            return kExitInputError;
-        } catch (const std::invalid_argument& e) {
-            std::cerr << "battsim residual: " << e.what() << "\n";
-            return kExitUsage;
-        } catch (const std::runtime_error& e) {
-            std::cerr << "battsim residual: " << e.what() << "\n";
-            return kExitOutputError;
-        }
-        const std::string text = j.dump(2) + "\n";
-        try {
-            if (!a->report.empty()) host::write_file_atomic(a->report, text);
-        } catch (const std::runtime_error& e) {
-            std::cerr << "battsim residual: " << e.what() << "\n";
-            return kExitOutputError;
-        }
-        if (a->json) {
-            std::cout << text;
-        } else {
-            host::residual::print_report(report, std::cout);
-        }
-        return kExitOk;
+        });
+        if (rc != kExitOk) return rc;
+        return finish_report(me, j, a->common.report, a->common.json,
+                             [&](std::ostream& out) { host::residual::print_report(report, out); });
     };
 }
 

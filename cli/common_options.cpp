@@ -1,8 +1,11 @@
 #include "common_options.h"
 
 #include <iostream>
+#include <stdexcept>
 
 #include "command.h"
+#include "host/io/atomic_file.h"
+#include "host/plot/plot.h"
 
 namespace battsim {
 namespace cli {
@@ -24,7 +27,17 @@ void add_input_options(CLI::App& sub, InputArgs& a) {
     sub.add_flag("--negative-discharge", a.negative_discharge, "CSV: the log's current is negative while discharging");
 }
 
-int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedConfig& config) {
+void add_model_job_options(CLI::App& sub, ModelJobArgs& a, const std::string& report, const std::string& plot_help) {
+    sub.add_option("--max-capacity-factor", a.max_capacity_factor,
+                   "The fitted capacity stays at or below this x the config's (and above the charge drawn)")
+        ->capture_default_str();
+    sub.add_option("--report", a.report, "Write the " + report + " JSON here");
+    sub.add_option("--plot", a.plot, plot_help);
+    sub.add_flag("--json", a.json, "Print the " + report + " JSON on standard output");
+    add_input_options(sub, a.input);
+}
+
+int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedConfig& config, const std::string& command) {
     try {
         reader.format = host::parse_log_format(a.format);
     } catch (const std::exception& e) {
@@ -64,7 +77,7 @@ int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedC
     try {
         config = a.config.empty() ? host::default_config() : host::load_config_file(a.config);
     } catch (const host::ConfigError& e) {
-        std::cerr << "battsim: config: " << e.what() << "\n";
+        std::cerr << command << ": config: " << e.what() << "\n";
         return kExitConfigError;
     }
     if (a.estimator == "reference") {
@@ -73,6 +86,66 @@ int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedC
         config.monitor.estimator = core::EstimatorKind::Joint;
     } else if (!a.estimator.empty()) {
         std::cerr << "battsim: --estimator: expected reference or joint, found \"" << a.estimator << "\"\n";
+        return kExitUsage;
+    }
+    return kExitOk;
+}
+
+host::LogSettingStrings setting_strings(const InputArgs& a) {
+    host::LogSettingStrings s;
+    s.config = a.config;
+    s.format = a.format;
+    s.current_source = a.current_source;
+    s.time_col = a.time_col;
+    s.time_unit = a.time_unit;
+    s.voltage_col = a.voltage_col;
+    s.current_col = a.current_col;
+    s.current_unit = a.current_unit;
+    s.temperature_col = a.temperature_col;
+    s.cell_cols = a.cell_cols;
+    s.negative_discharge = a.negative_discharge;
+    s.estimator = a.estimator;
+    return s;
+}
+
+int run_job(const std::string& command, const std::function<void()>& job) {
+    try {
+        job();
+    } catch (const host::InputError& e) {
+        std::cerr << command << ": " << e.what() << "\n";
+        return kExitInputError;
+    } catch (const std::invalid_argument& e) {
+        std::cerr << command << ": " << e.what() << "\n";
+        return kExitUsage;
+    } catch (const std::runtime_error& e) {
+        std::cerr << command << ": " << e.what() << "\n";
+        return kExitOutputError;
+    }
+    return kExitOk;
+}
+
+int finish_report(const std::string& command, const nlohmann::json& report, const std::string& path, bool json,
+                  const std::function<void(std::ostream&)>& brief) {
+    const std::string text = report.dump(2) + "\n";
+    try {
+        if (!path.empty()) host::write_file_atomic(path, text);
+    } catch (const std::runtime_error& e) {
+        std::cerr << command << ": " << e.what() << "\n";
+        return kExitOutputError;
+    }
+    if (json) {
+        std::cout << text;
+    } else {
+        brief(std::cout);
+    }
+    return kExitOk;
+}
+
+int check_plot_option(const std::string& command, const std::string& path) {
+    try {
+        if (!path.empty()) host::plot::check_plot_path(path);
+    } catch (const std::invalid_argument& e) {
+        std::cerr << command << ": " << e.what() << "\n";
         return kExitUsage;
     }
     return kExitOk;

@@ -1,11 +1,15 @@
-// Options shared by the commands that read logs: config, format, column mapping.
+// What the subcommands share: the input options (config, format, column mapping), the
+// options and the error-to-exit-code plumbing of the model jobs, the --plot name check.
 #pragma once
+#include <functional>
 #include <ostream>
 #include <string>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "host/batch/manifest.h"
+#include "host/config_json.h"
 #include "host/config_json.h"
 #include "host/io/sample_reader.h"
 
@@ -24,9 +28,34 @@ struct InputArgs {
 };
 
 void add_input_options(CLI::App& sub, InputArgs& a);
-// Fills reader options and loads the config; prints the error and returns an exit code
-// other than kExitOk on failure.
-int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedConfig& config);
+
+// What fit and residual share: the capacity bound, the report, the plot and the input.
+struct ModelJobArgs {
+    double max_capacity_factor = 1.5;
+    std::string report, plot;
+    bool json = false;
+    InputArgs input;
+};
+// Adds those options after the command's own; `report` names the report in the help
+// ("fit report"), `plot_help` says what the plot shows.
+void add_model_job_options(CLI::App& sub, ModelJobArgs& a, const std::string& report, const std::string& plot_help);
+// Fills reader options and loads the config (with its model extensions); prints the error,
+// prefixed with `command`, and returns an exit code other than kExitOk on failure.
+int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedConfig& config,
+                  const std::string& command = "battsim");
+// The options as typed, for the batch planner, which validates them like a manifest's
+// fields (batch, bench).
+host::LogSettingStrings setting_strings(const InputArgs& a);
+// Runs `job`, turning the host library's exceptions into exit codes with a message:
+// bad input 3, bad arguments 2, anything else (outputs) 5.
+int run_job(const std::string& command, const std::function<void()>& job);
+// Writes the report JSON to `path` (if given) atomically, then prints it (`json`) or the
+// brief; returns the exit code.
+int finish_report(const std::string& command, const nlohmann::json& report, const std::string& path, bool json,
+                  const std::function<void(std::ostream&)>& brief);
+// kExitOk if `path` is empty or a plot name (.png, .svg); else says why, kExitUsage. Checked
+// before the work, so a typo does not cost a long run.
+int check_plot_option(const std::string& command, const std::string& path);
 // Human-readable few lines about a summary.
 void print_brief(const nlohmann::json& summary, std::ostream& out);
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cli_util.h"
+#include "raw_logs.h"
 
 using clitest::q;
 using clitest::read_file;
@@ -28,42 +29,12 @@ bool exists(const std::string& p) {
     return ::stat(p.c_str(), &st) == 0;
 }
 
-// A raw predictive-bms log: rest, then a sagging load; `amps`/`sag` vary the numbers.
-std::string raw_flight(double amps, double sag_v_per_s, int load_rows = 400) {
-    std::string s;
-    long t = 630;
-    char line[160];
-    for (int k = 0; k < 150; ++k, t += 67) {
-        std::snprintf(line, sizeof line, "%ld,16.50,4.12,4.13,4.12,4.13,250.00,1.32,\n", t);
-        s += line;
-    }
-    for (int k = 0; k < load_rows; ++k, t += 67) {
-        const double v = 16.2 - amps * 0.02 - sag_v_per_s * k * 0.067;
-        const double c = v / 4;
-        std::snprintf(line, sizeof line, "%ld,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,\n", t, v, c, c + 0.01, c,
-                      v - 3 * c - 0.01, amps * 1000.0, amps * 0.378);
-        s += line;
-    }
-    return s;
-}
-
-// Removes the temp dirs this file made when the test program exits.
-std::string scratch_dir() {
-    struct Registry {
-        std::vector<std::string> dirs;
-        ~Registry() {
-            std::error_code ec;
-            for (const std::string& d : dirs) std::filesystem::remove_all(d, ec);
-        }
-    };
-    static Registry registry;
-    registry.dirs.push_back(clitest::temp_dir());
-    return registry.dirs.back();
-}
+using clitest::temp_dir;
+using testsupport::raw_flight;
 
 // A directory with `good` distinct flights g1..gN and, if asked, one unreadable log.
 std::string fleet_dir(int good, bool with_bad) {
-    const std::string dir = scratch_dir();
+    const std::string dir = temp_dir();
     for (int k = 1; k <= good; ++k)
         clitest::write_file(dir + "/g" + std::to_string(k) + ".csv", raw_flight(12 + 3 * k, 0.0006 * k));
     if (with_bad) clitest::write_file(dir + "/bad.csv", "627,16.57,4.14,4.14,4.14,4.16,47.99,0.39,\n628,oops,4.1,4.1,4.1,4.1,1,1,\n");
@@ -258,7 +229,7 @@ TEST_CASE("batch on the shared dissertation flights matches the committed golden
         WARN("shared data not found at " << kData << "; skipped");
         return;
     }
-    const std::string dir = scratch_dir();
+    const std::string dir = temp_dir();
     // The manifest finds the data through BATTSIM_DATA_DIR (its fallback is ../shared/data
     // beside the repository); point it at the data this build was configured with.
     ::setenv("BATTSIM_DATA_DIR", kData.c_str(), 1);

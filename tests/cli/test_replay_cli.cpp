@@ -3,6 +3,8 @@
 #include <nlohmann/json.hpp>
 #include <sys/stat.h>
 
+#include <filesystem>
+
 #include "cli_util.h"
 
 using clitest::q;
@@ -123,4 +125,42 @@ TEST_CASE("replay on a shared dissertation flight matches its golden summary", "
     auto g = nlohmann::json::parse(clitest::read_file(kSource + "/tests/golden/predictive-bms-modified/29.json"));
     CHECK(j["flight"]["capacity_ah"] == g["flight"]["capacity_ah"]);
     CHECK(j["flight"]["resistance_ohm"] == g["flight"]["resistance_ohm"]);
+}
+
+TEST_CASE("replay --plot draws the replay as SVG, and rejects other names", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string svg = dir + "/replay.svg";
+    auto r = run("replay " + q(kSource + "/logs/example-4s.csv") + " -c " + q(kConfig) + " --plot " + q(svg));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const std::string text = clitest::read_file(svg);
+    REQUIRE(!text.empty());
+    CHECK(text.find("<svg") != std::string::npos);
+    // Legend entries and axis labels are SVG text elements.
+    for (const char* title : {"measured", "fixed model", "adapted model", "current (right axis)", "capacity",
+                              "resistance (right axis)", "remaining", "total (flown + remaining)", "cell 1", "cell 4",
+                              "take-off", "landing", "voltage (V)", "current (A)", "capacity (Ah)", "resistance (mΩ)",
+                              "flight time (s)", "difference (mV)", "log time (s)"}) {
+        INFO(title);
+        CHECK(text.find(std::string(">") + title + "<") != std::string::npos);
+    }
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+        CHECK(e.path().filename() == "replay.svg");  // no temporary left beside it
+
+    // A series without a single value (this short log never gets a resistance estimate)
+    // keeps its legend entry and says so; gnuplot would otherwise stop at it.
+    clitest::write_file(dir + "/short.csv", raw_log());
+    auto s = run("replay " + q(dir + "/short.csv") + " -c " + q(kConfig) + " --plot " + q(dir + "/short.svg"));
+    CHECK(s.exit_code == 0);
+    CHECK(clitest::read_file(dir + "/short.svg").find(">resistance (right axis) (no values)<") != std::string::npos);
+
+    // Only .png and .svg: a usage error before any replay, and no file.
+    auto bad = run("replay " + q(dir + "/short.csv") + " -c " + q(kConfig) + " --plot " + q(dir + "/replay.pdf"));
+    CHECK(bad.exit_code == 2);
+    CHECK(bad.err.find("plot file \"" + dir + "/replay.pdf\": expected a name ending in .png or .svg") != std::string::npos);
+    CHECK(clitest::read_file(dir + "/replay.pdf").empty());
+    // A directory that cannot take the file is an output error.
+    auto unwritable = run("replay " + q(dir + "/short.csv") + " -c " + q(kConfig) + " --plot " + q(dir + "/none/replay.png"));
+    CHECK(unwritable.exit_code == 5);
+    CHECK(unwritable.err.find(dir + "/none/replay.png") != std::string::npos);
 }

@@ -3,9 +3,6 @@
 // the thread pool's determinism. Logs are small synthetic raw logs in a temp dir.
 #include <catch2/catch.hpp>
 
-#include <unistd.h>
-
-#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -18,6 +15,8 @@
 #include "host/batch/manifest.h"
 #include "host/batch/table.h"
 #include "host/config_json.h"
+#include "raw_logs.h"
+#include "test_files.h"
 
 using namespace battsim::host;
 using nlohmann::json;
@@ -25,50 +24,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-class TempDir {
-public:
-    TempDir() {
-        static std::atomic<int> counter{0};
-        dir_ = fs::temp_directory_path() /
-               ("battsim_batch_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-        fs::create_directories(dir_);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(dir_, ec);
-    }
-    std::string write(const std::string& name, const std::string& content) const {
-        const fs::path p = dir_ / name;
-        fs::create_directories(p.parent_path());
-        std::ofstream out(p, std::ios::binary);
-        out << content;
-        return p.string();
-    }
-    std::string path(const std::string& name = "") const { return name.empty() ? dir_.string() : (dir_ / name).string(); }
+using TempDir = testsupport::TempDir;
 
-private:
-    fs::path dir_;
-};
-
-// A raw predictive-bms log: rest, then a load whose voltage sags with the charge drawn.
-// `amps` and `sag` make each log's numbers different.
-std::string raw_flight(double amps, double sag_v_per_s, int load_rows = 400) {
-    std::string s;
-    long t = 630;
-    char line[160];
-    for (int k = 0; k < 150; ++k, t += 67) {
-        std::snprintf(line, sizeof line, "%ld,16.50,4.12,4.13,4.12,4.13,250.00,1.32,\n", t);
-        s += line;
-    }
-    for (int k = 0; k < load_rows; ++k, t += 67) {
-        const double v = 16.2 - amps * 0.02 - sag_v_per_s * k * 0.067;
-        const double c = v / 4;
-        std::snprintf(line, sizeof line, "%ld,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,%.2f,\n", t, v, c, c + 0.01, c, v - 3 * c - 0.01,
-                      amps * 1000.0, amps * 0.378);
-        s += line;
-    }
-    return s;
-}
+using testsupport::raw_flight;
 
 std::vector<std::string> paths_of(const std::vector<ExpandedPath>& v) {
     std::vector<std::string> out;

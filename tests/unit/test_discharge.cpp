@@ -4,18 +4,19 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <unistd.h>
 
 #include "core/model/tremblay.h"
 #include "host/discharge/discharge.h"
+#include "test_files.h"
 
 using namespace battsim::host;
 using namespace battsim::host::discharge;
 
 namespace {
 std::string write(const std::string& name, const std::string& text) {
-    const std::string path = "/tmp/battsim-test-" + std::to_string(::getpid()) + "-" + name + ".csv";
-    std::ofstream(path) << text;
+    static const std::string dir = testsupport::scratch_dir("discharge");
+    const std::string path = dir + "/" + name + ".csv";
+    testsupport::write_file(path, text);
     return path;
 }
 
@@ -157,7 +158,7 @@ TEST_CASE("Samsung 30Q C/10 discharge", "[discharge][data]") {
 
 TEST_CASE("battsim discharge writes its outputs and exits with the documented codes", "[discharge][cli]") {
     const std::string bin = BATTSIM_BINARY;
-    const std::string dir = "/tmp/battsim-test-" + std::to_string(::getpid());
+    const std::string dir = testsupport::scratch_dir("discharge") + "/run";
     const std::string log = std::string(BATTSIM_DATA_DIR) + "/samsung-30q/Q30_S001_4C.csv";
     const std::string cmd = bin + " discharge " + log + " --negative-discharge --min-voltage 2.5 --max-voltage 4.2 --table " + dir +
                             "-table.csv --plot " + dir + "-plot.svg --json > " + dir + "-out.json 2>/dev/null";

@@ -11,6 +11,8 @@
 //  2. the firmware's own discharge-logger record of the same readings, replayed by
 //     `battsim replay`, must give the firmware monitor's SD series byte for byte, and
 //     every status field, cells included, bit for bit.
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cmath>
 #include <memory>

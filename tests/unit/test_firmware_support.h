@@ -1,14 +1,7 @@
 // Shared by the firmware tests: temp dirs, files, running the programs, and the exact
 // comparison of two monitor statuses.
 #pragma once
-#include <stdlib.h>
-#include <sys/stat.h>
-#include <sys/wait.h>
-
-#include <array>
-#include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <sstream>
 #include <string>
 
@@ -16,50 +9,21 @@
 
 #include "core/monitor.h"
 #include "core/sample.h"
+#include "test_files.h"
 
 namespace fwtest {
 
-inline std::string temp_dir(const char* tag) {
-    std::string tmpl = std::string("/tmp/battsim-") + tag + "-XXXXXX";
-    char* d = mkdtemp(&tmpl[0]);
-    REQUIRE(d != nullptr);
-    return d;
-}
+using testsupport::read_file;
+using testsupport::write_file;
+using Run = testsupport::RunResult;
 
-inline std::string read_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
+// A fresh directory, removed when the test program exits.
+inline std::string temp_dir(const char* tag) { return testsupport::scratch_dir(tag); }
 
-inline void write_file(const std::string& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary);
-    out << text;
-}
-
-inline std::string q(const std::string& s) { return "'" + s + "'"; }
-
-struct Run {
-    int exit_code = -1;
-    std::string out;
-    std::string err;
-};
+inline std::string q(const std::string& s) { return testsupport::shell_quoted(s); }
 
 // Runs `program args` through the shell; stderr is captured through a file.
-inline Run run(const std::string& program, const std::string& args) {
-    static const std::string dir = temp_dir("fwrun");
-    const std::string err_path = dir + "/stderr.txt";
-    const std::string cmd = q(program) + " " + args + " 2>" + q(err_path);
-    Run r;
-    FILE* p = popen(cmd.c_str(), "r");
-    REQUIRE(p != nullptr);
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-    const int status = pclose(p);
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.err = read_file(err_path);
-    return r;
-}
+inline Run run(const std::string& program, const std::string& args) { return testsupport::run_program(program, args); }
 
 inline std::string flight_path(int n) {
     return std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/" + std::to_string(n) + ".csv";

@@ -11,12 +11,6 @@
 #include "test_fit_synthetic.h"
 
 namespace {
-std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
 int run(const std::string& args) {
     const int status = std::system((std::string(BATTSIM_BINARY) + " fit " + args + " > /dev/null 2>&1").c_str());
     return WEXITSTATUS(status);
@@ -35,7 +29,7 @@ TEST_CASE("battsim fit writes a loadable config, byte-identical on a rerun", "[f
     const std::string args = log + " -c " + kConfig + " --add rc --test " + log + " --plot " + png + " --report " + report + " -o ";
     REQUIRE(run(args + out1) == 0);
     REQUIRE(run(args + out2) == 0);
-    CHECK(slurp(out1) == slurp(out2));
+    CHECK(testsupport::read_file(out1) == testsupport::read_file(out2));
     const battsim::host::LoadedConfig c = battsim::host::load_config_file(out1);
     CHECK(c.monitor.extensions.rc_count == 1);
     CHECK(c.monitor.extensions.rc[0].time_constant_s == Approx(4.0).epsilon(0.2));
@@ -49,7 +43,7 @@ TEST_CASE("battsim fit writes a loadable config, byte-identical on a rerun", "[f
         if (p["name"] == "rc1_tau") have_sigma = p["sigma"].is_number() && p["sigma"].get<double>() > 0;
     }
     CHECK(have_sigma);
-    CHECK(slurp(png).compare(1, 3, "PNG") == 0);
+    CHECK(testsupport::read_file(png).compare(1, 3, "PNG") == 0);
     // Evaluation only: nothing fitted, the config's own errors reported.
     REQUIRE(run(log + " -c " + out1 + " --params none --initial monitor --report " + report) == 0);
     std::ifstream ein(report);

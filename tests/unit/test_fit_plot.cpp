@@ -2,22 +2,20 @@
 // plot reads the series CSV that `battsim replay --series` writes.
 #include <catch2/catch.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <unistd.h>
 
 #include "host/plot/plot.h"
 #include "host/replay.h"
+#include "test_files.h"
 
 using namespace battsim::host;
 
 namespace {
-std::string temp(const std::string& name) { return "/tmp/battsim-test-" + std::to_string(::getpid()) + "-" + name; }
-std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
+std::string temp(const std::string& name) {
+    static const std::string dir = testsupport::scratch_dir("plot");
+    return dir + "/" + name;
 }
 plot::Panel sine_panel() {
     plot::Panel p;
@@ -46,17 +44,38 @@ TEST_CASE("render writes PNG and SVG, the same bytes for the same input", "[plot
     plot::render({sine_panel(), sine_panel()}, "title with 'quotes'", png);
     plot::render({sine_panel()}, "t", svg);
     plot::render({sine_panel(), sine_panel()}, "title with 'quotes'", png2);
-    const std::string a = slurp(png), b = slurp(png2), c = slurp(svg);
+    const std::string a = testsupport::read_file(png), b = testsupport::read_file(png2), c = testsupport::read_file(svg);
     REQUIRE(a.size() > 1000);
     CHECK(a.compare(1, 3, "PNG") == 0);
     CHECK(a == b);
     CHECK(c.find("<svg") != std::string::npos);
     // No temporary left behind.
-    CHECK_FALSE(std::ifstream(png + ".tmp-" + std::to_string(::getpid())).good());
+    for (const auto& e : std::filesystem::directory_iterator(std::filesystem::path(png).parent_path()))
+        CHECK(e.path().string().rfind(png + ".tmp", 0) != 0);
     for (const std::string& f : {png, svg, png2}) std::remove(f.c_str());
     CHECK_THROWS_AS(plot::render({sine_panel()}, "t", temp("a.pdf")), std::invalid_argument);
     CHECK_THROWS_AS(plot::render({}, "t", temp("c.png")), std::invalid_argument);
     CHECK_THROWS_AS(plot::render({sine_panel()}, "t", "/nonexistent-dir/x.png"), std::runtime_error);
+}
+
+TEST_CASE("render keeps a series without values as a legend entry, even a whole empty panel", "[plot]") {
+    plot::Panel empty;
+    empty.title = "nothing yet";
+    plot::Series none, gaps;
+    none.title = "never estimated";
+    gaps.title = "only gaps";
+    gaps.y2 = true;
+    gaps.x = {0.0, 1.0};
+    gaps.y = {NAN, NAN};
+    empty.series = {none, gaps};
+    plot::Panel mixed = sine_panel();
+    mixed.series.push_back(none);
+    const std::string svg = temp("empty.svg");
+    plot::render({empty, mixed}, "t", svg);  // gnuplot stops at an empty series if it is plotted
+    const std::string text = testsupport::read_file(svg);
+    CHECK(text.find(">never estimated (no values)<") != std::string::npos);
+    CHECK(text.find(">only gaps (no values)<") != std::string::npos);
+    CHECK(text.find(">sin<") != std::string::npos);
 }
 
 TEST_CASE("Envelope thinning keeps the extremes", "[plot]") {
@@ -88,8 +107,8 @@ TEST_CASE("plot_replay from memory and from the replay's series CSV", "[plot]") 
     CHECK(from_csv.voltage_v[1000] == Approx(memory.voltage_v[1000]).margin(1e-4));
     plot::plot_replay(memory, "flight 30", png1);
     plot::plot_replay(from_csv, "flight 30", png2);
-    CHECK(slurp(png1).size() > 10000);
-    CHECK(slurp(png2).size() > 10000);
+    CHECK(testsupport::read_file(png1).size() > 10000);
+    CHECK(testsupport::read_file(png2).size() > 10000);
     for (const std::string& f : {series, png1, png2}) std::remove(f.c_str());
     CHECK_THROWS_AS(plot::read_replay_series_csv(log), InputError);  // a flight log is not a series
 }

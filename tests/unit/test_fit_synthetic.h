@@ -9,10 +9,10 @@
 #include <cstdio>
 #include <fstream>
 #include <string>
-#include <unistd.h>
 
 #include "core/estimate/low_pass.h"
 #include "core/model/tremblay.h"
+#include "test_files.h"
 
 namespace synth {
 
@@ -48,7 +48,8 @@ private:
 
 // Writes time_s,voltage_v,current_a (positive = discharge) and returns the path.
 inline std::string write_log(const std::string& name, const Options& o) {
-    const std::string path = "/tmp/battsim-test-" + std::to_string(::getpid()) + "-" + name + ".csv";
+    static const std::string dir = testsupport::scratch_dir("fit");
+    const std::string path = dir + "/" + name + ".csv";
     std::ofstream out(path);
     out << "time_s,voltage_v,current_a\n";
     battsim::core::TremblayModel model;

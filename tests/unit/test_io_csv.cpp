@@ -3,9 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <sys/stat.h>
-#include <unistd.h>
 
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -16,6 +14,7 @@
 #include "host/io/csv_reader.h"
 #include "host/io/line_reader.h"
 #include "host/io/sample_reader.h"
+#include "test_files.h"
 
 using namespace battsim;
 using namespace battsim::host;
@@ -23,31 +22,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// A fresh directory under the system temp dir, removed with everything in it.
-class TempDir {
-public:
-    TempDir() {
-        static std::atomic<int> counter{0};
-        dir_ = fs::temp_directory_path() /
-               ("battsim_io_csv_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-        fs::create_directories(dir_);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(dir_, ec);
-    }
-    // Writes `content` byte for byte and returns the path.
-    std::string write(const std::string& name, const std::string& content) const {
-        const fs::path p = dir_ / name;
-        std::ofstream out(p, std::ios::binary);
-        out.write(content.data(), static_cast<std::streamsize>(content.size()));
-        return p.string();
-    }
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-private:
-    fs::path dir_;
-};
+using TempDir = testsupport::TempDir;
 
 // Message of the InputError thrown by opening `path` and reading it to the end; "" if none.
 std::string read_error(const std::string& path, const ReaderOptions& opt = ReaderOptions()) {

@@ -3,10 +3,7 @@
 // inputs built byte by byte in this file.
 #include <catch2/catch.hpp>
 
-#include <unistd.h>
-
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -19,6 +16,7 @@
 #include "host/io/dataflash_reader.h"
 #include "host/io/sample_reader.h"
 #include "host/io/ulog_reader.h"
+#include "test_files.h"
 
 using namespace battsim;
 using namespace battsim::host;
@@ -26,28 +24,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-class LogTempDir {
-public:
-    LogTempDir() {
-        static std::atomic<int> counter{0};
-        dir_ = fs::temp_directory_path() /
-               ("battsim_io_logs_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-        fs::create_directories(dir_);
-    }
-    ~LogTempDir() {
-        std::error_code ec;
-        fs::remove_all(dir_, ec);
-    }
-    std::string write(const std::string& name, const std::string& bytes) const {
-        const fs::path p = dir_ / name;
-        std::ofstream out(p, std::ios::binary);
-        out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-        return p.string();
-    }
-
-private:
-    fs::path dir_;
-};
+using LogTempDir = testsupport::TempDir;
 
 enum class Kind { DfText, DfBinary, Ulog };
 

@@ -14,6 +14,7 @@
 #include "host/score/scoreboard.h"
 #include "host/sim/scenario.h"
 #include "host/sim/simulate.h"
+#include "test_files.h"
 
 using namespace battsim;
 using namespace battsim::host;
@@ -184,8 +185,8 @@ TEST_CASE("Scoreboard: table and JSON, every column; the same output on any thre
 
 TEST_CASE("Scoreboard: reading the logs from files gives the same result as in memory", "[score]") {
     const std::vector<sim::Scenario> suite = {scenario("one"), scenario("two", R"({"pack": {"cells": 4}, "seed": 9})")};
-    char tmpl[] = "/tmp/battsim-score-test-XXXXXX";
-    const std::string dir = mkdtemp(tmpl);
+    const testsupport::TempDir temp("score");
+    const std::string dir = temp.path();
     for (const sim::Scenario& s : suite) {
         const sim::SimulationResult r = sim::simulate(s);
         sim::write_simulation(r, dir + "/" + s.name + ".csv", dir + "/" + s.name + ".truth.json");

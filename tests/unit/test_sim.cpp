@@ -20,6 +20,7 @@
 #include "host/sim/rng.h"
 #include "host/sim/scenario.h"
 #include "host/sim/simulate.h"
+#include "test_files.h"
 
 using namespace battsim::host;
 using namespace battsim::host::sim;
@@ -41,12 +42,6 @@ Scenario small_scenario(const std::string& extra_json = "{}") {
     return scenario_from_json(j, "unit.json", "", &cfg);
 }
 
-std::string read_text(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::stringstream b;
-    b << in.rdbuf();
-    return b.str();
-}
 
 bool file_exists(const std::string& path) { return std::ifstream(path).good(); }
 
@@ -289,10 +284,10 @@ TEST_CASE("The bundled example log is what `battsim simulate` makes", "[sim]") {
     }
     // battsim simulate configs/scenarios/4s-racing-healthy-a.json -o logs/example-4s.csv
     const SimulationResult r = simulate(load_scenario(dir + "/configs/scenarios/4s-racing-healthy-a.json"));
-    CHECK(r.log_text == read_text(log));
+    CHECK(r.log_text == testsupport::read_file(log));
     // The truth file's flight, pack and series (its embedded copy of the monitor config
     // follows the config code and is left out).
-    const json written = json::parse(read_text(dir + "/logs/example-4s.truth.json"));
+    const json written = json::parse(testsupport::read_file(dir + "/logs/example-4s.truth.json"));
     const json now = truth_to_json(r);
     for (const char* key : {"scenario", "pack", "flight", "degradation", "sensor", "series", "log"}) {
         INFO(key);
@@ -333,12 +328,9 @@ TEST_CASE("Scenario files: the suite loads, covers what it must, and bad files a
     CHECK(cold >= 2);
     CHECK(hot >= 2);
 
-    char tmpl[] = "/tmp/battsim-sim-XXXXXX";
-    const std::string tmp = mkdtemp(tmpl);
-    const auto write = [&](const std::string& name, const std::string& text) {
-        std::ofstream(tmp + "/" + name) << text;
-        return tmp + "/" + name;
-    };
+    const testsupport::TempDir temp("sim");
+    const std::string tmp = temp.path();
+    const auto write = [&](const std::string& name, const std::string& text) { return temp.write(name, text); };
     const std::string cfg = std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-modified.json";
     const std::string head = R"({"schema": "battsim.scenario", "version": 1, "name": "x", "monitor_config": ")" + cfg + "\"";
     const auto error_of = [](const std::string& path) -> std::string {
@@ -409,7 +401,7 @@ TEST_CASE("The plant at 7 degC against flight 32: voltage against charge drawn",
         }
         return med;
     };
-    const std::vector<double> real = bins(read_text(path));
+    const std::vector<double> real = bins(testsupport::read_file(path));
     const Scenario s = small_scenario(
         R"({"seed": 1002, "environment": {"ambient_c": 7}, "profile": {"idle_before_s": 60, "flight_s": 150, "mean_power_w": 360}})");
     const std::string sim_text = simulate(s).log_text;
@@ -433,7 +425,7 @@ TEST_CASE("The plant at 7 degC against flight 32: voltage against charge drawn",
         std::sort(amps.begin(), amps.end());
         return std::vector<double>{amps[amps.size() / 2], amps[amps.size() * 9 / 10]};
     };
-    const std::vector<double> pr = percentiles(read_text(path)), ps = percentiles(sim_text);
+    const std::vector<double> pr = percentiles(testsupport::read_file(path)), ps = percentiles(sim_text);
     INFO("current median / p90: real " << pr[0] << " / " << pr[1] << " A, simulated " << ps[0] << " / " << ps[1] << " A");
     CHECK(ps[0] == Approx(pr[0]).epsilon(0.2));
     CHECK(ps[1] == Approx(pr[1]).epsilon(0.2));

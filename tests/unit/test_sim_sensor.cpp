@@ -16,6 +16,7 @@
 #include "host/sim/scenario.h"
 #include "host/sim/sensor.h"
 #include "host/sim/simulate.h"
+#include "test_files.h"
 
 using namespace battsim::host;
 using namespace battsim::host::sim;
@@ -173,9 +174,8 @@ TEST_CASE("Headered log for other cell counts reads back through the standard re
         for (int c = 3; c < 8; ++c) CHECK(std::lround(std::stod(f[static_cast<size_t>(c)]) * 1e5) % 800 == 0);
         CHECK(decimals(f[9]) == 1);
     }
-    char tmpl[] = "/tmp/battsim-sensor-XXXXXX";
-    const std::string path = std::string(mkdtemp(tmpl)) + "/six.csv";
-    std::ofstream(path) << r.log_text;
+    const testsupport::TempDir dir("sensor");
+    const std::string path = dir.write("six.csv", r.log_text);
     ReaderOptions ro;
     std::unique_ptr<SampleReader> reader = open_reader(path, ro);
     battsim::core::Sample s;
@@ -190,7 +190,6 @@ TEST_CASE("Headered log for other cell counts reads back through the standard re
     }
     CHECK(n == rows.size());
     CHECK(reader->info().format == LogFormat::Csv);
-    std::remove(path.c_str());
 }
 
 TEST_CASE("Sensor faults are visible in the log and leave the truth alone", "[sim][sensor]") {

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "host/batch/inputs.h"
+#include "host/io/line_reader.h"
 
 namespace battsim {
 namespace host {
@@ -136,19 +137,6 @@ std::string manifest_dir(const std::string& path) {
     return d.empty() ? "." : d;
 }
 
-// Line and column (1-based) of a byte offset.
-std::pair<long, long> line_column(const std::string& text, size_t offset) {
-    long line = 1, col = 1;
-    for (size_t i = 0; i < offset && i < text.size(); ++i) {
-        if (text[i] == '\n') {
-            ++line;
-            col = 1;
-        } else {
-            ++col;
-        }
-    }
-    return {line, col};
-}
 
 // Where each value of an (already validated) JSON text starts, keyed by the same
 // "$.a.b[3]" paths the messages use. nlohmann::json keeps no positions, so this small

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "host/io/line_reader.h"
 #include "host/io/sample_reader.h"
 #include "host/report/summary.h"
 
@@ -132,19 +133,6 @@ std::string render_csv(const json& rows, const std::vector<std::string>& keys) {
         out += "\n";
     }
     return out;
-}
-
-std::pair<long, long> line_column(const std::string& text, size_t offset) {
-    long line = 1, col = 1;
-    for (size_t i = 0; i < offset && i < text.size(); ++i) {
-        if (text[i] == '\n') {
-            ++line;
-            col = 1;
-        } else {
-            ++col;
-        }
-    }
-    return {line, col};
 }
 
 }  // namespace

@@ -15,6 +15,9 @@ public:
     AtomicFile& operator=(const AtomicFile&) = delete;
 
     std::FILE* handle() { return file_; }
+    // Another program (e.g. gnuplot) may write the temporary by this name instead of
+    // handle(); commit() then syncs and renames whatever it wrote.
+    const std::string& temp_path() const { return temp_path_; }
     void write(const std::string& text);
     void write(const char* data, size_t size);
     void commit();  // flush, fsync, rename; throws std::runtime_error on failure

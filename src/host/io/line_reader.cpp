@@ -125,5 +125,18 @@ bool LineReader::next(std::string_view& line) {
     }
 }
 
+std::pair<long, long> line_column(std::string_view text, std::size_t offset) {
+    long line = 1, col = 1;
+    for (std::size_t i = 0; i < offset && i < text.size(); ++i) {
+        if (text[i] == '\n') {
+            ++line;
+            col = 1;
+        } else {
+            ++col;
+        }
+    }
+    return {line, col};
+}
+
 }  // namespace host
 }  // namespace battsim

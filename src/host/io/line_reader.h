@@ -11,9 +11,14 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 
 namespace battsim {
 namespace host {
+
+// 1-based line and column of byte `offset` in `text` ("\n" ends a line), for messages
+// about a document parsed whole (JSON manifests and tables).
+std::pair<long, long> line_column(std::string_view text, std::size_t offset);
 
 class LineReader {
 public:

@@ -2,13 +2,19 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <gnuplot-iostream.h>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
+#include <utility>
 
+#include "host/io/atomic_file.h"
 #include "host/io/csv_reader.h"
 #include "host/io/line_reader.h"
 
@@ -40,6 +46,16 @@ void append_number(std::string& out, const char* fmt, double v) {
     out += buf;
 }
 
+// "set <axis>range [lo:hi]" when both ends are given, else autoscaling for that axis.
+std::string range_command(const char* axis, double lo, double hi) {
+    if (!(std::isfinite(lo) && std::isfinite(hi) && hi > lo)) return std::string("set autoscale ") + axis + "\n";
+    std::string cmd = std::string("set ") + axis + "range [";
+    append_number(cmd, "%.9g", lo);
+    cmd += ':';
+    append_number(cmd, "%.9g", hi);
+    return cmd + "]\n";
+}
+
 std::string read_all(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     std::ostringstream s;
@@ -49,9 +65,23 @@ std::string read_all(const std::string& path) {
 
 }  // namespace
 
+bool Series::has_points() const {
+    for (size_t i = 0; i < x.size() && i < y.size(); ++i) {
+        if (std::isfinite(x[i]) && std::isfinite(y[i])) return true;
+    }
+    return false;
+}
+
 bool Panel::y2_used() const {
     for (const Series& s : series) {
-        if (s.y2) return true;
+        if (s.y2 && s.has_points()) return true;
+    }
+    return false;
+}
+
+bool Panel::has_points() const {
+    for (const Series& s : series) {
+        if (s.has_points()) return true;
     }
     return false;
 }
@@ -108,13 +138,15 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
     check_plot_path(path);
     if (panels.empty()) throw std::invalid_argument("plot: nothing to draw");
     const bool svg = ends_with(path, ".svg");
-    const std::string temp = path + ".tmp-" + std::to_string(::getpid());
-    // Fail early, with a clear message, if the directory cannot take the file.
-    if (std::FILE* probe = std::fopen(temp.c_str(), "wb")) {
-        std::fclose(probe);
-    } else {
-        throw std::runtime_error("plot: cannot write " + path + " (cannot create " + temp + ")");
+    // Created first, so a directory that cannot take the file fails before gnuplot runs;
+    // gnuplot writes the temporary by name and it is renamed into place only on success.
+    std::unique_ptr<AtomicFile> out;
+    try {
+        out = std::make_unique<AtomicFile>(path);
+    } catch (const std::runtime_error& e) {
+        throw std::runtime_error(std::string("plot: ") + e.what());
     }
+    const std::string& temp = out->temp_path();
     char err_template[] = "/tmp/battsim-gnuplot-XXXXXX";
     const int fd = ::mkstemp(err_template);
     if (fd < 0) throw std::runtime_error("plot: cannot create a temporary file for gnuplot's messages");
@@ -126,6 +158,7 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
     const int height = panel_height_px * static_cast<int>(panels.size()) + 40;
     script += svg ? "set terminal svg size " : "set terminal pngcairo size ";
     script += std::to_string(width_px) + "," + std::to_string(height) + " font 'DejaVu Sans,10' noenhanced\n";
+    script += "set encoding utf8\n";  // units such as mΩ in labels
     script += "set output " + quoted(temp) + "\n";
     // Data first, as datablocks; a blank line breaks a line at missing values.
     int block = 0;
@@ -148,10 +181,20 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
             script += "EOD\n";
         }
     }
+    // Fixed side margins, the same in every panel, so the panels' time axes line up.
+    bool any_y2 = false;
+    for (const Panel& p : panels) any_y2 = any_y2 || p.y2_used();
+    script += "set lmargin 11\nset rmargin " + std::string(any_y2 ? "11" : "3") + "\n";
     script += "set multiplot layout " + std::to_string(panels.size()) + ",1 title " + quoted(title) + "\n";
     block = 0;
     for (const Panel& p : panels) {
-        script += "unset arrow\nunset label\nset grid\nset key top right opaque box\n";
+        script += "unset arrow\nunset label\nset grid\n";
+        if (p.key_above) {
+            // A taller top margin: the title on its own row, the legend's row under it.
+            script += "set tmargin 4\nset key at graph 1, graph 1 right bottom horizontal\n";
+        } else {
+            script += "set tmargin -1\nset key top right opaque box\n";
+        }
         script += "set title " + quoted(p.title) + "\n";
         script += "set xlabel " + quoted(p.xlabel) + "\nset ylabel " + quoted(p.ylabel) + "\n";
         if (p.y2_used()) {
@@ -159,46 +202,46 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
         } else {
             script += "set ytics mirror\nunset y2tics\nunset y2label\n";
         }
-        if (std::isfinite(p.y_min) && std::isfinite(p.y_max) && p.y_max > p.y_min) {
-            std::string lo, hi;
-            append_number(lo, "%.7g", p.y_min);
-            append_number(hi, "%.7g", p.y_max);
-            script += "set yrange [" + lo + ":" + hi + "]\n";
-        } else {
-            script += "set autoscale y\n";
+        double x_min = p.x_min, x_max = p.x_max, y_min = p.y_min, y_max = p.y_max;
+        if (!p.has_points()) {  // gnuplot cannot autoscale an axis without data: a unit frame
+            if (!(y_max > y_min)) y_min = 0, y_max = 1;
+            if (!(x_max > x_min)) x_min = 0, x_max = 1;
         }
-        if (std::isfinite(p.x_min) && std::isfinite(p.x_max) && p.x_max > p.x_min) {
-            std::string lo, hi;
-            append_number(lo, "%.9g", p.x_min);
-            append_number(hi, "%.9g", p.x_max);
-            script += "set xrange [" + lo + ":" + hi + "]\n";
-        } else {
-            script += "set autoscale x\n";
-        }
+        script += range_command("y", y_min, y_max);
+        script += range_command("y2", p.y2_min, p.y2_max);
+        script += range_command("x", x_min, x_max);
         for (const auto& m : p.vertical_marks) {
             std::string x;
             append_number(x, "%.9g", m.first);
             script += "set arrow from " + x + ", graph 0 to " + x + ", graph 1 nohead dt 2 lw 1.5 lc rgb 'black'\n";
             script += "set label " + quoted(m.second) + " at " + x + ", graph 0.06 rotate by 90 offset -1,0 front\n";
         }
-        std::string cmd = "plot ";
-        bool first = true;
+        // A plot of legend entries alone trips an assertion in gnuplot 5.4: an undefined
+        // function, drawn as nothing, comes first.
+        std::string cmd = p.has_points() ? "plot " : "plot NaN notitle";
+        bool first = p.has_points();
         for (const Series& s : p.series) {
             if (!first) cmd += ", ";
             first = false;
-            cmd += "$d" + std::to_string(block++) + " using 1:2 with " + s.style;
+            const std::string data = "$d" + std::to_string(block++);
+            // gnuplot stops at a series with no valid point; its legend entry still says it is empty.
+            cmd += s.has_points() ? data + " using 1:2 with " + s.style : "keyentry with " + s.style;
             if (s.style == "lines" || s.style == "linespoints" || s.style == "steps" || s.style == "impulses") {
                 std::string w;
                 append_number(w, "%.2g", s.width);
                 cmd += " lw " + w;
             }
             if (!s.color.empty()) cmd += " lc rgb " + quoted(s.color);
-            cmd += s.y2 ? " axes x1y2" : " axes x1y1";
-            cmd += " title " + quoted(s.title);
+            if (s.has_points()) cmd += s.y2 ? " axes x1y2" : " axes x1y1";
+            cmd += " title " + quoted(s.has_points() || s.title.empty() ? s.title : s.title + " (no values)");
         }
         script += cmd + "\n";
     }
     script += "unset multiplot\nunset output\n";
+    // gnuplot stops at the first error, and its exit status does not reach us through the
+    // pipe: only a script that ran to its end prints this.
+    static const char* const kDone = "battsim-plot-done";
+    script += std::string("print '") + kDone + "'\n";
 
     try {
         Gnuplot gp("gnuplot > " + err_path + " 2>&1");
@@ -206,22 +249,20 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
         gp.flush();
     } catch (const std::exception& e) {
         std::remove(err_path.c_str());
-        std::remove(temp.c_str());
         throw std::runtime_error(std::string("plot: cannot run gnuplot: ") + e.what());
     }
     // The Gnuplot object has closed the pipe and waited for gnuplot to exit.
     const std::string messages = read_all(err_path);
     std::remove(err_path.c_str());
     std::ifstream check(temp, std::ios::binary | std::ios::ate);
-    const bool ok = check && check.tellg() > 0 && messages.find("rror") == std::string::npos;
+    const bool ok = check && check.tellg() > 0 && messages.find("rror") == std::string::npos &&
+                    messages.find(kDone) != std::string::npos;
     check.close();
-    if (!ok) {
-        std::remove(temp.c_str());
-        throw std::runtime_error("plot: gnuplot failed to write " + path + (messages.empty() ? "" : ": " + messages));
-    }
-    if (std::rename(temp.c_str(), path.c_str()) != 0) {
-        std::remove(temp.c_str());
-        throw std::runtime_error("plot: cannot move the plot into place at " + path);
+    if (!ok) throw std::runtime_error("plot: gnuplot failed to write " + path + (messages.empty() ? "" : ": " + messages));
+    try {
+        out->commit();
+    } catch (const std::runtime_error& e) {
+        throw std::runtime_error(std::string("plot: ") + e.what());
     }
 }
 
@@ -240,6 +281,7 @@ void ReplaySeries::add(const core::Sample& sample, const core::MonitorStatus& s)
     resistance_ohm.push_back(s.resistance_ohm > 0 ? s.resistance_ohm : nan);
     remaining_s.push_back(s.time_valid ? s.remaining_time_s : nan);
     total_s.push_back(s.time_valid ? s.total_time_s : nan);
+    flying.push_back(s.flying);
     if (cell_v.size() < sample.cell_count) cell_v.resize(sample.cell_count, std::vector<double>(time_s.size() - 1, nan));
     for (size_t c = 0; c < cell_v.size(); ++c) cell_v[c].push_back(c < sample.cell_count ? sample.cell_voltage_v[c] : nan);
 }
@@ -261,13 +303,13 @@ ReplaySeries read_replay_series_csv(const std::string& path) {
     const long c_time = col("time_s"), c_v = col("voltage_v"), c_model = col("model_voltage_v"),
                c_adapted = col("adapted_model_voltage_v"), c_i = col("current_a"), c_fi = col("filtered_current_a"),
                c_cap = col("capacity_ah"), c_r = col("resistance_ohm"), c_rem = col("remaining_time_s"),
-               c_tot = col("total_time_s"), c_valid = col("sample_valid");
-    for (long c : {c_time, c_v, c_model, c_adapted, c_i, c_fi, c_cap, c_r, c_rem, c_tot, c_valid}) {
+               c_tot = col("total_time_s"), c_valid = col("sample_valid"), c_flying = col("flying");
+    for (long c : {c_time, c_v, c_model, c_adapted, c_i, c_fi, c_cap, c_r, c_rem, c_tot, c_valid, c_flying}) {
         if (c < 0)
             throw InputError(path, 1, 0,
                              "not a replay series: expected the columns time_s, voltage_v, current_a, filtered_current_a, "
                              "model_voltage_v, adapted_model_voltage_v, capacity_ah, resistance_ohm, remaining_time_s, "
-                             "total_time_s, sample_valid");
+                             "total_time_s, flying, sample_valid");
     }
     std::vector<long> cells;
     for (int c = 1; c <= core::kMaxCells; ++c) {
@@ -302,15 +344,15 @@ ReplaySeries read_replay_series_csv(const std::string& path) {
         s.resistance_ohm.push_back(r > 0 ? r : NAN);
         s.remaining_s.push_back(get(c_rem, true));
         s.total_s.push_back(get(c_tot, true));
+        s.flying.push_back(get(c_flying, false) != 0);
         for (size_t c = 0; c < cells.size(); ++c) s.cell_v[c].push_back(get(cells[c], true));
     }
     if (s.time_s.empty()) throw InputError(path, 0, 0, "the series holds no valid samples");
     return s;
 }
 
-namespace {
 Series line_series(const std::string& title, const std::vector<double>& x, const std::vector<double>& y,
-                   const std::string& color, bool y2 = false, double width = 1.0) {
+                   const std::string& color, bool y2, double width) {
     Series s;
     s.title = title;
     thin_envelope(x, y, 8000, s.x, s.y);
@@ -319,49 +361,110 @@ Series line_series(const std::string& title, const std::vector<double>& x, const
     s.width = width;
     return s;
 }
+
+namespace {
+// The range of a panel axis's data with a margin, so no line runs along the frame.
+// `trim` > 0 leaves that share of the values out at each end, so that a few spikes do
+// not squash what is typical.
+std::pair<double, double> padded_range(const Panel& p, bool y2, double trim = 0.0) {
+    std::vector<double> values;
+    for (const Series& s : p.series) {
+        if (s.y2 != y2) continue;
+        for (double v : s.y) {
+            if (std::isfinite(v)) values.push_back(v);
+        }
+    }
+    if (values.empty()) return {NAN, NAN};
+    std::sort(values.begin(), values.end());
+    const size_t cut = static_cast<size_t>(trim * static_cast<double>(values.size() - 1));
+    const double lo = values[cut], hi = values[values.size() - 1 - cut];
+    const double pad = hi > lo ? 0.06 * (hi - lo) : std::max(0.05 * std::fabs(hi), 0.01);
+    return {lo - pad, hi + pad};
+}
 }  // namespace
 
 void plot_replay(const ReplaySeries& s, const std::string& title, const std::string& path) {
     check_plot_path(path);
     if (s.time_s.empty()) throw std::invalid_argument("plot: the replay has no valid samples");
+    std::vector<double> resistance_mohm(s.resistance_ohm);
+    for (double& r : resistance_mohm) r *= 1000.0;  // milliohms read better than 0.0xx ohm
     std::vector<Panel> panels;
     Panel v;
     v.title = "Pack voltage: measured and model";
-    v.xlabel = "time (s)";
     v.ylabel = "voltage (V)";
     v.y2label = "current (A)";
-    v.series.push_back(line_series("current", s.time_s, s.current_a, "#c8c8c8", true));
+    v.series.push_back(line_series("current (right axis)", s.time_s, s.current_a, "#b0b0b0", true));
     v.series.push_back(line_series("fixed model", s.time_s, s.model_v, "#d62728", false, 1.5));
     v.series.push_back(line_series("adapted model", s.time_s, s.adapted_v, "#1f77b4", false, 1.5));
     v.series.push_back(line_series("measured", s.time_s, s.voltage_v, "black", false, 0.8));  // on top
     panels.push_back(v);
     Panel e;
     e.title = "Capacity and resistance estimates";
-    e.xlabel = "time (s)";
     e.ylabel = "capacity (Ah)";
-    e.y2label = "resistance (ohm)";
-    e.series.push_back(line_series("capacity estimate", s.time_s, s.capacity_ah, "#2ca02c", false, 1.5));
-    e.series.push_back(line_series("resistance estimate", s.time_s, s.resistance_ohm, "#9467bd", true, 1.5));
+    e.y2label = "resistance (mΩ)";
+    e.series.push_back(line_series("capacity", s.time_s, s.capacity_ah, "#2ca02c", false, 1.5));
+    e.series.push_back(line_series("resistance (right axis)", s.time_s, resistance_mohm, "#9467bd", true, 1.5));
     panels.push_back(e);
     Panel t;
-    t.title = "Flight time";
-    t.xlabel = "time (s)";
-    t.ylabel = "time (s)";
+    t.title = "Flight time estimates (to the minimum voltage at the average power)";
+    t.ylabel = "flight time (s)";
     t.series.push_back(line_series("remaining", s.time_s, s.remaining_s, "#ff7f0e", false, 1.5));
-    t.series.push_back(line_series("total", s.time_s, s.total_s, "#8c564b", false, 1.5));
+    t.series.push_back(line_series("total (flown + remaining)", s.time_s, s.total_s, "#8c564b", false, 1.5));
     panels.push_back(t);
+    size_t deviations = SIZE_MAX;  // index of the cell-difference panel, if any
     if (!s.cell_v.empty()) {
         static const char* colors[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b",
                                        "#e377c2", "#7f7f7f", "#bcbd22", "#17becf", "#393b79", "#637939"};
         Panel c;
         c.title = "Cell voltages";
-        c.xlabel = "time (s)";
         c.ylabel = "voltage (V)";
-        for (size_t k = 0; k < s.cell_v.size(); ++k)
-            c.series.push_back(line_series("cell " + std::to_string(k + 1), s.time_s, s.cell_v[k], colors[k % 12]));
+        // Each cell against the mean of the cells: the pack's sag cancels, so a weak or
+        // drifting cell shows, which it does not among noisy absolute voltages.
+        Panel d;
+        d.title = "Cell voltage minus the mean of the cells";
+        d.ylabel = "difference (mV)";
+        std::vector<double> mean(s.time_s.size(), 0.0);
+        for (size_t i = 0; i < mean.size(); ++i) {
+            for (const auto& cell : s.cell_v) mean[i] += cell[i];
+            mean[i] /= static_cast<double>(s.cell_v.size());  // NaN if a cell is missing: a gap
+        }
+        for (size_t k = 0; k < s.cell_v.size(); ++k) {
+            const std::string name = "cell " + std::to_string(k + 1);
+            std::vector<double> diff_mv(mean.size());
+            for (size_t i = 0; i < mean.size(); ++i) diff_mv[i] = (s.cell_v[k][i] - mean[i]) * 1000.0;
+            c.series.push_back(line_series(name, s.time_s, s.cell_v[k], colors[k % 12]));
+            d.series.push_back(line_series(name, s.time_s, diff_mv, colors[k % 12]));
+        }
         panels.push_back(c);
+        deviations = panels.size();
+        panels.push_back(d);
     }
-    render(panels, title, path);
+    // The flight window as the summary defines it: first to last flying sample (no landing
+    // mark when the log ends in flight).
+    std::vector<std::pair<double, std::string>> marks;
+    const size_t n = std::min(s.flying.size(), s.time_s.size());
+    size_t first = n, last = n;
+    for (size_t k = 0; k < n; ++k) {
+        if (!s.flying[k]) continue;
+        if (first == n) first = k;
+        last = k;
+    }
+    if (first < n) marks.push_back({s.time_s[first], "take-off"});
+    if (last + 1 < n) marks.push_back({s.time_s[last], "landing"});
+    for (size_t k = 0; k < panels.size(); ++k) {
+        Panel& p = panels[k];
+        p.xlabel = k + 1 == panels.size() ? "log time (s)" : "";  // one time axis label, at the bottom
+        p.key_above = true;  // never over the data
+        p.x_min = s.time_s.front();
+        p.x_max = s.time_s.back();
+        std::tie(p.y_min, p.y_max) = padded_range(p, false, k == deviations ? 0.002 : 0.0);
+        std::tie(p.y2_min, p.y2_max) = padded_range(p, true);
+        p.vertical_marks = marks;
+        if (k > 0) {
+            for (auto& m : p.vertical_marks) m.second.clear();  // named once, in the top panel
+        }
+    }
+    render(panels, title, path, 1400, 320);
 }
 
 // --- model against measurement --------------------------------------------------------------

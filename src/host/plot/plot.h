@@ -21,6 +21,7 @@ struct Series {
     std::string color;            // gnuplot colour name or #rrggbb; empty = automatic
     double width = 1.0;
     bool y2 = false;              // right-hand axis
+    bool has_points() const;      // any finite (x, y): else only its legend entry is drawn
 };
 
 struct Panel {
@@ -28,12 +29,19 @@ struct Panel {
     std::vector<Series> series;
     std::vector<std::pair<double, std::string>> vertical_marks;  // x position, label
     double y_min = NAN, y_max = NAN;  // left axis range; NaN = automatic
+    double y2_min = NAN, y2_max = NAN;  // right axis range; NaN = automatic
     double x_min = NAN, x_max = NAN;  // x axis range; NaN = automatic
-    bool y2_used() const;
+    bool key_above = false;  // legend in a row above the frame (else boxed, inside top right)
+    bool y2_used() const;  // a series on the right axis has points
+    bool has_points() const;
 };
 
 // Throws std::invalid_argument unless `path` ends in .png or .svg.
 void check_plot_path(const std::string& path);
+// A line of `x`, `y` thinned to about 8000 points for drawing (spikes kept).
+Series line_series(const std::string& title, const std::vector<double>& x, const std::vector<double>& y,
+                   const std::string& color, bool y2 = false, double width = 1.0);
+
 // Renders the panels one above the other. Throws std::runtime_error if gnuplot is missing
 // or fails (with its message); the target is only replaced on success.
 void render(const std::vector<Panel>& panels, const std::string& title, const std::string& path,
@@ -45,6 +53,7 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
 struct ReplaySeries {
     std::vector<double> time_s, voltage_v, model_v, adapted_v, current_a, filtered_a;
     std::vector<double> capacity_ah, resistance_ohm, remaining_s, total_s;
+    std::vector<bool> flying;
     std::vector<std::vector<double>> cell_v;  // [cell][sample]
     void add(const core::Sample& sample, const core::MonitorStatus& status);
 };

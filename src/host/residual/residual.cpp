@@ -868,15 +868,6 @@ void plot_residual(const std::vector<Trace>& traces, const ResidualReport& r, co
         eb.push_back(p.voltage_v - mb.back());
         ea.push_back(p.voltage_v - ma.back());
     }
-    auto series = [](const std::string& title, const std::vector<double>& x, const std::vector<double>& y, const char* color,
-                     double width) {
-        plot::Series s;
-        s.title = title;
-        plot::thin_envelope(x, y, 8000, s.x, s.y);
-        s.color = color;
-        s.width = width;
-        return s;
-    };
     // The axes follow the measurement and the final residual: a config model that runs away
     // (a pole reached) would otherwise squash everything else flat.
     {
@@ -898,9 +889,11 @@ void plot_residual(const std::vector<Trace>& traces, const ResidualReport& r, co
         e.y_max = r;
     }
     // Measured last, so it is drawn on top of the models it is compared with.
-    v.series = {series("config model", time, mb, "#ff7f0e", 1.2), series("final model", time, ma, "#d62728", 1.2),
-                series("measured", time, meas, "black", 0.8)};
-    e.series = {series("before (config)", time, eb, "#ff7f0e", 1.0), series("after (final)", time, ea, "#1f77b4", 1.0)};
+    v.series = {plot::line_series("config model", time, mb, "#ff7f0e", false, 1.2),
+                plot::line_series("final model", time, ma, "#d62728", false, 1.2),
+                plot::line_series("measured", time, meas, "black", false, 0.8)};
+    e.series = {plot::line_series("before (config)", time, eb, "#ff7f0e", false, 1.0),
+                plot::line_series("after (final)", time, ea, "#1f77b4", false, 1.0)};
     panels.push_back(v);
     panels.push_back(e);
     plot::Panel acf;
