@@ -42,5 +42,23 @@ inline int pick_lagged(const uint64_t* t_us, int head, int count, int capacity, 
     return -1;
 }
 
+// The x in [lo, hi] where a non-increasing voltage curve v(x) crosses `target_v`, by
+// bisection (the ends when the target lies outside). 32 halvings resolve the range well
+// below float resolution. Inverts the models for the charge drawn at a rested voltage.
+template <typename VoltageOf>
+float invert_falling(VoltageOf&& v, float lo, float hi, float target_v) {
+    if (v(lo) <= target_v) return lo;
+    if (v(hi) >= target_v) return hi;
+    for (int n = 0; n < 32; ++n) {
+        const float mid = 0.5f * (lo + hi);
+        if (v(mid) > target_v) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return 0.5f * (lo + hi);
+}
+
 }  // namespace core
 }  // namespace battsim

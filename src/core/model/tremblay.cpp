@@ -69,20 +69,8 @@ void TremblayModel::set_resistance_ohm(float resistance_ohm, bool keep_e0) {
 }
 
 float TremblayModel::used_ah_at_voltage(float voltage_v, float current_a) const {
-    float lo = 0.0f;
-    float hi = max_used_ah();
-    if (this->voltage_v(lo, current_a, current_a) <= voltage_v) return lo;
-    if (this->voltage_v(hi, current_a, current_a) >= voltage_v) return hi;
-    // 32 halvings resolve the range well below float resolution of the result.
-    for (int n = 0; n < 32; ++n) {
-        const float mid = 0.5f * (lo + hi);
-        if (this->voltage_v(mid, current_a, current_a) > voltage_v) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    return 0.5f * (lo + hi);
+    return invert_falling([&](float used_ah) { return this->voltage_v(used_ah, current_a, current_a); }, 0.0f,
+                          max_used_ah(), voltage_v);
 }
 
 float TremblayModel::energy_wh_to(float used_ah, float current_a) const {

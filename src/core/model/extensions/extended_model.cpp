@@ -144,19 +144,8 @@ float ExtendedModel::used_ah_at_voltage(float voltage_v, float current_a) const 
     const bool plain = ext_.rc_count == 0 && !ext_.temperature.enabled && ext_.hysteresis.magnitude_v == 0.0f &&
                        ext_.ocv.count < 2 && ext_.current_sensor.lead_s == 0.0f;
     if (plain) return base_.used_ah_at_voltage(voltage_v, current_a);
-    float lo = 0.0f;
-    float hi = q_ah_ * (1.0f - TremblayModel::kMinRemainingFraction);
-    if (this->voltage_v(lo, current_a, current_a) <= voltage_v) return lo;
-    if (this->voltage_v(hi, current_a, current_a) >= voltage_v) return hi;
-    for (int n = 0; n < 32; ++n) {
-        const float mid = 0.5f * (lo + hi);
-        if (this->voltage_v(mid, current_a, current_a) > voltage_v) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    return 0.5f * (lo + hi);
+    return invert_falling([&](float used_ah) { return this->voltage_v(used_ah, current_a, current_a); }, 0.0f,
+                          q_ah_ * (1.0f - TremblayModel::kMinRemainingFraction), voltage_v);
 }
 
 }  // namespace core
