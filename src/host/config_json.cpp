@@ -167,6 +167,20 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("capacity_process_fraction_per_sqrt_s", jc.ekf.capacity_process_fraction_per_sqrt_s, 0, 1);
         r.number("polarisation_process_ohm_per_sqrt_s", jc.ekf.polarisation_process_ohm_per_sqrt_s, 0, 1);
         r.number("gate_sigmas", jc.ekf.gate_sigmas, 1, 1000);
+        r.number("ocv_soc_sigma", jc.ekf.ocv_soc_sigma, 0, 1);
+        r.number("offset_sigma0_a", jc.ekf.offset_sigma0_a, 0, 100);
+        r.number("offset_process_a_per_sqrt_s", jc.ekf.offset_process_a_per_sqrt_s, 0, 10);
+        r.number("offset_fault_a", jc.offset_fault_a, 0, kBig);
+        r.number("offset_learn_max_current_a", jc.offset_learn_max_current_a, 0, kBig);
+        r.number("ground_soc_process_scale", jc.ground_soc_process_scale, 0, 100);
+        {
+            bool learn = jc.learn_offset_in_flight;
+            if (const json* b = r.object("learn_offset_in_flight")) {
+                if (!b->is_boolean()) r.fail(r.child("learn_offset_in_flight"), "expected true or false");
+                learn = b->get<bool>();
+            }
+            jc.learn_offset_in_flight = learn;
+        }
         r.number("solver_steps", jc.solver_steps, 2, 1000);
         r.number("solver_steps_per_update", jc.solver_steps_per_update, 1, 1000);
         r.number("short_flight_fraction", jc.short_flight_fraction, 0, 1);
@@ -292,6 +306,13 @@ json config_to_json(const LoadedConfig& c) {
             {"capacity_process_fraction_per_sqrt_s", jc.ekf.capacity_process_fraction_per_sqrt_s},
             {"polarisation_process_ohm_per_sqrt_s", jc.ekf.polarisation_process_ohm_per_sqrt_s},
             {"gate_sigmas", jc.ekf.gate_sigmas},
+            {"ocv_soc_sigma", jc.ekf.ocv_soc_sigma},
+            {"offset_sigma0_a", jc.ekf.offset_sigma0_a},
+            {"offset_process_a_per_sqrt_s", jc.ekf.offset_process_a_per_sqrt_s},
+            {"offset_fault_a", jc.offset_fault_a},
+            {"offset_learn_max_current_a", jc.offset_learn_max_current_a},
+            {"ground_soc_process_scale", jc.ground_soc_process_scale},
+            {"learn_offset_in_flight", jc.learn_offset_in_flight},
             {"solver_steps", jc.solver_steps},
             {"solver_steps_per_update", jc.solver_steps_per_update},
             {"short_flight_fraction", jc.short_flight_fraction},

@@ -21,18 +21,31 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     solve_ = kSolveRemaining;
     flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = elapsed_at_solve_s_ = 0.0f;
     short_count_ = 0;
+    was_flying_ = false;
 }
 
 void JointEstimator::start(float voltage_v, float current_a) {
-    const float soc = ocv_.soc_at_voltage(voltage_v + current_a * rated_.internal_resistance_ohm);
+    const float soc = CapacityEkf::soc_at_rest_voltage(ocv_, voltage_v + current_a * rated_.internal_resistance_ohm);
     ekf_.start(soc);
     polarisation_current_.reset(current_a);
     status_.started = true;
-    status_.soc = soc;
+    status_.soc = clampf(soc, 0.0f, 1.0f);
 }
 
 void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, float dt_s, bool flying) {
     if (!status_.started) start(voltage_v, current_a);
+    // Flying on the offset-corrected current: a sensor reading 1.5 A high on the ground must
+    // not start the flight (and its mean power) before take-off.
+    const float offset_a = ekf_.status().offset_a;
+    const float true_a = current_a - offset_a;
+    flying = flying && true_a >= config_.min_flying_current_a;
+    if (flying && !was_flying_) {
+        // A take-off: the flight's accumulators start again.
+        flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = elapsed_at_solve_s_ = 0.0f;
+        short_count_ = 0;
+    }
+    was_flying_ = flying;
+    status_.flying = flying;
     if (flying) resistance_.update(time_us, voltage_v, current_a);
     else resistance_.break_history();
     const DifferenceResistanceEstimator::Status& rs = resistance_.status();
@@ -52,14 +65,22 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     }
 
     const float ip = polarisation_current_.update(current_a, dt_s);
-    ekf_.predict(current_a, dt_s);
-    ekf_.correct(voltage_v + r0 * current_a, ip, (r_sigma * current_a) * (r_sigma * current_a), ocv_, flying);
+    // Below the offset-learning current the pack is on the ground: what the voltage shows
+    // there is the offset, never capacity or polarisation.
+    const bool ground = current_a < config_.offset_learn_max_current_a;
+    ekf_.predict(current_a, dt_s, ground ? config_.ground_soc_process_scale : 1.0f);
+    ekf_.correct(voltage_v + r0 * true_a, ip, (r_sigma * true_a) * (r_sigma * true_a), ocv_, flying && !ground,
+                 ground || (flying && config_.learn_offset_in_flight));
     const CapacityEkf::Status& es = ekf_.status();
+    status_.current_offset_a = es.offset_a;
+    status_.sigma_current_offset_a = es.sigma_offset_a;
+    status_.current_offset_fault =
+        fabsf(es.offset_a) > config_.offset_fault_a && fabsf(es.offset_a) > 3.0f * es.sigma_offset_a;
 
     if (flying) {
         flying_s_ += dt_s;
-        flying_energy_j_ += voltage_v * current_a * dt_s;
-        charge_since_takeoff_ah_ += current_a * dt_s / 3600.0f;
+        flying_energy_j_ += voltage_v * true_a * dt_s;
+        charge_since_takeoff_ah_ += true_a * dt_s / 3600.0f;
     }
     status_.soc = clampf(es.soc, 0.0f, 1.0f);
     status_.capacity_ah = es.capacity_ah * (1.0f - weakest_deficit_);

@@ -30,6 +30,11 @@ public:
         float cause_fraction = 0.9f;         // a cause alone must cost ≥ 10 % of the time
         float min_flight_s = 8.0f;           // before any verdict
         int persistence = 3;                 // consecutive verdicts before a warning
+        float min_flying_current_a = 1.0f;   // the monitor's take-off current (set by the monitor), on the offset-corrected current
+        float offset_fault_a = 0.5f;         // a learnt current offset beyond this (and 3 σ) is a sensor fault
+        bool learn_offset_in_flight = false;  // in flight polarisation and capacity errors would drive it
+        float ground_soc_process_scale = 0.2f;    // SOC process noise on the ground, × the in-flight value
+        float offset_learn_max_current_a = 3.0f;  // the offset is learnt while the measured current is below this (on the ground)
     };
     enum Cause : uint8_t { kCauseNone = 0, kCauseCapacity = 1, kCauseResistance = 2 };
     struct Status {
@@ -47,6 +52,10 @@ public:
         bool time_valid = false;
         bool short_flight = false;
         uint8_t cause = kCauseNone;        // Cause bits
+        bool flying = false;               // on the offset-corrected current
+        float current_offset_a = 0.0f;     // learnt current-sensor offset
+        float sigma_current_offset_a = 0.0f;
+        bool current_offset_fault = false;
     };
 
     void configure(const Config& config, const TremblayParams& rated, int cells_in_series);
@@ -79,6 +88,7 @@ private:
     float flying_energy_j_ = 0.0f;
     float charge_since_takeoff_ah_ = 0.0f;
     float elapsed_at_solve_s_ = 0.0f;
+    bool was_flying_ = false;
     int short_count_ = 0;
     float weakest_deficit_ = 0.0f;
 };
