@@ -173,6 +173,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("offset_fault_a", jc.offset_fault_a, 0, kBig);
         r.number("offset_learn_max_current_a", jc.offset_learn_max_current_a, 0, kBig);
         r.number("ground_soc_process_scale", jc.ground_soc_process_scale, 0, 100);
+        r.number("resistance_settle_s", jc.resistance_settle_s, 0, kBig);
         {
             bool learn = jc.learn_offset_in_flight;
             if (const json* b = r.object("learn_offset_in_flight")) {
@@ -312,6 +313,7 @@ json config_to_json(const LoadedConfig& c) {
             {"offset_fault_a", jc.offset_fault_a},
             {"offset_learn_max_current_a", jc.offset_learn_max_current_a},
             {"ground_soc_process_scale", jc.ground_soc_process_scale},
+            {"resistance_settle_s", jc.resistance_settle_s},
             {"learn_offset_in_flight", jc.learn_offset_in_flight},
             {"solver_steps", jc.solver_steps},
             {"solver_steps_per_update", jc.solver_steps_per_update},

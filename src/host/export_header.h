@@ -99,6 +99,7 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.learn_offset_in_flight", c.joint.learn_offset_in_flight);
     f("joint.offset_learn_max_current_a", c.joint.offset_learn_max_current_a);
     f("joint.ground_soc_process_scale", c.joint.ground_soc_process_scale);
+    f("joint.resistance_settle_s", c.joint.resistance_settle_s);
     f("cell_analysis.lag_s", c.cell_analysis.lag_s);
     f("cell_analysis.min_step_a", c.cell_analysis.min_step_a);
     f("cell_analysis.min_excitation_a2", c.cell_analysis.min_excitation_a2);

@@ -28,21 +28,21 @@ void CapacityEkf::start(float soc) {
     publish();
 }
 
-void CapacityEkf::predict(float current_a, float dt_s, float process_scale) {
+void CapacityEkf::predict(float current_a, float dt_s, bool ground, float ground_process_scale) {
     if (!(dt_s > 0.0f)) return;
     const float q = x_[1];
     const float k = dt_s / (3600.0f * q);
     const float dsoc = (current_a - x_[3]) * k;
     x_[0] -= dsoc;
     // F = I except row 0: ∂soc/∂q = dsoc/q, ∂soc/∂b = +dt/(3600·q).
-    const float f[kN] = {1.0f, dsoc / q, 0.0f, k};
+    const float f[kN] = {1.0f, ground ? 0.0f : dsoc / q, 0.0f, k};
     // P ← F P Fᵀ: only row and column 0 change.
     float row[kN];
     for (int c = 0; c < kN; ++c) row[c] = f[0] * p_[0][c] + f[1] * p_[1][c] + f[3] * p_[3][c];
     const float p00 = row[0] * f[0] + row[1] * f[1] + row[3] * f[3];
     p_[0][0] = p00;
     for (int c = 1; c < kN; ++c) p_[0][c] = p_[c][0] = row[c];
-    const float qs = config_.soc_process_per_sqrt_s * process_scale;
+    const float qs = config_.soc_process_per_sqrt_s * (ground ? ground_process_scale : 1.0f);
     const float qc = config_.capacity_process_fraction_per_sqrt_s * rated_ah_;
     const float qp = config_.polarisation_process_ohm_per_sqrt_s;
     const float qb = config_.offset_process_a_per_sqrt_s;
@@ -86,7 +86,9 @@ void CapacityEkf::correct(float y_v, float ip_a, float extra_var_v2, const OcvCu
     // y = V + R0·(I_m − b) = OCV(soc) − Rp·(i_p − b). The offset's direct effect on y
     // (R0·b + Rp·b, tens of mV) is left out of H: it would be read off the OCV table's own
     // error at a single instant. The offset is learnt through the state of charge alone.
-    const float hx[kN] = {h_soc, 0.0f, -ip_true, 0.0f};
+    // Held parameters are left out of H as well: as "consider" states the polarisation's
+    // wide prior would act as an unknown voltage bias on the ground and mask the offset.
+    const float hx[kN] = {h_soc, 0.0f, learn_parameters ? -ip_true : 0.0f, 0.0f};
     const float predicted = ocv_v - x_[2] * ip_true;
     const float nu = y_v - predicted;
     status_.innovation_v = nu;

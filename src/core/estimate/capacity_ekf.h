@@ -28,7 +28,7 @@ public:
         float polarisation_process_ohm_per_sqrt_s = 1.0e-4f;
         // The OCV table's own error, as an error in state of charge: adds (dOCV/dSOC·σ)² to
         // the measurement variance, so steep stretches (near full) do not over-drive capacity.
-        float ocv_soc_sigma = 0.0f;
+        float ocv_soc_sigma = 0.02f;
         float offset_sigma0_a = 1.0f;               // prior on the current sensor's offset
         float offset_process_a_per_sqrt_s = 1.0e-3f;
         float gate_sigmas = 8.0f;                   // innovations beyond this are rejected
@@ -54,9 +54,12 @@ public:
     // (up to 1.05).
     static float soc_at_rest_voltage(const OcvCurve& ocv, float voltage_v);
     // current_a: as measured (the offset state is subtracted here).
-    // process_scale scales the state of charge's process noise (on the ground, where the
-    // voltage is a clean OCV reading, the model error it stands for is smaller).
-    void predict(float current_a, float dt_s, float process_scale = 1.0f);
+    // ground = true: the pack is on the ground (a small current). The state of charge's
+    // process noise is scaled by ground_process_scale (the voltage is a clean OCV reading
+    // there), and the capacity's uncertainty is not coupled into the state of charge: the
+    // charge drawn on the ground is small once the offset is out of it, and coupling it
+    // through the raw (offset) current would make the offset look unobservable.
+    void predict(float current_a, float dt_s, bool ground = false, float ground_process_scale = 1.0f);
     // y: V + R0·(I_m − offset); ip: polarisation current (measured, low-passed);
     // extra_var_v2: variance added by the R0 error. learn_parameters = false holds capacity
     // and polarisation as "consider" states (at rest nothing flows that could tell them

@@ -33,7 +33,8 @@ public:
         float min_flying_current_a = 1.0f;   // the monitor's take-off current (set by the monitor), on the offset-corrected current
         float offset_fault_a = 0.5f;         // a learnt current offset beyond this (and 3 σ) is a sensor fault
         bool learn_offset_in_flight = false;  // in flight polarisation and capacity errors would drive it
-        float ground_soc_process_scale = 0.2f;    // SOC process noise on the ground, × the in-flight value
+        float ground_soc_process_scale = 0.2f;
+        float resistance_settle_s = 20.0f;  // learn capacity on the prior R after this long without a measured R0    // SOC process noise on the ground, × the in-flight value
         float offset_learn_max_current_a = 3.0f;  // the offset is learnt while the measured current is below this (on the ground)
     };
     enum Cause : uint8_t { kCauseNone = 0, kCauseCapacity = 1, kCauseResistance = 2 };
