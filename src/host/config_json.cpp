@@ -157,6 +157,9 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("resistance_memory_s", jc.resistance.memory_s, 0, kBig);
         r.number("resistance_min_step_a", jc.resistance.min_step_a, 0, kBig);
         r.number("resistance_min_excitation_a2", jc.resistance.min_excitation_a2, 0, kBig);
+        r.number("hover_resistance_lag_s", jc.hover_resistance.lag_s, 0, 60);
+        r.number("hover_resistance_min_step_a", jc.hover_resistance.min_step_a, 0, kBig);
+        r.number("hover_resistance_min_excitation_a2", jc.hover_resistance.min_excitation_a2, 0, kBig);
         r.number("polarisation_time_s", jc.polarisation_time_s, 0, kBig);
         r.number("voltage_sigma_v", jc.ekf.voltage_sigma_v, 1e-6, 100);
         r.number("soc_sigma0", jc.ekf.soc_sigma0, 0, 1);
@@ -297,6 +300,9 @@ json config_to_json(const LoadedConfig& c) {
             {"resistance_memory_s", jc.resistance.memory_s},
             {"resistance_min_step_a", jc.resistance.min_step_a},
             {"resistance_min_excitation_a2", jc.resistance.min_excitation_a2},
+            {"hover_resistance_lag_s", jc.hover_resistance.lag_s},
+            {"hover_resistance_min_step_a", jc.hover_resistance.min_step_a},
+            {"hover_resistance_min_excitation_a2", jc.hover_resistance.min_excitation_a2},
             {"polarisation_time_s", jc.polarisation_time_s},
             {"voltage_sigma_v", jc.ekf.voltage_sigma_v},
             {"soc_sigma0", jc.ekf.soc_sigma0},

@@ -12,6 +12,9 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     DifferenceResistanceEstimator::Config rc = config.resistance;
     rc.initial_resistance_ohm = rated.internal_resistance_ohm;
     resistance_.configure(rc);
+    DifferenceResistanceEstimator::Config hc = config.hover_resistance;
+    hc.initial_resistance_ohm = rated.internal_resistance_ohm;
+    hover_resistance_.configure(hc);
     ekf_.configure(config.ekf, rated.capacity_ah);
     polarisation_current_ = LowPassFilter{};
     polarisation_current_.configure({config.polarisation_time_s});
@@ -50,9 +53,18 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     }
     was_flying_ = flying;
     status_.flying = flying;
-    if (flying) resistance_.update(time_us, voltage_v, current_a);
-    else resistance_.break_history();
-    const DifferenceResistanceEstimator::Status& rs = resistance_.status();
+    if (flying) {
+        resistance_.update(time_us, voltage_v, current_a);
+        hover_resistance_.update(time_us, voltage_v, current_a);
+    } else {
+        resistance_.break_history();
+        hover_resistance_.break_history();
+    }
+    // The hover estimate stands in only after resistance_settle_s of flight without the
+    // short-lag one: at a racing take-off its long lag would read polarisation.
+    const bool settled = flying_s_ >= config_.resistance_settle_s;
+    const DifferenceResistanceEstimator::Status& rs =
+        resistance_.status().valid || !settled ? resistance_.status() : hover_resistance_.status();
     // Combine the difference estimate with the configured value by inverse variance: a
     // steady hover excites too little to trust the differences alone.
     const float prior_sigma = config_.resistance_prior_fraction * rated_.internal_resistance_ohm;
@@ -77,7 +89,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     // there is the offset, never capacity or polarisation.
     const bool ground = current_a < config_.offset_learn_max_current_a;
     ekf_.predict(current_a, dt_s, ground, config_.ground_soc_process_scale);
-    ekf_.correct(voltage_v + r0 * true_a, ip, (r_sigma * true_a) * (r_sigma * true_a), ocv_, flying && !ground && (rs.valid || flying_s_ >= config_.resistance_settle_s),
+    ekf_.correct(voltage_v + r0 * true_a, ip, (r_sigma * true_a) * (r_sigma * true_a), ocv_, flying && !ground && (resistance_.status().valid || settled),
                  ground || (flying && config_.learn_offset_in_flight));
     const CapacityEkf::Status& es = ekf_.status();
     status_.current_offset_a = es.offset_a;
@@ -94,6 +106,8 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     status_.capacity_ah = es.capacity_ah * (1.0f - weakest_deficit_);
     status_.sigma_capacity_ah = es.sigma_capacity_ah;
     status_.resistance_ohm = r0;
+    status_.measured_resistance_ohm = rs.valid ? rs.resistance_ohm : 0.0f;
+    status_.measured_resistance_sigma_ohm = rs.valid ? rs.sigma_ohm : 0.0f;
     status_.polarisation_ohm = es.polarisation_ohm;
     status_.mean_power_w = flying_s_ > 0.0f ? flying_energy_j_ / flying_s_ : 0.0f;
 

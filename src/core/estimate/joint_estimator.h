@@ -19,6 +19,10 @@ class JointEstimator {
 public:
     struct Config {
         DifferenceResistanceEstimator::Config resistance;
+        // Used while `resistance` has too little excitation (a steady hover): a longer lag
+        // (bigger current steps from slow gusts, a little polarisation read as resistance)
+        // and a lower bar.
+        DifferenceResistanceEstimator::Config hover_resistance{0.3f, 60.0f, 0.2f, 30.0f, 0.02f};
         CapacityEkf::Config ekf;
         OcvTable ocv;                       // optional; else the model's no-load curve
         float resistance_prior_fraction = 0.5f;  // σ of the configured resistance, as a fraction
@@ -34,7 +38,7 @@ public:
         float offset_fault_a = 0.5f;         // a learnt current offset beyond this (and 3 σ) is a sensor fault
         bool learn_offset_in_flight = false;  // in flight polarisation and capacity errors would drive it
         float ground_soc_process_scale = 0.2f;
-        float resistance_settle_s = 20.0f;  // learn capacity on the prior R after this long without a measured R0    // SOC process noise on the ground, × the in-flight value
+        float resistance_settle_s = 40.0f;  // learn capacity on the prior R after this long without a measured R0    // SOC process noise on the ground, × the in-flight value
         float offset_learn_max_current_a = 3.0f;  // the offset is learnt while the measured current is below this (on the ground)
     };
     enum Cause : uint8_t { kCauseNone = 0, kCauseCapacity = 1, kCauseResistance = 2 };
@@ -43,7 +47,9 @@ public:
         float soc = 0.0f;
         float capacity_ah = 0.0f;
         float sigma_capacity_ah = 0.0f;
-        float resistance_ohm = 0.0f;       // ohmic (short-lag) resistance
+        float resistance_ohm = 0.0f;       // ohmic (short-lag) resistance, the prior folded in
+        float measured_resistance_ohm = 0.0f;  // from the differences alone (0 until valid)
+        float measured_resistance_sigma_ohm = 0.0f;
         float polarisation_ohm = 0.0f;
         float mean_power_w = 0.0f;         // since take-off
         float remaining_time_s = 0.0f;
@@ -79,6 +85,7 @@ private:
     TremblayParams rated_;
     OcvCurve ocv_;
     DifferenceResistanceEstimator resistance_;
+    DifferenceResistanceEstimator hover_resistance_;
     CapacityEkf ekf_;
     LowPassFilter polarisation_current_;
     PowerTimeSolver solver_;
