@@ -175,7 +175,9 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         status_.remaining_energy_wh = js.remaining_energy_wh;
         status_.short_flight_cause = js.cause;
         short_flight = js.short_flight;
-        if (js.current_offset_fault) raise(kWarnSensorFault, true);
+        // Sensor faults only the joint estimator can see: a current offset learnt on the
+        // ground, and samples missing for longer than any logger stall.
+        if (js.current_offset_fault || dt_s > config_.joint.max_sample_gap_s) raise(kWarnSensorFault, true);
         if (js.flying && status_.cells_valid) {
             cell_analyzer_.update(sample.time_us, sample.cell_voltage_v, sample.cell_count, sample.current_a, used_ah,
                                   joint_.ocv().slope_v_per_soc(js.soc), js.capacity_ah);

@@ -191,6 +191,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("cause_fraction", jc.cause_fraction, 0, 1);
         r.number("min_flight_s", jc.min_flight_s, 0, kBig);
         r.number("persistence", jc.persistence, 1, 1e6);
+        r.number("max_sample_gap_s", jc.max_sample_gap_s, 0, kBig);
         core::CellAnalyzer::Config& ca = m.cell_analysis;
         r.number("cell_resistance_ratio", ca.resistance_ratio, 1, 100);
         r.number("cell_capacity_deficit", ca.capacity_deficit, 0, 1);
@@ -327,6 +328,7 @@ json config_to_json(const LoadedConfig& c) {
             {"cause_fraction", jc.cause_fraction},
             {"min_flight_s", jc.min_flight_s},
             {"persistence", jc.persistence},
+            {"max_sample_gap_s", jc.max_sample_gap_s},
             {"cell_resistance_ratio", m.cell_analysis.resistance_ratio},
             {"cell_capacity_deficit", m.cell_analysis.capacity_deficit},
             {"cell_significance_sigmas", m.cell_analysis.significance_sigmas},

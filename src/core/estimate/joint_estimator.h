@@ -33,7 +33,8 @@ public:
         float short_flight_fraction = 0.8f;  // warn below this × a healthy pack's flight time
         float cause_fraction = 0.9f;         // a cause alone must cost ≥ 10 % of the time
         float min_flight_s = 8.0f;           // before any verdict
-        int persistence = 3;                 // consecutive verdicts before a warning
+        int persistence = 2;                 // consecutive verdicts before a warning
+        float max_sample_gap_s = 0.75f;      // a longer gap between samples is a sensor (logging) fault
         float min_flying_current_a = 1.0f;   // the monitor's take-off current (set by the monitor), on the offset-corrected current
         float offset_fault_a = 0.5f;         // a learnt current offset beyond this (and 3 σ) is a sensor fault
         bool learn_offset_in_flight = false;  // in flight polarisation and capacity errors would drive it
