@@ -89,7 +89,13 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     // there is the offset, never capacity or polarisation.
     const bool ground = current_a < config_.offset_learn_max_current_a;
     ekf_.predict(current_a, dt_s, ground, config_.ground_soc_process_scale);
-    ekf_.correct(voltage_v + r0 * true_a, ip, (r_sigma * true_a) * (r_sigma * true_a), ocv_, flying && !ground && (resistance_.status().valid || settled),
+    // On the ground the voltage is used as it is: R0 times a ground current is a few mV and
+    // constant, while compensating with the offset-corrected current would move y as the
+    // offset is learnt and slow that learning down (the offset reaches y only through the
+    // state of charge; see CapacityEkf).
+    const float compensated_v = ground ? voltage_v : voltage_v + r0 * true_a;
+    ekf_.correct(compensated_v, ip, (r_sigma * true_a) * (r_sigma * true_a), ocv_,
+                 flying && !ground && (resistance_.status().valid || settled),
                  ground || (flying && config_.learn_offset_in_flight));
     const CapacityEkf::Status& es = ekf_.status();
     status_.current_offset_a = es.offset_a;
