@@ -72,20 +72,14 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     }
 
     // Drift of each cell's compensated voltage from the cells' mean, against charge drawn.
-    // Before the cells' resistances are known (a hover rarely excites them) the raw
-    // voltages are used: at a steady current R·I is a constant offset and leaves the drift
-    // against charge as it is.
-    {
+    if (r_ready) {
         float comp[kMaxCells];
-        // The mean over the compared cells: the lead-carrying cell's voltage swings with the
-        // lead's drop and would move every other cell's deviation with the throttle.
-        const int lead = config_.last_cell_includes_lead ? cells - 1 : -1;
         float mean = 0.0f;
         for (int c = 0; c < cells; ++c) {
-            comp[c] = cell_v[c] + (r_ready ? status_.resistance_ohm[c] * current_a : 0.0f);
-            if (c != lead) mean += comp[c];
+            comp[c] = cell_v[c] + status_.resistance_ohm[c] * current_a;
+            mean += comp[c];
         }
-        mean /= static_cast<float>(lead >= 0 ? cells - 1 : cells);
+        mean /= static_cast<float>(cells);
         n_ += 1.0f;
         sq_ += charge_ah;
         sqq_ += charge_ah * charge_ah;
@@ -130,9 +124,9 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
             // Samples are strongly correlated; count one independent point per 10.
             const float se = sqrtf(var_d / maxf(1.0f, n_ / 10.0f - 2.0f) / var_q);
             // A cell with a fraction f less capacity drops f·OCV' per unit of pack SOC faster.
-            // (Measured against the mean of the M compared cells, itself included: × M/(M−1).)
-            const float m = static_cast<float>(lead_cell >= 0 ? cells - 1 : cells);
-            const float deficit = -slope * capacity_ah / cell_slope * (c == lead_cell ? 1.0f : m / maxf(1.0f, m - 1.0f));
+            // (Measured against the mean of all cells, itself included: × N/(N−1).)
+            const float deficit = -slope * capacity_ah / cell_slope * static_cast<float>(cells) /
+                                  static_cast<float>(cells - 1);
             status_.capacity_deficit[c] = deficit;
             if (c == lead_cell) continue;
             if (deficit > config_.capacity_deficit && -slope > config_.significance_sigmas * se &&
