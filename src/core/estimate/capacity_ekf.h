@@ -20,7 +20,7 @@ public:
     struct Config {
         float voltage_sigma_v = 0.02f;              // measurement and model error (tuned on the scenario suite)
         float soc_sigma0 = 0.03f;                   // after the initial state at rest
-        float capacity_sigma0_fraction = 0.25f;     // of rated
+        float capacity_sigma0_fraction = 0.15f;     // of rated (0.25 before issue 7 part 4: it over-reacted early)
         float polarisation_initial_ohm = 0.005f;
         float polarisation_sigma0_ohm = 0.02f;
         float soc_process_per_sqrt_s = 2.0e-4f;
