@@ -22,7 +22,7 @@ public:
         // Used while `resistance` has too little excitation (a steady hover): a longer lag
         // (bigger current steps from slow gusts, a little polarisation read as resistance)
         // and a lower bar.
-        DifferenceResistanceEstimator::Config hover_resistance{0.3f, 60.0f, 0.2f, 30.0f, 0.02f};
+        DifferenceResistanceEstimator::Config hover_resistance{0.3f, 60.0f, 0.2f, 10.0f, 0.02f};
         CapacityEkf::Config ekf;
         OcvTable ocv;                       // optional; else the model's no-load curve
         float resistance_prior_fraction = 0.5f;  // σ of the configured resistance, as a fraction
