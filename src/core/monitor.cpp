@@ -33,6 +33,7 @@ void Monitor::configure(const MonitorConfig& config) {
     cells_.configure(config.cells);
     JointEstimator::Config jc = config.joint;
     jc.min_voltage_v = config.flight_time.min_flight_voltage_v;
+    jc.min_flying_current_a = config.flying.min_flying_current_a;
     joint_.configure(jc, config.battery, config.cells_in_series);
     cell_analyzer_.configure(config.cell_analysis);
     have_time_ = false;
@@ -197,7 +198,10 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         status_.remaining_energy_wh = js.remaining_energy_wh;
         status_.short_flight_cause = js.cause;
         short_flight = js.short_flight;
-        if (flying && status_.cells_valid) {
+        // Sensor faults only the joint estimator can see: a current offset learnt on the
+        // ground, and samples missing for longer than any logger stall.
+        if (js.current_offset_fault || dt_s > config_.joint.max_sample_gap_s) raise(kWarnSensorFault, true);
+        if (js.flying && status_.cells_valid) {
             cell_analyzer_.update(sample.time_us, sample.cell_voltage_v, sample.cell_count, current_a, used_ah,
                                   joint_.ocv().slope_v_per_soc(js.soc), js.capacity_ah);
         } else {

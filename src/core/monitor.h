@@ -71,6 +71,7 @@ public:
     const MonitorStatus& update(const Sample& sample);
     const MonitorStatus& status() const { return status_; }
     const MonitorConfig& config() const { return config_; }
+    const JointEstimator& joint() const { return joint_; }
 
 private:
     bool validate(const Sample& s, bool& cells_ok) const;

@@ -131,6 +131,9 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("resistance_memory_s", jc.resistance.memory_s, 0, kBig);
         r.number("resistance_min_step_a", jc.resistance.min_step_a, 0, kBig);
         r.number("resistance_min_excitation_a2", jc.resistance.min_excitation_a2, 0, kBig);
+        r.number("hover_resistance_lag_s", jc.hover_resistance.lag_s, 0, 60);
+        r.number("hover_resistance_min_step_a", jc.hover_resistance.min_step_a, 0, kBig);
+        r.number("hover_resistance_min_excitation_a2", jc.hover_resistance.min_excitation_a2, 0, kBig);
         r.number("polarisation_time_s", jc.polarisation_time_s, 0, kBig);
         r.number("voltage_sigma_v", jc.ekf.voltage_sigma_v, 1e-6, 100);
         r.number("soc_sigma0", jc.ekf.soc_sigma0, 0, 1);
@@ -141,12 +144,28 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("capacity_process_fraction_per_sqrt_s", jc.ekf.capacity_process_fraction_per_sqrt_s, 0, 1);
         r.number("polarisation_process_ohm_per_sqrt_s", jc.ekf.polarisation_process_ohm_per_sqrt_s, 0, 1);
         r.number("gate_sigmas", jc.ekf.gate_sigmas, 1, 1000);
+        r.number("ocv_soc_sigma", jc.ekf.ocv_soc_sigma, 0, 1);
+        r.number("offset_sigma0_a", jc.ekf.offset_sigma0_a, 0, 100);
+        r.number("offset_process_a_per_sqrt_s", jc.ekf.offset_process_a_per_sqrt_s, 0, 10);
+        r.number("offset_fault_a", jc.offset_fault_a, 0, kBig);
+        r.number("offset_learn_max_current_a", jc.offset_learn_max_current_a, 0, kBig);
+        r.number("ground_soc_process_scale", jc.ground_soc_process_scale, 0, 100);
+        r.number("resistance_settle_s", jc.resistance_settle_s, 0, kBig);
+        {
+            bool learn = jc.learn_offset_in_flight;
+            if (const json* b = r.member("learn_offset_in_flight")) {
+                if (!b->is_boolean()) r.fail(r.child("learn_offset_in_flight"), "expected true or false");
+                learn = b->get<bool>();
+            }
+            jc.learn_offset_in_flight = learn;
+        }
         r.number("solver_steps", jc.solver_steps, 2, 1000);
         r.number("solver_steps_per_update", jc.solver_steps_per_update, 1, 1000);
         r.number("short_flight_fraction", jc.short_flight_fraction, 0, 1);
         r.number("cause_fraction", jc.cause_fraction, 0, 1);
         r.number("min_flight_s", jc.min_flight_s, 0, kBig);
         r.number("persistence", jc.persistence, 1, 1e6);
+        r.number("max_sample_gap_s", jc.max_sample_gap_s, 0, kBig);
         core::CellAnalyzer::Config& ca = m.cell_analysis;
         r.number("cell_resistance_ratio", ca.resistance_ratio, 1, 100);
         r.number("cell_capacity_deficit", ca.capacity_deficit, 0, 1);
@@ -253,6 +272,9 @@ json config_to_json(const LoadedConfig& c) {
             {"resistance_memory_s", jc.resistance.memory_s},
             {"resistance_min_step_a", jc.resistance.min_step_a},
             {"resistance_min_excitation_a2", jc.resistance.min_excitation_a2},
+            {"hover_resistance_lag_s", jc.hover_resistance.lag_s},
+            {"hover_resistance_min_step_a", jc.hover_resistance.min_step_a},
+            {"hover_resistance_min_excitation_a2", jc.hover_resistance.min_excitation_a2},
             {"polarisation_time_s", jc.polarisation_time_s},
             {"voltage_sigma_v", jc.ekf.voltage_sigma_v},
             {"soc_sigma0", jc.ekf.soc_sigma0},
@@ -263,12 +285,21 @@ json config_to_json(const LoadedConfig& c) {
             {"capacity_process_fraction_per_sqrt_s", jc.ekf.capacity_process_fraction_per_sqrt_s},
             {"polarisation_process_ohm_per_sqrt_s", jc.ekf.polarisation_process_ohm_per_sqrt_s},
             {"gate_sigmas", jc.ekf.gate_sigmas},
+            {"ocv_soc_sigma", jc.ekf.ocv_soc_sigma},
+            {"offset_sigma0_a", jc.ekf.offset_sigma0_a},
+            {"offset_process_a_per_sqrt_s", jc.ekf.offset_process_a_per_sqrt_s},
+            {"offset_fault_a", jc.offset_fault_a},
+            {"offset_learn_max_current_a", jc.offset_learn_max_current_a},
+            {"ground_soc_process_scale", jc.ground_soc_process_scale},
+            {"resistance_settle_s", jc.resistance_settle_s},
+            {"learn_offset_in_flight", jc.learn_offset_in_flight},
             {"solver_steps", jc.solver_steps},
             {"solver_steps_per_update", jc.solver_steps_per_update},
             {"short_flight_fraction", jc.short_flight_fraction},
             {"cause_fraction", jc.cause_fraction},
             {"min_flight_s", jc.min_flight_s},
             {"persistence", jc.persistence},
+            {"max_sample_gap_s", jc.max_sample_gap_s},
             {"cell_resistance_ratio", m.cell_analysis.resistance_ratio},
             {"cell_capacity_deficit", m.cell_analysis.capacity_deficit},
             {"cell_significance_sigmas", m.cell_analysis.significance_sigmas},

@@ -94,6 +94,11 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.resistance.min_step_a", c.joint.resistance.min_step_a);
     f("joint.resistance.min_excitation_a2", c.joint.resistance.min_excitation_a2);
     f("joint.resistance.initial_resistance_ohm", c.joint.resistance.initial_resistance_ohm);
+    f("joint.hover_resistance.lag_s", c.joint.hover_resistance.lag_s);
+    f("joint.hover_resistance.memory_s", c.joint.hover_resistance.memory_s);
+    f("joint.hover_resistance.min_step_a", c.joint.hover_resistance.min_step_a);
+    f("joint.hover_resistance.min_excitation_a2", c.joint.hover_resistance.min_excitation_a2);
+    f("joint.hover_resistance.initial_resistance_ohm", c.joint.hover_resistance.initial_resistance_ohm);
     f("joint.ekf.voltage_sigma_v", c.joint.ekf.voltage_sigma_v);
     f("joint.ekf.soc_sigma0", c.joint.ekf.soc_sigma0);
     f("joint.ekf.capacity_sigma0_fraction", c.joint.ekf.capacity_sigma0_fraction);
@@ -103,6 +108,9 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.ekf.capacity_process_fraction_per_sqrt_s", c.joint.ekf.capacity_process_fraction_per_sqrt_s);
     f("joint.ekf.polarisation_process_ohm_per_sqrt_s", c.joint.ekf.polarisation_process_ohm_per_sqrt_s);
     f("joint.ekf.gate_sigmas", c.joint.ekf.gate_sigmas);
+    f("joint.ekf.ocv_soc_sigma", c.joint.ekf.ocv_soc_sigma);
+    f("joint.ekf.offset_sigma0_a", c.joint.ekf.offset_sigma0_a);
+    f("joint.ekf.offset_process_a_per_sqrt_s", c.joint.ekf.offset_process_a_per_sqrt_s);
     f("joint.ekf.min_capacity_fraction", c.joint.ekf.min_capacity_fraction);
     f("joint.ekf.max_capacity_fraction", c.joint.ekf.max_capacity_fraction);
     f("joint.ocv.points", c.joint.ocv.points);
@@ -118,6 +126,13 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.cause_fraction", c.joint.cause_fraction);
     f("joint.min_flight_s", c.joint.min_flight_s);
     f("joint.persistence", c.joint.persistence);
+    f("joint.max_sample_gap_s", c.joint.max_sample_gap_s);
+    f("joint.min_flying_current_a", c.joint.min_flying_current_a);
+    f("joint.offset_fault_a", c.joint.offset_fault_a);
+    f("joint.learn_offset_in_flight", c.joint.learn_offset_in_flight);
+    f("joint.offset_learn_max_current_a", c.joint.offset_learn_max_current_a);
+    f("joint.ground_soc_process_scale", c.joint.ground_soc_process_scale);
+    f("joint.resistance_settle_s", c.joint.resistance_settle_s);
     f("cell_analysis.lag_s", c.cell_analysis.lag_s);
     f("cell_analysis.min_step_a", c.cell_analysis.min_step_a);
     f("cell_analysis.min_excitation_a2", c.cell_analysis.min_excitation_a2);

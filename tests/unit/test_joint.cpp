@@ -236,3 +236,161 @@ TEST_CASE("Joint estimator on injected packs: capacity, resistance, warnings by 
     if (resistive.warned) CHECK((resistive.cause & JointEstimator::kCauseResistance) != 0);
 }
 
+
+TEST_CASE("OCV continued past full for a resting voltage above the table", "[joint]") {
+    OcvCurve c;
+    c.configure(lipo_table(), 4, TremblayParams{});
+    // Top segment: (4.17 − 4.07) V per cell over 0.1 SOC; the slope at 1.0 is the central
+    // difference over [0.99, 1.0]: 1 V per cell per unit SOC, 4 V for the pack.
+    CHECK(CapacityEkf::soc_at_rest_voltage(c, 16.72f) == Approx(1.0f + (16.72f - 16.68f) / 4.0f).epsilon(1e-4));
+    CHECK(CapacityEkf::soc_at_rest_voltage(c, 17.5f) == Approx(1.05f));  // capped
+    CHECK(CapacityEkf::soc_at_rest_voltage(c, 4.0f * 3.835f) == Approx(0.55f).margin(1e-4));
+}
+
+namespace {
+// The pack at rest on the ground for `seconds` drawing `true_a` while the sensor reads
+// `offset_a` more; the EKF sees only the ground (offset learning, nothing else).
+CapacityEkf::Status rest_with_offset(float start_soc, float true_a, float offset_a, float seconds) {
+    OcvCurve ocv;
+    ocv.configure(lipo_table(), 4, TremblayParams{});
+    CapacityEkf ekf;
+    ekf.configure(CapacityEkf::Config{}, 1.5f);
+    ekf.start(start_soc + 0.003f);  // the resting voltage's own error
+    Lcg rng;
+    float soc = start_soc;
+    const float dt = 0.067f;
+    for (float t = 0.0f; t < seconds; t += dt) {
+        soc -= true_a * dt / (3600.0f * 1.5f);
+        const float v = std::round((ocv.voltage_v(soc) - 0.025f * true_a + 0.004f * rng.next()) * 1000.0f) / 1000.0f;
+        const float measured = true_a + offset_a;
+        ekf.predict(measured, dt, true, 0.2f);
+        ekf.correct(v, measured, 0.0f, ocv, false, true);  // as the joint estimator does on the ground
+    }
+    return ekf.status();
+}
+}  // namespace
+
+TEST_CASE("Capacity EKF learns a current-sensor offset from a pack at rest", "[joint][truth]") {
+    // 90 s at 0.3 A on the steep top of the curve (4 V/SOC for the pack): 1.5 A more
+    // would lower the pack 0.1 V, which the voltage does not show.
+    const CapacityEkf::Status faulty = rest_with_offset(0.97f, 0.3f, 1.5f, 90.0f);
+    INFO("offset " << faulty.offset_a << " ± " << faulty.sigma_offset_a);
+    CHECK(faulty.offset_a == Approx(1.5f).margin(0.3f));
+    CHECK(faulty.offset_a > 3.0f * faulty.sigma_offset_a);
+    // A clean sensor: the idle draw is real current, not offset.
+    const CapacityEkf::Status clean = rest_with_offset(0.97f, 0.3f, 0.0f, 90.0f);
+    INFO("offset " << clean.offset_a << " ± " << clean.sigma_offset_a);
+    CHECK(std::fabs(clean.offset_a) < 0.3f);
+    // A negative offset (the sensor reads low) is found just as well.
+    const CapacityEkf::Status low = rest_with_offset(0.97f, 1.0f, -0.8f, 90.0f);
+    CHECK(low.offset_a == Approx(-0.8f).margin(0.3f));
+}
+
+namespace {
+struct GroundFlight {
+    JointEstimator::Status on_ground;  // just before take-off
+    JointEstimator::Status at20;
+    float true_total_s = 0.0f;
+    bool flew_on_ground = false;
+};
+// 60 s on the ground at 0.3 A, then the racing demand until the cutoff; the sensor reads
+// `offset_a` high throughout. The monitor's own take-off flag (≥ 1 A measured) is what the
+// estimator is handed, as in the Monitor.
+GroundFlight fly_with_offset(float offset_a) {
+    const float dt = 0.067f;
+    TremblayParams rated;
+    rated.capacity_ah = 1.5f;
+    rated.internal_resistance_ohm = 0.025f;
+    auto make_plant = [&]() {
+        Plant p{OcvCurve{}, 1.5f, 0.025f, 0.008f, 6.0f};
+        p.ocv.configure(lipo_table(), 4, rated);
+        return p;
+    };
+    GroundFlight out;
+    Plant truth = make_plant();
+    float t = 0.0f, i = 0.3f;
+    for (; t < 60.0f; t += dt) truth.step(0.3f, dt);
+    float flight_s = 0.0f;
+    i = demand_w(0.0f) / truth.ocv.voltage_v(truth.soc);
+    while (flight_s < 2000.0f) {
+        const float v = truth.step(i, dt);
+        if (v < 13.3f) break;
+        i = demand_w(flight_s) / v;
+        flight_s += dt;
+    }
+    out.true_total_s = flight_s;
+
+    Plant p = make_plant();
+    JointEstimator::Config jc;
+    jc.ocv = lipo_table();
+    JointEstimator e;
+    e.configure(jc, rated, 4);
+    Lcg rng;
+    uint64_t t_us = 0;
+    float v = p.ocv.voltage_v(1.0f);
+    for (float tt = 0.0f; tt < 60.0f; tt += dt, t_us += 67000) {
+        v = p.step(0.3f, dt);
+        const float vm = std::round((v + 0.003f * rng.next()) * 1000.0f) / 1000.0f;
+        e.update(t_us, vm, 0.3f + offset_a, dt, 0.3f + offset_a >= 1.0f);
+        if (tt > 45.0f && e.status().flying) out.flew_on_ground = true;
+    }
+    out.on_ground = e.status();
+    i = demand_w(0.0f) / v;
+    bool recorded = false;
+    for (float tt = 0.0f; tt < out.true_total_s; tt += dt, t_us += 67000) {
+        v = p.step(i, dt);
+        const float vm = std::round((v + 0.003f * rng.next()) * 1000.0f) / 1000.0f;
+        e.update(t_us, vm, i + offset_a + 0.05f * rng.next(), dt, true);
+        if (!recorded && tt >= 0.2f * out.true_total_s) {
+            out.at20 = e.status();
+            recorded = true;
+        }
+        i = demand_w(tt) / v;
+    }
+    return out;
+}
+}  // namespace
+
+TEST_CASE("Joint estimator with an offset current sensor: flagged, corrected, no ground flight", "[joint][truth]") {
+    const GroundFlight faulty = fly_with_offset(1.5f);
+    INFO("offset " << faulty.on_ground.current_offset_a << " ± " << faulty.on_ground.sigma_current_offset_a);
+    CHECK(faulty.on_ground.current_offset_fault);
+    CHECK(faulty.on_ground.current_offset_a == Approx(1.5f).margin(0.35f));
+    CHECK_FALSE(faulty.flew_on_ground);  // 1.8 A measured on the ground is not a take-off
+    INFO("remaining at 20 %: " << faulty.at20.remaining_time_s << " of " << 0.8f * faulty.true_total_s);
+    CHECK(std::fabs(faulty.at20.remaining_time_s - 0.8f * faulty.true_total_s) < 0.08f * faulty.true_total_s);
+    CHECK_FALSE(faulty.at20.short_flight);
+
+    const GroundFlight clean = fly_with_offset(0.0f);
+    CHECK_FALSE(clean.on_ground.current_offset_fault);
+    CHECK(std::fabs(clean.on_ground.current_offset_a) < 0.3f);
+    CHECK(std::fabs(clean.at20.remaining_time_s - 0.8f * clean.true_total_s) < 0.08f * clean.true_total_s);
+}
+
+TEST_CASE("Hover resistance: slow gusts too small for the short lag, recovered by the long one", "[joint][truth]") {
+    // A steady hover at ~9 A with 0.8 A gusts (2.5 rad/s): consecutive samples differ by
+    // far less than the short-lag estimator's 0.5 A minimum step.
+    for (float r_true : {0.02f, 0.04f}) {
+        Plant p{OcvCurve{}, 1.5f, r_true, 0.0f, 6.0f};
+        TremblayParams rated;
+        rated.capacity_ah = 1.5f;
+        rated.internal_resistance_ohm = 0.025f;
+        p.ocv.configure(lipo_table(), 4, rated);
+        JointEstimator::Config jc;
+        jc.ocv = lipo_table();
+        JointEstimator e;
+        e.configure(jc, rated, 4);
+        e.start(p.ocv.voltage_v(1.0f), 0.0f);
+        uint64_t t_us = 0;
+        const float dt = 0.067f;
+        Lcg rng;
+        for (float t = 0.0f; t < 90.0f; t += dt, t_us += 67000) {
+            const float i = 9.0f + 0.8f * std::sin(t * 2.5f) + 0.3f * std::sin(t * 0.47f);
+            const float v = p.step(i, dt);
+            e.update(t_us, v + 0.0012f * rng.next(), i, dt, true);
+        }
+        INFO("true " << r_true << " measured " << e.status().measured_resistance_ohm << " used " << e.status().resistance_ohm);
+        CHECK(e.status().measured_resistance_ohm == Approx(r_true).epsilon(0.05));
+        CHECK(e.status().resistance_ohm == Approx(r_true).epsilon(0.10));
+    }
+}

@@ -165,3 +165,23 @@ TEST_CASE("Monitor applies the configured model extensions", "[monitor][extensio
     CHECK(plain.status().adapted_model_voltage_v - extended.status().adapted_model_voltage_v ==
           Approx(expected_drop_v).margin(0.01));
 }
+
+TEST_CASE("Joint mode flags a gap in the samples as a sensor fault; the reference does not", "[monitor]") {
+    for (EstimatorKind kind : {EstimatorKind::Reference, EstimatorKind::Joint}) {
+        MonitorConfig cfg;
+        cfg.estimator = kind;
+        Monitor m;
+        m.configure(cfg);
+        uint64_t t = 0;
+        for (int k = 0; k < 100; ++k, t += 67000) m.update(make(t, 16.5f, 0.3f));
+        // A 0.35 s logger stall is normal.
+        t += 350000;
+        m.update(make(t, 16.5f, 0.3f));
+        CHECK_FALSE((m.status().warnings_raised >> kWarnSensorFault) & 1u);
+        // Two seconds without a sample is not.
+        t += 2000000;
+        m.update(make(t, 16.5f, 0.3f));
+        const bool flagged = (m.status().warnings_raised >> kWarnSensorFault) & 1u;
+        CHECK(flagged == (kind == EstimatorKind::Joint));
+    }
+}

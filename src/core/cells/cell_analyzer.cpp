@@ -96,7 +96,10 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     status_.finding = kNone;
     float worst = 0.0f;
     const int lead_cell = config_.last_cell_includes_lead ? cells - 1 : -1;
-    if (r_ready) {
+    // A resistance verdict needs at least two other cells to take a median of: against a
+    // single other cell, ordinary cell-to-cell spread reads as an outlier.
+    const int compared = cells - 1 - (lead_cell >= 0 ? 1 : 0);
+    if (r_ready && compared >= 2) {
         for (int c = 0; c < cells; ++c) {
             if (c == lead_cell) continue;
             const float med = median_excluding(status_.resistance_ohm, cells, c, lead_cell);

@@ -19,6 +19,10 @@ class JointEstimator {
 public:
     struct Config {
         DifferenceResistanceEstimator::Config resistance;
+        // Used while `resistance` has too little excitation (a steady hover): a longer lag
+        // (bigger current steps from slow gusts, a little polarisation read as resistance)
+        // and a lower bar.
+        DifferenceResistanceEstimator::Config hover_resistance{0.3f, 60.0f, 0.2f, 10.0f, 0.02f};
         CapacityEkf::Config ekf;
         OcvTable ocv;                       // optional; else the model's no-load curve
         float resistance_prior_fraction = 0.5f;  // σ of the configured resistance, as a fraction
@@ -29,7 +33,14 @@ public:
         float short_flight_fraction = 0.8f;  // warn below this × a healthy pack's flight time
         float cause_fraction = 0.9f;         // a cause alone must cost ≥ 10 % of the time
         float min_flight_s = 8.0f;           // before any verdict
-        int persistence = 3;                 // consecutive verdicts before a warning
+        int persistence = 2;                 // consecutive verdicts before a warning
+        float max_sample_gap_s = 0.75f;      // a longer gap between samples is a sensor (logging) fault
+        float min_flying_current_a = 1.0f;   // the monitor's take-off current (set by the monitor), on the offset-corrected current
+        float offset_fault_a = 0.5f;         // a learnt current offset beyond this (and 3 σ) is a sensor fault
+        bool learn_offset_in_flight = false;  // in flight polarisation and capacity errors would drive it
+        float ground_soc_process_scale = 0.2f;
+        float resistance_settle_s = 40.0f;  // learn capacity on the prior R after this long without a measured R0    // SOC process noise on the ground, × the in-flight value
+        float offset_learn_max_current_a = 3.0f;  // the offset is learnt while the measured current is below this (on the ground)
     };
     enum Cause : uint8_t { kCauseNone = 0, kCauseCapacity = 1, kCauseResistance = 2 };
     struct Status {
@@ -37,7 +48,9 @@ public:
         float soc = 0.0f;
         float capacity_ah = 0.0f;
         float sigma_capacity_ah = 0.0f;
-        float resistance_ohm = 0.0f;       // ohmic (short-lag) resistance
+        float resistance_ohm = 0.0f;       // ohmic (short-lag) resistance, the prior folded in
+        float measured_resistance_ohm = 0.0f;  // from the differences alone (0 until valid)
+        float measured_resistance_sigma_ohm = 0.0f;
         float polarisation_ohm = 0.0f;
         float mean_power_w = 0.0f;         // since take-off
         float remaining_time_s = 0.0f;
@@ -47,6 +60,10 @@ public:
         bool time_valid = false;
         bool short_flight = false;
         uint8_t cause = kCauseNone;        // Cause bits
+        bool flying = false;               // on the offset-corrected current
+        float current_offset_a = 0.0f;     // learnt current-sensor offset
+        float sigma_current_offset_a = 0.0f;
+        bool current_offset_fault = false;
     };
 
     void configure(const Config& config, const TremblayParams& rated, int cells_in_series);
@@ -69,6 +86,7 @@ private:
     TremblayParams rated_;
     OcvCurve ocv_;
     DifferenceResistanceEstimator resistance_;
+    DifferenceResistanceEstimator hover_resistance_;
     CapacityEkf ekf_;
     LowPassFilter polarisation_current_;
     PowerTimeSolver solver_;
@@ -79,6 +97,7 @@ private:
     float flying_energy_j_ = 0.0f;
     float charge_since_takeoff_ah_ = 0.0f;
     float elapsed_at_solve_s_ = 0.0f;
+    bool was_flying_ = false;
     int short_count_ = 0;
     float weakest_deficit_ = 0.0f;
 };
