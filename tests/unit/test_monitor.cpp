@@ -25,16 +25,21 @@ bool all_finite(const MonitorStatus& s) {
         if (!std::isfinite(x)) return false;
     return true;
 }
+// A monitor with `kind` configured and 6.7 s at rest behind it; `t` is the next time stamp.
+void configure_at_rest(Monitor& m, EstimatorKind kind, uint64_t& t) {
+    MonitorConfig cfg;
+    cfg.estimator = kind;
+    m.configure(cfg);
+    t = 0;
+    for (int k = 0; k < 100; ++k, t += 67000) m.update(make(t, 16.5f, 0.3f));
+}
 }  // namespace
 
 TEST_CASE("Monitor settles at rest, counts charge, flies", "[monitor]") {
     for (EstimatorKind kind : {EstimatorKind::Reference, EstimatorKind::Joint}) {
-        MonitorConfig cfg;
-        cfg.estimator = kind;
         Monitor m;
-        m.configure(cfg);
         uint64_t t = 0;
-        for (int k = 0; k < 100; ++k, t += 67000) m.update(make(t, 16.5f, 0.3f));
+        configure_at_rest(m, kind, t);
         REQUIRE(m.status().initialised);
         CHECK_FALSE(m.status().flying);
         const float start_mah = m.status().consumed_mah;
@@ -168,12 +173,9 @@ TEST_CASE("Monitor applies the configured model extensions", "[monitor][extensio
 
 TEST_CASE("Joint mode flags a gap in the samples as a sensor fault; the reference does not", "[monitor]") {
     for (EstimatorKind kind : {EstimatorKind::Reference, EstimatorKind::Joint}) {
-        MonitorConfig cfg;
-        cfg.estimator = kind;
         Monitor m;
-        m.configure(cfg);
         uint64_t t = 0;
-        for (int k = 0; k < 100; ++k, t += 67000) m.update(make(t, 16.5f, 0.3f));
+        configure_at_rest(m, kind, t);
         // A 0.35 s logger stall is normal.
         t += 350000;
         m.update(make(t, 16.5f, 0.3f));
