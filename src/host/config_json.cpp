@@ -159,6 +159,14 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
             }
             jc.learn_offset_in_flight = learn;
         }
+        {
+            bool follows = jc.polarisation_follows_resistance;
+            if (const json* b = r.member("polarisation_follows_resistance")) {
+                if (!b->is_boolean()) r.fail(r.child("polarisation_follows_resistance"), "expected true or false");
+                follows = b->get<bool>();
+            }
+            jc.polarisation_follows_resistance = follows;
+        }
         r.number("solver_steps", jc.solver_steps, 2, 1000);
         r.number("solver_steps_per_update", jc.solver_steps_per_update, 1, 1000);
         r.number("short_flight_fraction", jc.short_flight_fraction, 0, 1);
@@ -293,6 +301,7 @@ json config_to_json(const LoadedConfig& c) {
             {"ground_soc_process_scale", jc.ground_soc_process_scale},
             {"resistance_settle_s", jc.resistance_settle_s},
             {"learn_offset_in_flight", jc.learn_offset_in_flight},
+            {"polarisation_follows_resistance", jc.polarisation_follows_resistance},
             {"solver_steps", jc.solver_steps},
             {"solver_steps_per_update", jc.solver_steps_per_update},
             {"short_flight_fraction", jc.short_flight_fraction},

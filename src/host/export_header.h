@@ -130,6 +130,7 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.min_flying_current_a", c.joint.min_flying_current_a);
     f("joint.offset_fault_a", c.joint.offset_fault_a);
     f("joint.learn_offset_in_flight", c.joint.learn_offset_in_flight);
+    f("joint.polarisation_follows_resistance", c.joint.polarisation_follows_resistance);
     f("joint.offset_learn_max_current_a", c.joint.offset_learn_max_current_a);
     f("joint.ground_soc_process_scale", c.joint.ground_soc_process_scale);
     f("joint.resistance_settle_s", c.joint.resistance_settle_s);

@@ -394,3 +394,57 @@ TEST_CASE("Hover resistance: slow gusts too small for the short lag, recovered b
         CHECK(e.status().resistance_ohm == Approx(r_true).epsilon(0.10));
     }
 }
+
+TEST_CASE("Capacity EKF: the polarisation scale multiplies the modelled polarisation voltage", "[joint]") {
+    OcvCurve ocv;
+    ocv.configure(lipo_table(), 4, TremblayParams{});
+    CapacityEkf::Config cfg;
+    cfg.polarisation_initial_ohm = 0.005f;
+    CapacityEkf ekf;
+    ekf.configure(cfg, 1.5f);
+    ekf.start(0.5f);
+    // OCV(0.5) = 4 × 3.81 = 15.24 V; predicted y = 15.24 − 0.005 Ω × 2 × 10 A = 15.14 V.
+    ekf.correct(15.00f, 10.0f, 0.0f, ocv, false, false, 2.0f);
+    CHECK(ekf.status().innovation_v == Approx(15.00f - 15.14f).margin(1e-4));
+    // Scale 1 (the default): 15.24 − 0.05 = 15.19 V, from the state the first update left.
+    CapacityEkf plain;
+    plain.configure(cfg, 1.5f);
+    plain.start(0.5f);
+    plain.correct(15.00f, 10.0f, 0.0f, ocv, false, false);
+    CHECK(plain.status().innovation_v == Approx(15.00f - 15.19f).margin(1e-4));
+}
+
+TEST_CASE("Capacity EKF on a warming pack: polarisation scaled with R0 keeps capacity", "[joint][truth]") {
+    // Ohmic and polarisation resistance both fall by 40 % over the flight (the pack warms);
+    // the estimator is given the true R0, as the difference estimator would measure it.
+    float err_scaled = 0.0f, err_fixed = 0.0f;
+    for (bool scaled : {true, false}) {
+        Plant p{OcvCurve{}, 1.5f, 0.05f, 0.05f, 5.0f};
+        p.ocv.configure(lipo_table(), 4, TremblayParams{});
+        CapacityEkf ekf;
+        ekf.configure(CapacityEkf::Config{}, 1.5f);
+        ekf.start(1.0f);
+        Lcg rng;
+        float ip = 20.0f;
+        p.v1 = 20.0f * p.r1_ohm;  // in flight already
+        const float dt = 0.067f;
+        const float r_start = 0.05f;
+        for (int k = 0; k < 3000; ++k) {  // 200 s at ~20 A: ~1.1 Ah
+            const float t = static_cast<float>(k) * dt;
+            const float warm = 1.0f - 0.4f * std::fmin(1.0f, t / 150.0f);
+            p.r0_ohm = r_start * warm;
+            p.r1_ohm = 0.05f * warm;
+            const float i = 20.0f + 10.0f * rng.next();
+            const float v = p.step(i, dt) + 0.01f * rng.next();
+            ip += (i - ip) * (1.0f - std::exp(-dt / 5.0f));
+            ekf.predict(i, dt);
+            ekf.correct(v + p.r0_ohm * i, ip, 0.0f, p.ocv, true, false, scaled ? p.r0_ohm / r_start : 1.0f);
+            if (p.soc < 0.15f) break;
+        }
+        const float err = ekf.status().capacity_ah / 1.5f - 1.0f;
+        (scaled ? err_scaled : err_fixed) = err;
+    }
+    INFO("capacity error, scaled " << err_scaled << ", fixed " << err_fixed);
+    CHECK(std::fabs(err_scaled) < 0.05f);
+    CHECK(err_fixed > 0.10f);  // the fixed polarisation reads the recovery as charge (+15 %)
+}

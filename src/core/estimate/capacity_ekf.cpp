@@ -79,10 +79,12 @@ float CapacityEkf::soc_at_rest_voltage(const OcvCurve& ocv, float voltage_v) {
 }
 
 void CapacityEkf::correct(float y_v, float ip_a, float extra_var_v2, const OcvCurve& ocv,
-                          bool learn_parameters, bool learn_offset) {
+                          bool learn_parameters, bool learn_offset, float polarisation_scale) {
     float h_soc = 0.0f;
     const float ocv_v = ocv_extended(ocv, x_[0], h_soc);
-    const float ip_true = ip_a - x_[3];
+    // The polarisation voltage is Rp·scale·(i_p − b): the scale rides on the current, so
+    // the state stays in ohms at the rated resistance and H keeps its form.
+    const float ip_true = (ip_a - x_[3]) * (polarisation_scale > 0.0f ? polarisation_scale : 1.0f);
     // y = V + R0·(I_m − b) = OCV(soc) − Rp·(i_p − b). The offset's direct effect on y
     // (R0·b + Rp·b, tens of mV) is left out of H: it would be read off the OCV table's own
     // error at a single instant. The offset is learnt through the state of charge alone.

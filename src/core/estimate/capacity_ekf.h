@@ -64,8 +64,11 @@ public:
     // extra_var_v2: variance added by the R0 error. learn_parameters = false holds capacity
     // and polarisation as "consider" states (at rest nothing flows that could tell them
     // apart); learn_offset = false holds the offset likewise.
+    // polarisation_scale: the polarisation state is the pack's polarisation resistance at
+    // its rated ohmic resistance; the voltage sees it times this factor (the measured ohmic
+    // resistance over the rated one), so the polarisation follows the pack as it warms.
     void correct(float y_v, float ip_a, float extra_var_v2, const OcvCurve& ocv,
-                 bool learn_parameters = true, bool learn_offset = true);
+                 bool learn_parameters = true, bool learn_offset = true, float polarisation_scale = 1.0f);
     const Status& status() const { return status_; }
 
 private:

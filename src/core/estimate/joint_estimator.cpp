@@ -25,6 +25,8 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = elapsed_at_solve_s_ = 0.0f;
     short_count_ = 0;
     was_flying_ = false;
+    polarisation_scale_ = 1.0f;
+    polarisation_ref_ohm_ = 0.0f;
 }
 
 void JointEstimator::start(float voltage_v, float current_a) {
@@ -94,9 +96,15 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     // offset is learnt and slow that learning down (the offset reaches y only through the
     // state of charge; see CapacityEkf).
     const float compensated_v = ground ? voltage_v : voltage_v + r0 * true_a;
-    ekf_.correct(compensated_v, ip, (r_sigma * true_a) * (r_sigma * true_a), ocv_,
-                 flying && !ground && (resistance_.status().valid || settled),
-                 ground || (flying && config_.learn_offset_in_flight));
+    const bool learn = flying && !ground && (resistance_.status().valid || settled);
+    // The polarisation state is held at the ohmic resistance when learning began; from
+    // then on the polarisation the voltage sees moves in proportion with R0.
+    if (learn && !(polarisation_ref_ohm_ > 0.0f)) polarisation_ref_ohm_ = r0;
+    polarisation_scale_ = config_.polarisation_follows_resistance && polarisation_ref_ohm_ > 0.0f
+                              ? r0 / polarisation_ref_ohm_
+                              : 1.0f;
+    ekf_.correct(compensated_v, ip, (r_sigma * true_a) * (r_sigma * true_a), ocv_, learn,
+                 ground || (flying && config_.learn_offset_in_flight), polarisation_scale_);
     const CapacityEkf::Status& es = ekf_.status();
     status_.current_offset_a = es.offset_a;
     status_.sigma_current_offset_a = es.sigma_offset_a;
@@ -114,7 +122,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     status_.resistance_ohm = r0;
     status_.measured_resistance_ohm = rs.valid ? rs.resistance_ohm : 0.0f;
     status_.measured_resistance_sigma_ohm = rs.valid ? rs.sigma_ohm : 0.0f;
-    status_.polarisation_ohm = es.polarisation_ohm;
+    status_.polarisation_ohm = es.polarisation_ohm * polarisation_scale_;
     status_.mean_power_w = flying_s_ > 0.0f ? flying_energy_j_ / flying_s_ : 0.0f;
 
     // Flight-time solves, round robin, a bounded number of steps per update.
@@ -131,7 +139,8 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
 void JointEstimator::start_solve() {
     const CapacityEkf::Status& es = ekf_.status();
     const float q = es.capacity_ah * (1.0f - weakest_deficit_);
-    const float r_total = status_.resistance_ohm + es.polarisation_ohm;
+    const float r_total = status_.resistance_ohm + status_.polarisation_ohm;
+    // A healthy pack: rated resistance, and the polarisation the state holds at it.
     const float r_rated = rated_.internal_resistance_ohm + es.polarisation_ohm;
     // The charge at take-off as the present estimate sees it.
     const float soc_takeoff = clampf(es.soc + charge_since_takeoff_ah_ / q, 0.0f, 1.0f);

@@ -41,6 +41,10 @@ public:
         float ground_soc_process_scale = 0.2f;
         float resistance_settle_s = 40.0f;  // learn capacity on the prior R after this long without a measured R0    // SOC process noise on the ground, × the in-flight value
         float offset_learn_max_current_a = 3.0f;  // the offset is learnt while the measured current is below this (on the ground)
+        // Polarisation resistance scaled with the ohmic resistance (R0 now / R0 when learning
+        // began): both fall as the pack warms in flight (the same Arrhenius behaviour), and a
+        // fixed Rp would read that recovery of the voltage as charge the pack still holds.
+        bool polarisation_follows_resistance = false;  // off: on the simulated suite it cost a false warning (docs/estimator.md)
     };
     enum Cause : uint8_t { kCauseNone = 0, kCauseCapacity = 1, kCauseResistance = 2 };
     struct Status {
@@ -100,6 +104,8 @@ private:
     bool was_flying_ = false;
     int short_count_ = 0;
     float weakest_deficit_ = 0.0f;
+    float polarisation_scale_ = 1.0f;   // R0 now / R0 when learning began
+    float polarisation_ref_ohm_ = 0.0f;  // R0 when capacity and polarisation learning began (0: not yet)
 };
 
 }  // namespace core
