@@ -171,7 +171,9 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
     status_.avg_current_a = current_average_.status().short_avg;
     status_.avg_power_w = power_average_.status().short_avg;
     status_.long_avg_power_w = power_average_.status().long_avg;
-    flight_time_.compute(counted.consumed_mwh * 0.001f, status_.avg_power_w);
+    // The reference's flight time; the joint estimator writes its own below (its usable
+    // capacity is never tracked there, so it keeps the configured value).
+    if (reference) flight_time_.compute(counted.consumed_mwh * 0.001f, status_.avg_power_w);
     const FlightTimeEstimator::Status& ft = flight_time_.status();
     status_.usable_capacity_ah = ft.usable_capacity_ah;
     status_.remaining_time_s = ft.remaining_time_s;
@@ -216,7 +218,9 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
 
     const PiaoCellScorer::Status& cs = cells_.status();
     status_.cell_count = cs.cell_count;
-    for (int c = 0; c < kMaxCells; ++c) status_.cell_score[c] = cs.score[c];
+    if (reference) {  // the Piao scores only move in reference mode (zero otherwise)
+        for (int c = 0; c < kMaxCells; ++c) status_.cell_score[c] = cs.score[c];
+    }
 
     const WarningConfig& wc = config_.warnings;
     if (config_.estimator == EstimatorKind::Joint) {
