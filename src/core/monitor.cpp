@@ -205,7 +205,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         if (js.current_offset_fault || dt_s > config_.joint.max_sample_gap_s) raise(kWarnSensorFault, true);
         if (js.flying && status_.cells_valid) {
             cell_analyzer_.update(sample.time_us, sample.cell_voltage_v, sample.cell_count, current_a, used_ah,
-                                  joint_.ocv().slope_v_per_soc(js.soc), js.capacity_ah);
+                                  js.ocv_slope_v_per_soc, js.capacity_ah);
         } else {
             cell_analyzer_.break_history();
         }

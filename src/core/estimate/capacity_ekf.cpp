@@ -82,6 +82,7 @@ void CapacityEkf::correct(float y_v, float ip_a, float extra_var_v2, const OcvCu
                           bool learn_parameters, bool learn_offset, float polarisation_scale) {
     float h_soc = 0.0f;
     const float ocv_v = ocv_extended(ocv, x_[0], h_soc);
+    status_.ocv_slope_v_per_soc = h_soc;
     // The polarisation voltage is Rp·scale·(i_p − b): the scale rides on the current, so
     // the state stays in ohms at the rated resistance and H keeps its form.
     const float ip_true = (ip_a - x_[3]) * (polarisation_scale > 0.0f ? polarisation_scale : 1.0f);

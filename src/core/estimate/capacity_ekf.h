@@ -45,6 +45,7 @@ public:
         float sigma_polarisation_ohm = 0.0f;
         float sigma_offset_a = 0.0f;
         float innovation_v = 0.0f;
+        float ocv_slope_v_per_soc = 0.0f;  // dOCV/dSOC at the last correction's prior SOC
         uint32_t rejected = 0;
     };
 

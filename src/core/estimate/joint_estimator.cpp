@@ -117,6 +117,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         charge_since_takeoff_ah_ += true_a * dt_s / 3600.0f;
     }
     status_.soc = clampf(es.soc, 0.0f, 1.0f);
+    status_.ocv_slope_v_per_soc = es.ocv_slope_v_per_soc;
     status_.capacity_ah = es.capacity_ah * (1.0f - weakest_deficit_);
     status_.sigma_capacity_ah = es.sigma_capacity_ah;
     status_.resistance_ohm = r0;

@@ -56,6 +56,7 @@ public:
         float measured_resistance_ohm = 0.0f;  // from the differences alone (0 until valid)
         float measured_resistance_sigma_ohm = 0.0f;
         float polarisation_ohm = 0.0f;
+        float ocv_slope_v_per_soc = 0.0f;  // the filter's dOCV/dSOC (for the cell check)
         float mean_power_w = 0.0f;         // since take-off
         float remaining_time_s = 0.0f;
         float remaining_energy_wh = 0.0f;
