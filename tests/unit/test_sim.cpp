@@ -20,6 +20,7 @@
 #include "host/sim/rng.h"
 #include "host/sim/scenario.h"
 #include "host/sim/simulate.h"
+#include "sim_scenarios.h"
 #include "test_files.h"
 
 using namespace battsim::host;
@@ -30,16 +31,13 @@ namespace {
 
 // A short 4S flight built in code (the monitor config embedded, no files).
 Scenario small_scenario(const std::string& extra_json = "{}") {
-    json j = json::parse(R"({
+    return simtest::code_scenario(R"({
       "schema": "battsim.scenario", "version": 1, "name": "unit", "seed": 7,
       "monitor_config": "embedded",
       "pack": {"cells": 4, "capacity_ah": 1.55},
       "profile": {"kind": "racing", "idle_before_s": 8, "armed_s": 2, "flight_s": 60, "idle_after_s": 5,
                   "mean_power_w": 420}
-    })");
-    j.merge_patch(json::parse(extra_json));
-    const json cfg = config_to_json(default_config());
-    return scenario_from_json(j, "unit.json", "", &cfg);
+    })", extra_json);
 }
 
 

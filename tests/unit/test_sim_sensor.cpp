@@ -16,6 +16,7 @@
 #include "host/sim/scenario.h"
 #include "host/sim/sensor.h"
 #include "host/sim/simulate.h"
+#include "sim_scenarios.h"
 #include "test_files.h"
 
 using namespace battsim::host;
@@ -25,20 +26,13 @@ using nlohmann::json;
 namespace {
 
 Scenario scenario(const std::string& extra_json = "{}") {
-    json j = json::parse(R"({
+    return simtest::code_scenario(R"({
       "schema": "battsim.scenario", "version": 1, "name": "sensor", "seed": 11,
       "monitor_config": "embedded",
       "pack": {"cells": 4, "capacity_ah": 1.55},
       "profile": {"kind": "racing", "idle_before_s": 30, "armed_s": 2, "flight_s": 90, "idle_after_s": 10,
                   "mean_power_w": 360}
-    })");
-    j.merge_patch(json::parse(extra_json));
-    json cfg = config_to_json(default_config());
-    if (j["pack"]["cells"] != 4) {
-        cfg["battery"]["cells_in_series"] = j["pack"]["cells"];
-        cfg["sensor"]["max_pack_voltage_v"] = 40.0;
-    }
-    return scenario_from_json(j, "sensor.json", "", &cfg);
+    })", extra_json);
 }
 
 std::vector<std::string> split(const std::string& line) {
