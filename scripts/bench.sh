@@ -61,19 +61,24 @@ for est in reference joint; do
   echo "6S CMU flight 70, $est: $(echo "$out" | field ns_per_update) ns/update wall, $(echo "$out" | field cpu_ns_per_update) CPU, over $(echo "$out" | field updates) updates"
 done
 if command -v valgrind >/dev/null 2>&1 && command -v callgrind_annotate >/dev/null 2>&1; then
+  # Only Monitor::update and what it calls is counted (--toggle-collect).
+  count() {  # label, then the arguments of `battsim bench monitor`
+    label=$1; shift
+    out=$(valgrind --tool=callgrind --callgrind-out-file="$tmp/cg.out" \
+            '--toggle-collect=battsim::core::Monitor::update*' \
+            "$bin" bench monitor "$@" --passes 1 2>/dev/null)
+    updates=$(echo "$out" | field updates)
+    total=$(callgrind_annotate "$tmp/cg.out" 2>/dev/null | awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1 }')
+    echo "callgrind, $label: $total instructions / $updates updates = $((total / updates)) instructions per update"
+  }
   for est in reference joint; do
-    for case in raw cmu; do
-      if [ $case = raw ]; then set -- "$raw" -c "$ref_cfg"; else set -- "$cmu" --manifest "$cmu_manifest"; fi
-      # (the CMU log is in the manifest, which gives its columns and config)
-      # Only Monitor::update and what it calls is counted (--toggle-collect).
-      out=$(valgrind --tool=callgrind --callgrind-out-file="$tmp/cg.out" \
-              '--toggle-collect=battsim::core::Monitor::update*' \
-              "$bin" bench monitor "$@" --estimator "$est" --passes 1 2>/dev/null)
-      updates=$(echo "$out" | field updates)
-      total=$(callgrind_annotate "$tmp/cg.out" 2>/dev/null | awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1 }')
-      echo "callgrind, $case, $est: $total instructions / $updates updates = $((total / updates)) instructions per update"
-    done
+    count "raw, $est" "$raw" -c "$ref_cfg" --estimator "$est"
+    # (the CMU log is in the manifest, which gives its columns and config)
+    count "cmu, $est" "$cmu" --manifest "$cmu_manifest" --estimator "$est"
   done
+  count "raw, joint, OCV table (configs/sim-4s.json)" "$raw" -c "$root/configs/sim-4s.json" --estimator joint
+  count "raw, reference, fitted model extensions (configs/fitted/pbms-flight30-cnhl5.json)" "$raw" \
+    -c "$root/configs/fitted/pbms-flight30-cnhl5.json" --estimator reference
 else
   echo "callgrind: valgrind not installed, instruction count skipped"
 fi
