@@ -204,8 +204,8 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         // ground, and samples missing for longer than any logger stall.
         if (js.current_offset_fault || dt_s > config_.joint.max_sample_gap_s) raise(kWarnSensorFault, true);
         if (js.flying && status_.cells_valid) {
-            cell_analyzer_.update(sample.time_us, sample.cell_voltage_v, sample.cell_count, current_a, used_ah,
-                                  js.ocv_slope_v_per_soc, js.capacity_ah);
+            cell_analyzer_.update(sample.time_us, sample.cell_voltage_v, sample.cell_count, current_a,
+                                  js.polarisation_current_a, used_ah, js.soc, joint_.ocv());
         } else {
             cell_analyzer_.break_history();
         }

@@ -72,6 +72,7 @@ public:
     const MonitorStatus& status() const { return status_; }
     const MonitorConfig& config() const { return config_; }
     const JointEstimator& joint() const { return joint_; }
+    const CellAnalyzer& cell_analyzer() const { return cell_analyzer_; }
 
 private:
     bool validate(const Sample& s, bool& cells_ok) const;

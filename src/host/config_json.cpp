@@ -135,6 +135,8 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("hover_resistance_min_step_a", jc.hover_resistance.min_step_a, 0, kBig);
         r.number("hover_resistance_min_excitation_a2", jc.hover_resistance.min_excitation_a2, 0, kBig);
         r.number("polarisation_time_s", jc.polarisation_time_s, 0, kBig);
+        r.number("polarisation_slow_time_s", jc.polarisation_slow_time_s, 0, kBig);
+        r.number("polarisation_slow_share", jc.polarisation_slow_share, 0, 1);
         r.number("voltage_sigma_v", jc.ekf.voltage_sigma_v, 1e-6, 100);
         r.number("soc_sigma0", jc.ekf.soc_sigma0, 0, 1);
         r.number("capacity_sigma0_fraction", jc.ekf.capacity_sigma0_fraction, 0, 10);
@@ -178,7 +180,11 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("cell_resistance_ratio", ca.resistance_ratio, 1, 100);
         r.number("cell_capacity_deficit", ca.capacity_deficit, 0, 1);
         r.number("cell_significance_sigmas", ca.significance_sigmas, 0, 100);
+        r.number("cell_capacity_significance_sigmas", ca.capacity_significance_sigmas, 0, 100);
         r.number("cell_min_charge_ah", ca.min_charge_ah, 0, kBig);
+        r.number("cell_min_drift_v", ca.min_drift_v, 0, kBig);
+        r.number("cell_detrend_time_s", ca.detrend_time_s, 0, kBig);
+        r.number("cell_current_ridge_a2", ca.current_ridge_a2, 0, kBig);
         r.boolean("last_cell_includes_lead", ca.last_cell_includes_lead);
         if (const json* t = r.member("ocv_cell_voltage_v")) {
             if (!t->is_array() || t->size() < 2 || t->size() > static_cast<size_t>(core::kOcvTableMaxPoints))
@@ -284,6 +290,8 @@ json config_to_json(const LoadedConfig& c) {
             {"hover_resistance_min_step_a", jc.hover_resistance.min_step_a},
             {"hover_resistance_min_excitation_a2", jc.hover_resistance.min_excitation_a2},
             {"polarisation_time_s", jc.polarisation_time_s},
+            {"polarisation_slow_time_s", jc.polarisation_slow_time_s},
+            {"polarisation_slow_share", jc.polarisation_slow_share},
             {"voltage_sigma_v", jc.ekf.voltage_sigma_v},
             {"soc_sigma0", jc.ekf.soc_sigma0},
             {"capacity_sigma0_fraction", jc.ekf.capacity_sigma0_fraction},
@@ -312,7 +320,11 @@ json config_to_json(const LoadedConfig& c) {
             {"cell_resistance_ratio", m.cell_analysis.resistance_ratio},
             {"cell_capacity_deficit", m.cell_analysis.capacity_deficit},
             {"cell_significance_sigmas", m.cell_analysis.significance_sigmas},
+            {"cell_capacity_significance_sigmas", m.cell_analysis.capacity_significance_sigmas},
             {"cell_min_charge_ah", m.cell_analysis.min_charge_ah},
+            {"cell_min_drift_v", m.cell_analysis.min_drift_v},
+            {"cell_detrend_time_s", m.cell_analysis.detrend_time_s},
+            {"cell_current_ridge_a2", m.cell_analysis.current_ridge_a2},
             {"last_cell_includes_lead", m.cell_analysis.last_cell_includes_lead},
         };
         if (jc.ocv.points >= 2) {

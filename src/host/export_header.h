@@ -119,6 +119,8 @@ void visit_monitor_config(Config& c, F&& f) {
     }
     f("joint.resistance_prior_fraction", c.joint.resistance_prior_fraction);
     f("joint.polarisation_time_s", c.joint.polarisation_time_s);
+    f("joint.polarisation_slow_time_s", c.joint.polarisation_slow_time_s);
+    f("joint.polarisation_slow_share", c.joint.polarisation_slow_share);
     f("joint.min_voltage_v", c.joint.min_voltage_v);
     f("joint.solver_steps", c.joint.solver_steps);
     f("joint.solver_steps_per_update", c.joint.solver_steps_per_update);
@@ -138,11 +140,14 @@ void visit_monitor_config(Config& c, F&& f) {
     f("cell_analysis.min_step_a", c.cell_analysis.min_step_a);
     f("cell_analysis.min_excitation_a2", c.cell_analysis.min_excitation_a2);
     f("cell_analysis.min_pairs", c.cell_analysis.min_pairs);
-    f("cell_analysis.min_cell_ocv_slope_v", c.cell_analysis.min_cell_ocv_slope_v);
+    f("cell_analysis.current_ridge_a2", c.cell_analysis.current_ridge_a2);
+    f("cell_analysis.detrend_time_s", c.cell_analysis.detrend_time_s);
     f("cell_analysis.resistance_ratio", c.cell_analysis.resistance_ratio);
     f("cell_analysis.capacity_deficit", c.cell_analysis.capacity_deficit);
     f("cell_analysis.min_charge_ah", c.cell_analysis.min_charge_ah);
+    f("cell_analysis.min_drift_v", c.cell_analysis.min_drift_v);
     f("cell_analysis.significance_sigmas", c.cell_analysis.significance_sigmas);
+    f("cell_analysis.capacity_significance_sigmas", c.cell_analysis.capacity_significance_sigmas);
     f("cell_analysis.last_cell_includes_lead", c.cell_analysis.last_cell_includes_lead);
     f("warnings.low_capacity_fraction", c.warnings.low_capacity_fraction);
     f("warnings.high_resistance_factor", c.warnings.high_resistance_factor);

@@ -8,8 +8,16 @@ namespace core {
 void CellAnalyzer::reset() {
     status_ = Status{};
     head_ = count_ = 0;
-    sxx_ = n_r_ = n_ = sq_ = sqq_ = 0.0f;
-    for (int c = 0; c < kMaxCells; ++c) sxy_[c] = syy_[c] = sd_[c] = sqd_[c] = sdd_[c] = 0.0f;
+    sxx_ = n_r_ = n_ = first_charge_ah_ = slow_current_a_ = 0.0f;
+    last_time_us_ = 0;
+    for (int k = 0; k < kZ; ++k) {
+        mz_[k] = 0.0f;
+        for (int j = 0; j < kZ; ++j) czz_[k][j] = 0.0f;
+    }
+    for (int c = 0; c < kMaxCells; ++c) {
+        sxy_[c] = syy_[c] = md_[c] = cdd_[c] = 0.0f;
+        for (int k = 0; k < kZ; ++k) czd_[c][k] = 0.0f;
+    }
 }
 
 namespace {
@@ -31,10 +39,36 @@ float median_excluding(const float* x, int n, int skip, int also_skip) {
     if (m == 0) return 0.0f;
     return m % 2 ? a[m / 2] : 0.5f * (a[m / 2 - 1] + a[m / 2]);
 }
+
+// Inverse of a small symmetric positive matrix (Gauss–Jordan, no pivoting needed for a
+// positive definite one); false if (near) singular.
+template <int N>
+bool invert_spd(const float a[N][N], float inv[N][N]) {
+    float m[N][2 * N];
+    for (int r = 0; r < N; ++r)
+        for (int c = 0; c < N; ++c) {
+            m[r][c] = a[r][c];
+            m[r][N + c] = r == c ? 1.0f : 0.0f;
+        }
+    for (int p = 0; p < N; ++p) {
+        const float piv = m[p][p];
+        if (!(piv > 1.0e-20f) || !finitef(piv)) return false;
+        const float rp = 1.0f / piv;
+        for (int c = 0; c < 2 * N; ++c) m[p][c] *= rp;
+        for (int r = 0; r < N; ++r) {
+            if (r == p) continue;
+            const float f = m[r][p];
+            for (int c = 0; c < 2 * N; ++c) m[r][c] -= f * m[p][c];
+        }
+    }
+    for (int r = 0; r < N; ++r)
+        for (int c = 0; c < N; ++c) inv[r][c] = m[r][N + c];
+    return true;
+}
 }  // namespace
 
-void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, float current_a, float charge_ah,
-                          float pack_ocv_slope_v_per_soc, float capacity_ah) {
+void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, float current_a,
+                          float polarisation_current_a, float charge_ah, float pack_soc, const OcvCurve& ocv) {
     if (cells < 3 || cells > kMaxCells) return;  // a median needs at least two others
     if (status_.cell_count != cells) {
         reset();
@@ -71,31 +105,51 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
         }
     }
 
-    // Drift of each cell's compensated voltage from the cells' mean, against charge drawn.
-    if (r_ready) {
-        float comp[kMaxCells];
-        float mean = 0.0f;
-        for (int c = 0; c < cells; ++c) {
-            comp[c] = cell_v[c] + status_.resistance_ohm[c] * current_a;
-            mean += comp[c];
-        }
-        mean /= static_cast<float>(cells);
-        n_ += 1.0f;
-        sq_ += charge_ah;
-        sqq_ += charge_ah * charge_ah;
-        for (int c = 0; c < cells; ++c) {
-            const float d = comp[c] - mean;
-            sd_[c] += d;
-            sqd_[c] += charge_ah * d;
-            sdd_[c] += d * d;
-        }
+    // Drift regression. A cell with a fraction f less capacity than the others sits, at the
+    // same charge drawn, (1 − SOC)·f/(1 − f) further down the curve, so its voltage is below
+    // the others' by about that times the curve's slope. The slope is taken as the secant
+    // over the step a cell at the naming threshold would have made: exact where the verdict
+    // is made (the tangent at the pack's SOC under-reads a weak cell on the curved top).
+    const int lead_cell = config_.last_cell_includes_lead ? cells - 1 : -1;
+    const int compared_n = cells - (lead_cell >= 0 ? 1 : 0);
+    float mean_v = 0.0f;
+    for (int c = 0; c < cells; ++c)
+        if (c != lead_cell) mean_v += cell_v[c];
+    mean_v /= static_cast<float>(compared_n);
+    const float k_ref = config_.capacity_deficit / maxf(0.05f, 1.0f - config_.capacity_deficit);
+    const float behind = (1.0f - clampf(pack_soc, 0.0f, 1.0f)) * k_ref;
+    const float drift_v = (ocv.voltage_v(pack_soc) - ocv.voltage_v(pack_soc - behind)) /
+                          (static_cast<float>(cells) * maxf(k_ref, 1.0e-3f));
+    if (n_ == 0.0f) {
+        first_charge_ah_ = charge_ah;
+        slow_current_a_ = current_a;
+    } else if (time_us > last_time_us_ && config_.detrend_time_s > 0.0f) {
+        const float dt_s = static_cast<float>(time_us - last_time_us_) * 1.0e-6f;
+        slow_current_a_ += clampf(dt_s / config_.detrend_time_s, 0.0f, 1.0f) * (current_a - slow_current_a_);
+    }
+    last_time_us_ = time_us;
+    n_ += 1.0f;
+    const float z[kZ] = {-drift_v, current_a, polarisation_current_a, slow_current_a_};
+    float dz[kZ];
+    for (int k = 0; k < kZ; ++k) {
+        dz[k] = z[k] - mz_[k];
+        mz_[k] += dz[k] / n_;
+    }
+    for (int k = 0; k < kZ; ++k)
+        for (int j = k; j < kZ; ++j) czz_[k][j] += dz[k] * (z[j] - mz_[j]);
+    for (int c = 0; c < cells; ++c) {
+        const float d = cell_v[c] - mean_v;
+        const float dd = d - md_[c];
+        md_[c] += dd / n_;
+        const float dn = d - md_[c];
+        for (int k = 0; k < kZ; ++k) czd_[c][k] += dz[k] * dn;
+        cdd_[c] += dd * dn;
     }
 
     // Verdicts.
     status_.flagged_cell = -1;
     status_.finding = kNone;
     float worst = 0.0f;
-    const int lead_cell = config_.last_cell_includes_lead ? cells - 1 : -1;
     // A resistance verdict needs at least two other cells to take a median of: against a
     // single other cell, ordinary cell-to-cell spread reads as an outlier.
     const int compared = cells - 1 - (lead_cell >= 0 ? 1 : 0);
@@ -113,28 +167,55 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
             }
         }
     }
-    const float var_q = n_ > 1.0f ? sqq_ / n_ - (sq_ / n_) * (sq_ / n_) : 0.0f;
-    const float span_ah = sqrtf(maxf(0.0f, var_q)) * 3.4641f;  // a uniform spread's full width
-    const float cell_slope = maxf(pack_ocv_slope_v_per_soc / static_cast<float>(cells), config_.min_cell_ocv_slope_v);
-    if (span_ah >= config_.min_charge_ah && cell_slope > 0.0f && capacity_ah > 0.0f) {
-        for (int c = 0; c < cells; ++c) {
-            const float cov = sqd_[c] / n_ - (sq_ / n_) * (sd_[c] / n_);
-            const float slope = cov / var_q;  // V per Ah, negative = falling behind
-            const float var_d = maxf(0.0f, sdd_[c] / n_ - (sd_[c] / n_) * (sd_[c] / n_) - slope * cov);
-            // Samples are strongly correlated; count one independent point per 10.
-            const float se = sqrtf(var_d / maxf(1.0f, n_ / 10.0f - 2.0f) / var_q);
-            // A cell with a fraction f less capacity drops f·OCV' per unit of pack SOC faster.
-            // (Measured against the mean of all cells, itself included: × N/(N−1).)
-            const float deficit = -slope * capacity_ah / cell_slope * static_cast<float>(cells) /
-                                  static_cast<float>(cells - 1);
-            status_.capacity_deficit[c] = deficit;
-            if (c == lead_cell) continue;
-            if (deficit > config_.capacity_deficit && -slope > config_.significance_sigmas * se &&
-                deficit > worst) {
-                worst = deficit;
-                status_.flagged_cell = static_cast<int8_t>(c);
-                status_.finding = kLowCapacity;
-            }
+    if (charge_ah - first_charge_ah_ < config_.min_charge_ah || n_ < 20.0f) return;
+    const float drift_span_v = sqrtf(maxf(0.0f, czz_[0][0] / n_)) * 3.4641f * k_ref;  // a uniform spread's full width
+    if (drift_span_v < config_.min_drift_v) return;
+    float a[kZ][kZ];
+    for (int k = 0; k < kZ; ++k)
+        for (int j = k; j < kZ; ++j) a[k][j] = a[j][k] = czz_[k][j];
+    for (int k = 1; k < kZ; ++k) a[k][k] += config_.current_ridge_a2;
+    float inv[kZ][kZ];
+    if (!invert_spd<kZ>(a, inv)) return;
+    // Samples are strongly correlated; count one independent point per 10.
+    const float n_eff = maxf(1.0f, n_ / 10.0f - static_cast<float>(kZ + 1));
+    float drift[kMaxCells] = {};
+    float drift_se[kMaxCells] = {};
+    for (int c = 0; c < cells; ++c) {
+        float beta[kZ];
+        float explained = 0.0f;
+        for (int k = 0; k < kZ; ++k) {
+            beta[k] = 0.0f;
+            for (int j = 0; j < kZ; ++j) beta[k] += inv[k][j] * czd_[c][j];
+        }
+        for (int k = 0; k < kZ; ++k) explained += beta[k] * czd_[c][k];
+        const float var_res = maxf(0.0f, cdd_[c] - explained) / n_;
+        drift[c] = beta[0];
+        drift_se[c] = sqrtf(var_res * maxf(0.0f, inv[0][0]) * n_ / n_eff);
+        // Measured against a mean that contains the cell itself: × M/(M − 1).
+        const float scale =
+            c == lead_cell ? 1.0f : static_cast<float>(compared_n) / static_cast<float>(compared_n - 1);
+        const float b = beta[0] * scale;
+        status_.capacity_deficit[c] = b / (1.0f + maxf(b, -0.5f));
+        status_.capacity_deficit_sigma[c] = drift_se[c] * scale;
+    }
+    // A weak cell falls behind every other cell; a measurement artefact shared by two
+    // readings (the logger's cell 2 is channel 2 − channel 1) pushes one cell down and its
+    // neighbour up, leaving a third unmoved. So the verdict is against the weakest of the
+    // others: the cell must be beyond the threshold relative to each of them.
+    for (int c = 0; c < cells; ++c) {
+        if (c == lead_cell) continue;
+        float versus_weakest_other = 1.0e9f;
+        for (int k = 0; k < cells; ++k)
+            if (k != c && k != lead_cell) versus_weakest_other = minf(versus_weakest_other, drift[c] - drift[k]);
+        const float deficit = versus_weakest_other / (1.0f + maxf(versus_weakest_other, -0.5f));
+        // Twice the threshold is beyond what those artefacts reach, and takes the usual bar.
+        const float sigmas = deficit > 2.0f * config_.capacity_deficit ? config_.significance_sigmas
+                                                                        : config_.capacity_significance_sigmas;
+        if (deficit > config_.capacity_deficit && status_.capacity_deficit[c] > sigmas * status_.capacity_deficit_sigma[c] &&
+            status_.capacity_deficit[c] > worst) {
+            worst = status_.capacity_deficit[c];
+            status_.flagged_cell = static_cast<int8_t>(c);
+            status_.finding = kLowCapacity;
         }
     }
 }

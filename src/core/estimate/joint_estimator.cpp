@@ -8,6 +8,7 @@ namespace core {
 void JointEstimator::configure(const Config& config, const TremblayParams& rated, int cells_in_series) {
     config_ = config;
     rated_ = rated;
+    cells_ = cells_in_series > 0 ? cells_in_series : 1;
     ocv_.configure(config.ocv, cells_in_series, rated);
     DifferenceResistanceEstimator::Config rc = config.resistance;
     rc.initial_resistance_ohm = rated.internal_resistance_ohm;
@@ -18,6 +19,8 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     ekf_.configure(config.ekf, rated.capacity_ah);
     polarisation_current_ = LowPassFilter{};
     polarisation_current_.configure({config.polarisation_time_s});
+    polarisation_slow_current_ = LowPassFilter{};
+    polarisation_slow_current_.configure({config.polarisation_slow_time_s});
     status_ = Status{};
     status_.capacity_ah = rated.capacity_ah;
     status_.resistance_ohm = rated.internal_resistance_ohm;
@@ -33,6 +36,7 @@ void JointEstimator::start(float voltage_v, float current_a) {
     const float soc = CapacityEkf::soc_at_rest_voltage(ocv_, voltage_v + current_a * rated_.internal_resistance_ohm);
     ekf_.start(soc);
     polarisation_current_.reset(current_a);
+    polarisation_slow_current_.reset(current_a);
     status_.started = true;
     status_.soc = clampf(soc, 0.0f, 1.0f);
 }
@@ -86,7 +90,11 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     // excitation to measure it, after resistance_settle_s of flight on the prior): an R0
     // error at take-off (0.8 V at 50 A on a pack 60 % above its configured resistance)
     // would otherwise be read as charge and polarisation.
-    const float ip = polarisation_current_.update(current_a, dt_s);
+    float ip = polarisation_current_.update(current_a, dt_s);
+    if (config_.polarisation_slow_share > 0.0f) {
+        const float w = config_.polarisation_slow_share;
+        ip = (1.0f - w) * ip + w * polarisation_slow_current_.update(current_a, dt_s);
+    }
     // Below the offset-learning current the pack is on the ground: what the voltage shows
     // there is the offset, never capacity or polarisation.
     const bool ground = current_a < config_.offset_learn_max_current_a;
@@ -124,6 +132,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     status_.measured_resistance_ohm = rs.valid ? rs.resistance_ohm : 0.0f;
     status_.measured_resistance_sigma_ohm = rs.valid ? rs.sigma_ohm : 0.0f;
     status_.polarisation_ohm = es.polarisation_ohm * polarisation_scale_;
+    status_.polarisation_current_a = ip;
     status_.mean_power_w = flying_s_ > 0.0f ? flying_energy_j_ / flying_s_ : 0.0f;
 
     // Flight-time solves, round robin, a bounded number of steps per update.
@@ -139,12 +148,16 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
 
 void JointEstimator::start_solve() {
     const CapacityEkf::Status& es = ekf_.status();
-    const float q = es.capacity_ah * (1.0f - weakest_deficit_);
+    // The filter sees the mean cell; with a weak cell named, the others hold a little more
+    // and the weak one a fraction (1 − deficit) of that (see PowerTimeSolver::start).
+    const float share = weakest_deficit_ > 0.0f ? 1.0f / static_cast<float>(cells_) : 0.0f;
+    const float q = es.capacity_ah / (1.0f - weakest_deficit_ * share);
+    const float ratio = 1.0f - weakest_deficit_;
     const float r_total = status_.resistance_ohm + status_.polarisation_ohm;
     // A healthy pack: rated resistance, and the polarisation the state holds at it.
     const float r_rated = rated_.internal_resistance_ohm + es.polarisation_ohm;
     // The charge at take-off as the present estimate sees it.
-    const float soc_takeoff = clampf(es.soc + charge_since_takeoff_ah_ / q, 0.0f, 1.0f);
+    const float soc_takeoff = clampf(es.soc + charge_since_takeoff_ah_ / es.capacity_ah, 0.0f, 1.0f);
     if (solve_ == kSolveRemaining) {
         solve_power_w_ = status_.mean_power_w;
         elapsed_at_solve_s_ = flying_s_;
@@ -153,10 +166,10 @@ void JointEstimator::start_solve() {
     const float v_min = config_.min_voltage_v;
     const int n = config_.solver_steps;
     switch (solve_) {
-        case kSolveRemaining: solver_.start(clampf(es.soc, 0.0f, 1.0f), q, r_total, p, v_min, n); break;
-        case kSolveTotal: solver_.start(soc_takeoff, q, r_total, p, v_min, n); break;
+        case kSolveRemaining: solver_.start(clampf(es.soc, 0.0f, 1.0f), q, r_total, p, v_min, n, share, ratio); break;
+        case kSolveTotal: solver_.start(soc_takeoff, q, r_total, p, v_min, n, share, ratio); break;
         case kSolveExpected: solver_.start(soc_takeoff, rated_.capacity_ah, r_rated, p, v_min, n); break;
-        case kSolveCapacityOnly: solver_.start(soc_takeoff, q, r_rated, p, v_min, n); break;
+        case kSolveCapacityOnly: solver_.start(soc_takeoff, q, r_rated, p, v_min, n, share, ratio); break;
         default: solver_.start(soc_takeoff, rated_.capacity_ah, r_total, p, v_min, n); break;
     }
 }

@@ -27,6 +27,12 @@ public:
         OcvTable ocv;                       // optional; else the model's no-load curve
         float resistance_prior_fraction = 0.5f;  // σ of the configured resistance, as a fraction
         float polarisation_time_s = 5.0f;   // i_p time constant: fast enough that i_p follows the throttle and cannot mimic the SOC trend
+        // A second, slow part of the polarisation sharing the one resistance state: i_p is
+        // (1 − share)·(fast low-pass) + share·(slow low-pass). One state keeps the filter
+        // well conditioned (two free, nearly collinear branches diverged in float); the
+        // shape comes from a fit of the pack (battsim fit's RC branches). 0 = off.
+        float polarisation_slow_time_s = 0.0f;
+        float polarisation_slow_share = 0.0f;
         float min_voltage_v = 13.3f;        // loaded cutoff
         int solver_steps = 32;
         int solver_steps_per_update = 4;  // keeps an update near 2,000 instructions
@@ -56,6 +62,7 @@ public:
         float measured_resistance_ohm = 0.0f;  // from the differences alone (0 until valid)
         float measured_resistance_sigma_ohm = 0.0f;
         float polarisation_ohm = 0.0f;
+        float polarisation_current_a = 0.0f;  // the low-passed current the polarisation sees
         float ocv_slope_v_per_soc = 0.0f;  // the filter's dOCV/dSOC (for the cell check)
         float mean_power_w = 0.0f;         // since take-off
         float remaining_time_s = 0.0f;
@@ -94,6 +101,7 @@ private:
     DifferenceResistanceEstimator hover_resistance_;
     CapacityEkf ekf_;
     LowPassFilter polarisation_current_;
+    LowPassFilter polarisation_slow_current_;
     PowerTimeSolver solver_;
     uint8_t solve_ = kSolveRemaining;
     float solve_power_w_ = 0.0f;
@@ -105,6 +113,7 @@ private:
     bool was_flying_ = false;
     int short_count_ = 0;
     float weakest_deficit_ = 0.0f;
+    int cells_ = 1;
     float polarisation_scale_ = 1.0f;   // R0 now / R0 when learning began
     float polarisation_ref_ohm_ = 0.0f;  // R0 when capacity and polarisation learning began (0: not yet)
 };

@@ -6,7 +6,9 @@ namespace battsim {
 namespace core {
 
 void PowerTimeSolver::start(float soc_from, float capacity_ah, float resistance_ohm, float power_w,
-                            float min_voltage_v, int steps) {
+                            float min_voltage_v, int steps, float weak_cell_share, float weak_cell_ratio) {
+    weak_share_ = weak_cell_ratio > 0.05f && weak_cell_ratio < 1.0f ? clampf(weak_cell_share, 0.0f, 1.0f) : 0.0f;
+    weak_ratio_ = weak_share_ > 0.0f ? weak_cell_ratio : 1.0f;
     soc_from_ = clampf(soc_from, 0.0f, 1.0f);
     capacity_ah_ = maxf(capacity_ah, 1.0e-3f);
     resistance_ohm_ = maxf(resistance_ohm, 0.0f);
@@ -20,7 +22,13 @@ void PowerTimeSolver::start(float soc_from, float capacity_ah, float resistance_
 }
 
 float PowerTimeSolver::loaded_voltage(const OcvCurve& ocv, float soc, float& current_a, bool& feasible) const {
-    const float e = ocv.voltage_v(soc);
+    float e = ocv.voltage_v(soc);
+    if (weak_share_ > 0.0f) {
+        const float weak_soc = 1.0f - (1.0f - soc) / weak_ratio_;
+        float weak_v = ocv.voltage_v(weak_soc);
+        if (weak_soc < 0.0f) weak_v += ocv.slope_v_per_soc(0.0f) * weak_soc;
+        e = (1.0f - weak_share_) * e + weak_share_ * weak_v;
+    }
     const float disc = e * e - 4.0f * resistance_ohm_ * power_w_;
     feasible = disc >= 0.0f && e > 0.0f;
     if (!feasible) {
