@@ -428,3 +428,26 @@ TEST_CASE("The plant at 7 degC against flight 32: voltage against charge drawn",
     CHECK(ps[0] == Approx(pr[0]).epsilon(0.2));
     CHECK(ps[1] == Approx(pr[1]).epsilon(0.2));
 }
+
+TEST_CASE("Truth names outlier cells by the 10 % bar against the other cells, not by the declaration", "[sim]") {
+    // No cell-to-cell spread, so the factors alone decide: R0 +12 % and capacity −12 % are
+    // beyond the bar; +8 % and −8 % are not, whatever the scenario calls them.
+    const auto outliers = [](const std::string& weak) {
+        const SimulationResult r = simulate(small_scenario(
+            R"({"pack": {"capacity_spread": 0, "resistance_spread": 0, "weak_cells": [)" + weak + "]}}"));
+        return r.truth.outlier_cells;
+    };
+    CHECK(outliers(R"({"cell": 2, "resistance_factor": 1.12})") == std::vector<int>{1});
+    CHECK(outliers(R"({"cell": 3, "capacity_factor": 0.88})") == std::vector<int>{2});
+    CHECK(outliers(R"({"cell": 2, "resistance_factor": 1.08})").empty());
+    CHECK(outliers(R"({"cell": 1, "capacity_factor": 0.92})").empty());
+    const SimulationResult two = simulate(small_scenario(
+        R"({"pack": {"capacity_spread": 0, "resistance_spread": 0, "weak_cells": [{"cell": 1, "capacity_factor": 0.8}, {"cell": 4, "resistance_factor": 1.5}]}})"));
+    CHECK(two.truth.outlier_cells == std::vector<int>{0, 3});
+    CHECK(two.truth.weak_cell == 3);  // the furthest: +50 % against −20 %
+    const json tj = truth_to_json(two);
+    CHECK(tj["degradation"]["outlier_cells"] == json::array({1, 4}));
+    CHECK(tj["pack"]["per_cell"].size() == 4);
+    CHECK(tj["pack"]["per_cell"][3]["r0_ohm_25c"].get<double>() ==
+          Approx(1.5 * tj["pack"]["per_cell"][0]["r0_ohm_25c"].get<double>()).epsilon(1e-5));
+}

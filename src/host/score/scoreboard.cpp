@@ -27,6 +27,11 @@ namespace {
 using nlohmann::json;
 namespace fs = std::filesystem;
 
+// The cell a column last named is one of the flight's outlier cells (by the truth).
+bool named_outlier(const FlightScore& f, const ColumnFlight& c) {
+    return std::find(f.outlier_cells.begin(), f.outlier_cells.end(), c.named_cell) != f.outlier_cells.end();
+}
+
 constexpr double kFractions[3] = {0.1, 0.2, 0.5};
 
 bool has_warning(const std::vector<std::string>& list, const char* name) {
@@ -118,7 +123,9 @@ ColumnFlight judge(const std::vector<Estimate>& est, const sim::SimulationResult
         if ((e.warnings >> core::kWarnCellOutlier) & 1u) {
             cf.cell_warning = true;
             cf.named_cell = e.outlier_cell;
-            if (!correct_cell && t.weak_cell >= 0 && e.outlier_cell == t.weak_cell) {
+            const bool is_outlier = std::find(t.outlier_cells.begin(), t.outlier_cells.end(),
+                                              static_cast<int>(e.outlier_cell)) != t.outlier_cells.end();
+            if (!correct_cell && is_outlier) {
                 correct_cell = true;
                 correct_cell_s = std::max(0.0, e.time_s - t.takeoff_s);
             }
@@ -290,12 +297,12 @@ std::vector<Row> build_rows(const ScoreResult& r) {
               [](const FlightScore& f, const ColumnFlight& c, Count& n) {
                   if (f.weak_cell < 0) return;
                   ++n.n;
-                  if (c.cell_warning && c.named_cell == f.weak_cell) ++n.k;
+                  if (c.cell_warning && named_outlier(f, c)) ++n.k;
               });
     add_count("cell_outlier_false_positives", "cell outlier: false alarms (flights)",
               [](const FlightScore& f, const ColumnFlight& c, Count& n) {
                   ++n.n;
-                  if (c.cell_warning && (f.weak_cell < 0 || c.named_cell != f.weak_cell)) ++n.k;
+                  if (c.cell_warning && !named_outlier(f, c)) ++n.k;
               });
     add_count("sensor_faults_flagged", "sensor faults flagged as sensor faults",
               [](const FlightScore& f, const ColumnFlight& c, Count& n) {
@@ -344,6 +351,7 @@ FlightScore score_flight(const sim::SimulationResult& sim, const std::vector<cor
     f.degraded = t.degraded;
     f.sensor_faulty = t.sensor_faulty;
     f.weak_cell = t.weak_cell;
+    f.outlier_cells = t.outlier_cells;
     f.justified = t.justified_warnings;
     if (f.flown_s < 0.5 * t.total_flight_time_s) f.notes.push_back("landed before 50 % of the flight: the 50 % point is left out");
 
@@ -519,6 +527,11 @@ json to_json(const ScoreResult& r) {
                    {"degraded", f.degraded},
                    {"justified_warnings", f.justified},
                    {"weak_cell", f.weak_cell >= 0 ? json(f.weak_cell + 1) : json(nullptr)},
+                   {"outlier_cells", [&] {
+                        json a = json::array();
+                        for (int c : f.outlier_cells) a.push_back(c + 1);
+                        return a;
+                    }()},
                    {"sensor_faulty", f.sensor_faulty},
                    {"notes", f.notes}};
         json per = json::object();

@@ -65,6 +65,7 @@ struct FlightScore {
     double total_flight_time_s = 0, healthy_total_flight_time_s = 0, flown_s = 0;
     bool short_flight = false, degraded = false, sensor_faulty = false;
     int weak_cell = -1;
+    std::vector<int> outlier_cells;  // any of them named counts as right (see sim::Truth)
     std::vector<std::string> justified;
     std::vector<std::string> notes;
     std::vector<ColumnFlight> columns;

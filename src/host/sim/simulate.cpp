@@ -294,10 +294,29 @@ SimulationResult simulate(const Scenario& scenario, const SimulateOptions& optio
     for (int c = 0; c < nominal.cells; ++c) nominal.cell[c].r0_ohm = s.pack.r0_ohm;
     ref.configure(nominal, 1.0, 25.0);
     tr.nominal_pack_r0_reference_ohm = ref.pack_r0_reference_ohm();
-    for (const WeakCell& w : s.pack.weak_cells) {
-        if (std::fabs(w.capacity_factor - 1.0) >= 0.05 || std::fabs(w.resistance_factor - 1.0) >= 0.05) {
-            tr.weak_cell = w.cell - 1;
-            break;
+    {
+        double worst = 0.0;
+        for (int c = 0; c < pp.cells; ++c) {
+            std::vector<double> q, r;
+            for (int k = 0; k < pp.cells; ++k) {
+                if (k == c) continue;
+                q.push_back(pp.cell[k].capacity_ah);
+                r.push_back(pp.cell[k].r0_ohm);
+            }
+            std::sort(q.begin(), q.end());
+            std::sort(r.begin(), r.end());
+            const size_t m = q.size();
+            const double q_med = m % 2 ? q[m / 2] : 0.5 * (q[m / 2 - 1] + q[m / 2]);
+            const double r_med = m % 2 ? r[m / 2] : 0.5 * (r[m / 2 - 1] + r[m / 2]);
+            const double deficit = 1.0 - pp.cell[c].capacity_ah / q_med;
+            const double excess = pp.cell[c].r0_ohm / r_med - 1.0;
+            if (deficit > 0.10 || excess > 0.10) {
+                tr.outlier_cells.push_back(c);
+                if (std::max(deficit, excess) > worst) {
+                    worst = std::max(deficit, excess);
+                    tr.weak_cell = c;
+                }
+            }
         }
     }
     const double capacity_ratio = tr.pack_capacity_ah / tr.nominal_pack_capacity_ah;
@@ -347,7 +366,7 @@ json truth_to_json(const SimulationResult& r) {
                  {"resistance_ohm_25c", round_fixed(t.pack_r0_reference_ohm, 7)},
                  {"nominal_resistance_ohm_25c", round_fixed(t.nominal_pack_r0_reference_ohm, 7)},
                  {"resistance_note", "series ohmic resistance R0 (what an instantaneous current step shows); the RC branches are per cell below"},
-                 {"cells", cells}};
+                 {"per_cell", cells}};
     j["flight"] = {{"takeoff_s", round_fixed(t.takeoff_s, 3)},
                    {"planned_landing_s", round_fixed(t.planned_landing_s, 3)},
                    {"landing_s", round_fixed(t.landing_s, 3)},
@@ -365,6 +384,12 @@ json truth_to_json(const SimulationResult& r) {
     j["degradation"] = {{"degraded", t.degraded},
                         {"justified_warnings", t.justified_warnings},
                         {"weak_cell", t.weak_cell >= 0 ? json(t.weak_cell + 1) : json(nullptr)},
+                        {"outlier_cells", [&] {
+                             json a = json::array();
+                             for (int c : t.outlier_cells) a.push_back(c + 1);
+                             return a;
+                         }()},
+                        {"outlier_note", "cells with capacity > 10 % below or R0 > 10 % above the median of the other cells (25 °C values in pack.per_cell)"},
                         {"capacity_ratio", round_fixed(t.pack_capacity_ah / t.nominal_pack_capacity_ah, 5)},
                         {"resistance_ratio", round_fixed(t.pack_r0_reference_ohm / t.nominal_pack_r0_reference_ohm, 5)}};
     json gains = json::array(), offsets = json::array();

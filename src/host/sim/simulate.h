@@ -54,7 +54,12 @@ struct Truth {
     double pack_r0_reference_ohm = 0;     // Σ R0 at 25 °C, full
     double nominal_pack_r0_reference_ohm = 0;
     double initial_charge_ah = 0;         // already drawn from the weakest cell at power-on
-    int weak_cell = -1;                   // 0-based, −1 none
+    // Cells beyond the bar against the median of the other cells (capacity more
+    // than 10 % lower, or R0 more than 10 % higher), 0-based; whatever the scenario
+    // declared: the cell-to-cell spread can push a declared 10 % cell inside the bar or
+    // an undeclared one beyond it. weak_cell is the furthest of them (−1 none).
+    std::vector<int> outlier_cells;
+    int weak_cell = -1;
     bool degraded = false;
     bool sensor_faulty = false;
     std::vector<std::string> justified_warnings;  // low_capacity, high_resistance, cell_outlier
