@@ -10,6 +10,7 @@ void CellAnalyzer::reset() {
     head_ = count_ = 0;
     sxx_ = n_r_ = n_ = first_charge_ah_ = slow_current_a_ = 0.0f;
     last_time_us_ = 0;
+    since_verdict_ = 0;
     for (int k = 0; k < kZ; ++k) {
         mz_[k] = 0.0f;
         for (int j = 0; j < kZ; ++j) czz_[k][j] = 0.0f;
@@ -95,16 +96,6 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     head_ = (head_ + 1) % kHistory;
     if (count_ < kHistory) ++count_;
 
-    const bool r_ready = sxx_ >= config_.min_excitation_a2 && n_r_ >= config_.min_pairs;
-    float sigma_r[kMaxCells] = {};
-    if (r_ready) {
-        for (int c = 0; c < cells; ++c) {
-            status_.resistance_ohm[c] = -sxy_[c] / sxx_;
-            const float rss = maxf(0.0f, syy_[c] - sxy_[c] * sxy_[c] / sxx_);
-            sigma_r[c] = sqrtf(rss / maxf(1.0f, n_r_ - 1.0f) / sxx_);
-        }
-    }
-
     // Drift regression. A cell with a fraction f less capacity than the others sits, at the
     // same charge drawn, (1 − SOC)·f/(1 − f) further down the curve, so its voltage is below
     // the others' by about that times the curve's slope. The slope is taken as the secant
@@ -146,7 +137,20 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
         cdd_[c] += dd * dn;
     }
 
-    // Verdicts.
+    // Verdicts, every kVerdictEvery updates (about half a second): the sums above need
+    // every sample, the solves below do not.
+    if (++since_verdict_ < kVerdictEvery) return;
+    since_verdict_ = 0;
+    const bool r_ready = sxx_ >= config_.min_excitation_a2 && n_r_ >= config_.min_pairs;
+    float sigma_r[kMaxCells] = {};
+    if (r_ready) {
+        for (int c = 0; c < cells; ++c) {
+            status_.resistance_ohm[c] = -sxy_[c] / sxx_;
+            const float rss = maxf(0.0f, syy_[c] - sxy_[c] * sxy_[c] / sxx_);
+            sigma_r[c] = sqrtf(rss / maxf(1.0f, n_r_ - 1.0f) / sxx_);
+        }
+    }
+
     status_.flagged_cell = -1;
     status_.finding = kNone;
     float worst = 0.0f;

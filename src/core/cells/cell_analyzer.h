@@ -75,6 +75,8 @@ public:
 
 private:
     static constexpr int kHistory = 8;
+    static constexpr int kVerdictEvery = 8;
+    int since_verdict_ = 0;
     Config config_;
     Status status_;
     uint64_t t_us_[kHistory] = {};
