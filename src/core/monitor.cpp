@@ -198,6 +198,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         status_.time_valid = js.time_valid;
         status_.expected_time_s = js.expected_time_s;
         status_.remaining_energy_wh = js.remaining_energy_wh;
+        status_.rest_capacity_ah = js.rest_capacity_ah;
         status_.short_flight_cause = js.cause;
         short_flight = js.short_flight;
         // Sensor faults only the joint estimator can see: a current offset learnt on the

@@ -50,6 +50,7 @@ struct MonitorStatus {
     float long_avg_power_w = 0.0f;
     float expected_time_s = 0.0f;      // joint estimator: a healthy pack's flight time
     float remaining_energy_wh = 0.0f;  // joint estimator: to the cutoff at the mean power
+    float rest_capacity_ah = 0.0f;     // joint estimator: from the rests before and after a flight (0 = none)
     uint8_t short_flight_cause = 0;    // JointEstimator::Cause bits
 
     uint8_t cell_count = 0;

@@ -151,6 +151,9 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("offset_process_a_per_sqrt_s", jc.ekf.offset_process_a_per_sqrt_s, 0, 10);
         r.number("offset_fault_a", jc.offset_fault_a, 0, kBig);
         r.number("offset_learn_max_current_a", jc.offset_learn_max_current_a, 0, kBig);
+        r.number("rest_capacity_min_rest_s", jc.rest_capacity_min_rest_s, 0, kBig);
+        r.number("rest_capacity_max_current_a", jc.rest_capacity_max_current_a, 0, kBig);
+        r.number("rest_capacity_min_soc_drop", jc.rest_capacity_min_soc_drop, 0, 1);
         r.number("ground_soc_process_scale", jc.ground_soc_process_scale, 0, 100);
         r.number("resistance_settle_s", jc.resistance_settle_s, 0, kBig);
         {
@@ -306,6 +309,9 @@ json config_to_json(const LoadedConfig& c) {
             {"offset_process_a_per_sqrt_s", jc.ekf.offset_process_a_per_sqrt_s},
             {"offset_fault_a", jc.offset_fault_a},
             {"offset_learn_max_current_a", jc.offset_learn_max_current_a},
+            {"rest_capacity_min_rest_s", jc.rest_capacity_min_rest_s},
+            {"rest_capacity_max_current_a", jc.rest_capacity_max_current_a},
+            {"rest_capacity_min_soc_drop", jc.rest_capacity_min_soc_drop},
             {"ground_soc_process_scale", jc.ground_soc_process_scale},
             {"resistance_settle_s", jc.resistance_settle_s},
             {"learn_offset_in_flight", jc.learn_offset_in_flight},

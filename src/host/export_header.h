@@ -134,6 +134,9 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.learn_offset_in_flight", c.joint.learn_offset_in_flight);
     f("joint.polarisation_follows_resistance", c.joint.polarisation_follows_resistance);
     f("joint.offset_learn_max_current_a", c.joint.offset_learn_max_current_a);
+    f("joint.rest_capacity_min_rest_s", c.joint.rest_capacity_min_rest_s);
+    f("joint.rest_capacity_max_current_a", c.joint.rest_capacity_max_current_a);
+    f("joint.rest_capacity_min_soc_drop", c.joint.rest_capacity_min_soc_drop);
     f("joint.ground_soc_process_scale", c.joint.ground_soc_process_scale);
     f("joint.resistance_settle_s", c.joint.resistance_settle_s);
     f("cell_analysis.lag_s", c.cell_analysis.lag_s);

@@ -448,3 +448,35 @@ TEST_CASE("Capacity EKF on a warming pack: polarisation scaled with R0 keeps cap
     CHECK(std::fabs(err_scaled) < 0.05f);
     CHECK(err_fixed > 0.10f);  // the fixed polarisation reads the recovery as charge (+15 %)
 }
+
+TEST_CASE("Capacity from the rests before and after a flight; a power-off glitch is no rest", "[joint][truth]") {
+    // A 1.2 Ah pack rated 1.5 Ah flies 300 s at 150 W (about 0.8 Ah, 0.7 of its charge),
+    // lands and rests 90 s: the OCV read at rest gives the charge drawn as a fall in SOC, so
+    // capacity = charge / (SOC before − SOC after). The plant's RC branch (6 s) has relaxed
+    // by then, so the reading is within the table interpolation's error.
+    TremblayParams rated;
+    rated.capacity_ah = 1.5f;
+    rated.internal_resistance_ohm = 0.025f;
+    Plant p{OcvCurve{}, 1.2f, 0.025f, 0.008f, 6.0f};
+    p.ocv.configure(lipo_table(), 4, rated);
+    JointEstimator::Config jc;
+    jc.ocv = lipo_table();
+    JointEstimator e;
+    e.configure(jc, rated, 4);
+    const float dt = 0.067f;
+    uint64_t t_us = 0;
+    float v = p.ocv.voltage_v(1.0f);
+    e.start(v, 0.0f);
+    for (float t = 0.0f; t < 410.0f; t += dt, t_us += 67000) {
+        const bool flying = t >= 20.0f && t < 320.0f;
+        const float i = flying ? 150.0f / v : 0.2f;
+        v = p.step(i, dt);
+        e.update(t_us, v, i, dt, flying);
+        if (t < 349.0f) CHECK(e.status().rest_capacity_ah == 0.0f);  // not before 30 s of rest
+    }
+    const float rest_ah = e.status().rest_capacity_ah;
+    CHECK(rest_ah == Approx(1.2f).epsilon(0.03));
+    // The logger's last sample at power-off reads a volt low: no rest, the value stays.
+    e.update(t_us, v - 1.0f, -0.4f, dt, false);
+    CHECK(e.status().rest_capacity_ah == rest_ah);
+}

@@ -30,11 +30,15 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     was_flying_ = false;
     polarisation_scale_ = 1.0f;
     polarisation_ref_ohm_ = 0.0f;
+    start_soc_ = 1.0f;
+    charge_total_ah_ = rest_s_ = 0.0f;
+    has_flown_ = false;
 }
 
 void JointEstimator::start(float voltage_v, float current_a) {
     const float soc = CapacityEkf::soc_at_rest_voltage(ocv_, voltage_v + current_a * rated_.internal_resistance_ohm);
     ekf_.start(soc);
+    start_soc_ = soc;
     polarisation_current_.reset(current_a);
     polarisation_slow_current_.reset(current_a);
     status_.started = true;
@@ -119,6 +123,23 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     status_.current_offset_fault =
         fabsf(es.offset_a) > config_.offset_fault_a && fabsf(es.offset_a) > 3.0f * es.sigma_offset_a;
 
+    charge_total_ah_ += true_a * dt_s / 3600.0f;
+    if (flying) {
+        has_flown_ = has_flown_ || flying_s_ > config_.min_flight_s;
+        rest_s_ = 0.0f;
+    } else {
+        // A step in the voltage is no rest (a logger's power-off sample reads 1 V low).
+        const bool steady = fabsf(voltage_v - last_voltage_v_) <= 0.05f;
+        rest_s_ = fabsf(true_a) <= config_.rest_capacity_max_current_a && steady ? rest_s_ + dt_s : 0.0f;
+    }
+    last_voltage_v_ = voltage_v;
+    if (has_flown_ && rest_s_ >= config_.rest_capacity_min_rest_s) {
+        const float soc_rest = CapacityEkf::soc_at_rest_voltage(ocv_, voltage_v + true_a * r0);
+        const float drop = start_soc_ - soc_rest;
+        // The curve reads the mean cell; like capacity_ah, report what the weakest holds.
+        if (drop >= config_.rest_capacity_min_soc_drop)
+            status_.rest_capacity_ah = charge_total_ah_ / drop * (1.0f - weakest_deficit_);
+    }
     if (flying) {
         flying_s_ += dt_s;
         flying_energy_j_ += voltage_v * true_a * dt_s;

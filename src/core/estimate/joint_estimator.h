@@ -51,6 +51,15 @@ public:
         // began): both fall as the pack warms in flight (the same Arrhenius behaviour), and a
         // fixed Rp would read that recovery of the voltage as charge the pack still holds.
         bool polarisation_follows_resistance = false;  // off: on the simulated suite it cost a false warning (docs/estimator.md)
+        // Capacity from two rests: the charge counted since the first resting voltage over
+        // the fall in SOC the OCV curve reads between it and a rest after landing. The
+        // filter cannot use the landing rest (it learns capacity only in flight, where the
+        // state of charge moves); a rest after a flight is the cleanest reading a monitor
+        // gets. The voltage is still recovering after tens of seconds, so the value reads a
+        // little low; it is refreshed while the rest lasts.
+        float rest_capacity_min_rest_s = 30.0f;
+        float rest_capacity_max_current_a = 1.0f;
+        float rest_capacity_min_soc_drop = 0.25f;  // below this the curve's error dominates
     };
     enum Cause : uint8_t { kCauseNone = 0, kCauseCapacity = 1, kCauseResistance = 2 };
     struct Status {
@@ -76,6 +85,7 @@ public:
         float current_offset_a = 0.0f;     // learnt current-sensor offset
         float sigma_current_offset_a = 0.0f;
         bool current_offset_fault = false;
+        float rest_capacity_ah = 0.0f;     // after a flight and a rest (0 = none yet)
     };
 
     void configure(const Config& config, const TremblayParams& rated, int cells_in_series);
@@ -116,6 +126,11 @@ private:
     int cells_ = 1;
     float polarisation_scale_ = 1.0f;   // R0 now / R0 when learning began
     float polarisation_ref_ohm_ = 0.0f;  // R0 when capacity and polarisation learning began (0: not yet)
+    float start_soc_ = 1.0f;             // from the first resting voltage
+    float charge_total_ah_ = 0.0f;       // offset-corrected, since start
+    float rest_s_ = 0.0f;                // on the ground below the rest current, since
+    bool has_flown_ = false;
+    float last_voltage_v_ = 0.0f;
 };
 
 }  // namespace core

@@ -110,6 +110,9 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
         flight_last_us_ = s.time_us;
         at_last_flying_ = running_;
         last_flying_ = s;
+        rest_capacity_ah_ = 0.0f;  // a new flight: wait for the rest after it
+    } else if (s.rest_capacity_ah > 0.0f) {
+        rest_capacity_ah_ = s.rest_capacity_ah;
     }
 }
 
@@ -152,7 +155,8 @@ json SummaryAccumulator::to_json(int cells) const {
         flight["samples"] = static_cast<uint64_t>(f.n);
         flight["capacity_ah"] = {{"mean", mean_or_null(f.capacity_ah, f.n)},
                                  {"first20_mean", mean_or_null(first20.capacity_ah, first20.n)},
-                                 {"final", round_sig(last_flying_.capacity_ah)}};
+                                 {"final", round_sig(last_flying_.capacity_ah)},
+                                 {"after_rest", rest_capacity_ah_ > 0.0f ? json(round_sig(rest_capacity_ah_)) : json(nullptr)}};
         flight["resistance_ohm"] = {{"mean", mean_or_null(f.resistance_ohm, f.n)},
                                     {"first20_mean", mean_or_null(first20.resistance_ohm, first20.n)},
                                     {"final", round_sig(last_flying_.resistance_ohm)}};
