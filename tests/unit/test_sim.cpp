@@ -362,6 +362,36 @@ TEST_CASE("Scenario files: the suite loads, covers what it must, and bad files a
     CHECK_THROWS_AS(find_scenario_files({tmp + "/nothing"}), ScenarioError);
 }
 
+TEST_CASE("Scenario files: the held-out suite shares no seed or name with the tuning suite", "[sim]") {
+    const std::string tuning_dir = std::string(BATTSIM_SOURCE_DIR) + "/configs/scenarios";
+    const std::string holdout_dir = std::string(BATTSIM_SOURCE_DIR) + "/configs/scenarios-holdout";
+    std::set<std::string> tuning_names;
+    std::set<uint64_t> tuning_seeds;
+    for (const std::string& f : find_scenario_files({tuning_dir})) {
+        const Scenario s = load_scenario(f);
+        tuning_names.insert(s.name);
+        tuning_seeds.insert(s.seed);
+    }
+    const std::vector<std::string> files = find_scenario_files({holdout_dir});
+    CHECK(files.size() >= 20);
+    std::set<std::string> names;
+    std::set<uint64_t> seeds;
+    for (const std::string& f : files) {
+        const Scenario s = load_scenario(f);
+        INFO(f);
+        CHECK(s.name.rfind("ho-", 0) == 0);
+        CHECK(f == holdout_dir + "/" + s.name + ".json");
+        CHECK(tuning_names.count(s.name) == 0);
+        CHECK(tuning_seeds.count(s.seed) == 0);
+        CHECK(s.seed >= 9001);
+        CHECK(s.seed <= 9099);
+        CHECK(names.insert(s.name).second);
+        CHECK(seeds.insert(s.seed).second);
+        CHECK(s.config.monitor.cells_in_series == s.pack.cells);
+        CHECK(s.config.monitor.battery.capacity_ah == Approx(s.pack.capacity_ah));
+    }
+}
+
 TEST_CASE("The plant at 7 degC against flight 32: voltage against charge drawn", "[sim][data]") {
     // The shared flight 32 (a new CNHL 1500 mAh 4S at about 7 degC) and a simulated racing
     // flight in the same conditions: the IR-corrected pack voltage per cell, binned by
