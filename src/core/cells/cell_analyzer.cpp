@@ -10,6 +10,7 @@ void CellAnalyzer::reset() {
     head_ = count_ = 0;
     sxx_ = n_r_ = n_ = first_charge_ah_ = slow_current_a_ = 0.0f;
     last_time_us_ = 0;
+    drift_v_ = 0.0f;
     since_verdict_ = 0;
     for (int k = 0; k < kZ; ++k) {
         mz_[k] = 0.0f;
@@ -108,9 +109,14 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
         if (c != lead_cell) mean_v += cell_v[c];
     mean_v /= static_cast<float>(compared_n);
     const float k_ref = config_.capacity_deficit / maxf(0.05f, 1.0f - config_.capacity_deficit);
-    const float behind = (1.0f - clampf(pack_soc, 0.0f, 1.0f)) * k_ref;
-    const float drift_v = (ocv.voltage_v(pack_soc) - ocv.voltage_v(pack_soc - behind)) /
-                          (static_cast<float>(cells) * maxf(k_ref, 1.0e-3f));
+    // The secant moves with the SOC, slowly: refreshed with the verdicts (two OCV look-ups,
+    // Tremblay exponentials without a table) and held in between.
+    if (n_ == 0.0f || since_verdict_ == 0) {
+        const float behind = (1.0f - clampf(pack_soc, 0.0f, 1.0f)) * k_ref;
+        drift_v_ = (ocv.voltage_v(pack_soc) - ocv.voltage_v(pack_soc - behind)) /
+                   (static_cast<float>(cells) * maxf(k_ref, 1.0e-3f));
+    }
+    const float drift_v = drift_v_;
     if (n_ == 0.0f) {
         first_charge_ah_ = charge_ah;
         slow_current_a_ = current_a;

@@ -77,6 +77,7 @@ private:
     static constexpr int kHistory = 8;
     static constexpr int kVerdictEvery = 8;
     int since_verdict_ = 0;
+    float drift_v_ = 0.0f;  // the regressor's secant, refreshed with the verdicts
     Config config_;
     Status status_;
     uint64_t t_us_[kHistory] = {};

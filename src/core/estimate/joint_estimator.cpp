@@ -33,6 +33,8 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     start_soc_ = 1.0f;
     charge_total_ah_ = rest_s_ = 0.0f;
     has_flown_ = false;
+    rest_reads_ = 0;
+    last_voltage_v_ = 0.0f;
 }
 
 void JointEstimator::start(float voltage_v, float current_a) {
@@ -133,7 +135,8 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         rest_s_ = fabsf(true_a) <= config_.rest_capacity_max_current_a && steady ? rest_s_ + dt_s : 0.0f;
     }
     last_voltage_v_ = voltage_v;
-    if (has_flown_ && rest_s_ >= config_.rest_capacity_min_rest_s) {
+    // Read about once a second (an inversion of the curve: bisection).
+    if (has_flown_ && rest_s_ >= config_.rest_capacity_min_rest_s && (++rest_reads_ & 15u) == 0u) {
         const float soc_rest = CapacityEkf::soc_at_rest_voltage(ocv_, voltage_v + true_a * r0);
         const float drop = start_soc_ - soc_rest;
         // The curve reads the mean cell; like capacity_ah, report what the weakest holds.

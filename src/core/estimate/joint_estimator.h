@@ -131,6 +131,7 @@ private:
     float rest_s_ = 0.0f;                // on the ground below the rest current, since
     bool has_flown_ = false;
     float last_voltage_v_ = 0.0f;
+    uint32_t rest_reads_ = 0;
 };
 
 }  // namespace core
