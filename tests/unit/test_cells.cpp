@@ -6,28 +6,11 @@
 #include "core/cells/cell_analyzer.h"
 #include "core/estimate/power_time_solver.h"
 #include "core/model/ocv.h"
+#include "ecm_plant.h"
 
 using namespace battsim::core;
 
 namespace {
-
-OcvTable cell_table() {
-    OcvTable t;
-    const float v[11] = {3.30f, 3.60f, 3.68f, 3.73f, 3.77f, 3.81f, 3.86f, 3.92f, 3.99f, 4.07f, 4.17f};
-    t.points = 11;
-    for (int k = 0; k < 11; ++k) t.cell_voltage_v[k] = v[k];
-    return t;
-}
-
-struct CellPlant {
-    float capacity_ah, r0_ohm, r1_ohm, tau_s;
-    float soc = 1.0f, v1 = 0.0f;
-    float step(const OcvCurve& cell_ocv, float current_a, float dt_s) {
-        soc -= current_a * dt_s / (3600.0f * capacity_ah);
-        v1 += (current_a * r1_ohm - v1) * (1.0f - std::exp(-dt_s / tau_s));
-        return cell_ocv.voltage_v(soc) - r0_ohm * current_a - v1;
-    }
-};
 
 struct Outcome {
     CellAnalyzer::Status status;
@@ -38,17 +21,18 @@ struct Outcome {
 // compared), a racing-like current, 67 ms samples, 4 mV tap noise; the pack SOC the
 // analyzer is given is the compared cells' mean (as the pack filter would see it).
 Outcome fly(const float capacity_factor[4], const float resistance_factor[4], float seconds) {
-    OcvCurve cell_ocv, pack_ocv;
-    cell_ocv.configure(cell_table(), 1, TremblayParams{});
-    pack_ocv.configure(cell_table(), 4, TremblayParams{});
-    CellPlant cells[4];
-    for (int c = 0; c < 4; ++c)
-        cells[c] = CellPlant{1.5f * capacity_factor[c], 0.004f * resistance_factor[c], 0.003f * resistance_factor[c],
-                             20.0f};
+    OcvCurve pack_ocv;
+    pack_ocv.configure(testplant::lipo_table(), 4, TremblayParams{});
+    testplant::Plant cells[4];
+    for (int c = 0; c < 4; ++c) {
+        cells[c] = testplant::Plant{OcvCurve{}, 1.5f * capacity_factor[c], 0.004f * resistance_factor[c],
+                                    0.003f * resistance_factor[c], 20.0f};
+        cells[c].ocv.configure(testplant::lipo_table(), 1, TremblayParams{});
+    }
     CellAnalyzer a;
     a.configure(CellAnalyzer::Config{});
     const float dt = 0.067f;
-    uint32_t seed = 777u;
+    testplant::Lcg rng;
     float ip = 0.0f, charge = 0.0f;
     Outcome out;
     for (int n = 0; n * dt < seconds; ++n) {
@@ -61,9 +45,8 @@ Outcome fly(const float capacity_factor[4], const float resistance_factor[4], fl
         float v[4];
         float soc_mean = 0.0f;
         for (int c = 0; c < 4; ++c) {
-            seed = seed * 1664525u + 1013904223u;
-            const float noise = (static_cast<float>(seed >> 8) / 8388608.0f - 1.0f) * 0.004f;
-            v[c] = std::round((cells[c].step(cell_ocv, i, dt) + noise) / 0.001f) * 0.001f;
+            const float noise = rng.next() * 0.004f;
+            v[c] = std::round((cells[c].step(i, dt) + noise) / 0.001f) * 0.001f;
             if (c < 3) soc_mean += cells[c].soc / 3.0f;
         }
         a.update(static_cast<uint64_t>(t * 1.0e6f), v, 4, i, ip, charge, soc_mean, pack_ocv);

@@ -9,39 +9,15 @@
 #include "core/estimate/joint_estimator.h"
 #include "core/estimate/power_time_solver.h"
 #include "core/model/ocv.h"
+#include "ecm_plant.h"
 
 using namespace battsim::core;
 
 namespace {
 
-// Per-cell LiPo-like OCV at SOC 0, 0.1, …, 1.
-OcvTable lipo_table() {
-    OcvTable t;
-    const float v[11] = {3.30f, 3.60f, 3.68f, 3.73f, 3.77f, 3.81f, 3.86f, 3.92f, 3.99f, 4.07f, 4.17f};
-    t.points = 11;
-    for (int k = 0; k < 11; ++k) t.cell_voltage_v[k] = v[k];
-    return t;
-}
-
-// Deterministic pseudo-noise in [−1, 1] (no library RNG: same on every platform).
-struct Lcg {
-    uint32_t s = 12345u;
-    float next() {
-        s = s * 1664525u + 1013904223u;
-        return static_cast<float>(s >> 8) / 8388608.0f - 1.0f;
-    }
-};
-
-struct Plant {
-    OcvCurve ocv;
-    float capacity_ah, r0_ohm, r1_ohm, tau_s;
-    float soc = 1.0f, v1 = 0.0f;
-    float step(float current_a, float dt_s) {
-        soc -= current_a * dt_s / (3600.0f * capacity_ah);
-        v1 += (current_a * r1_ohm - v1) * (1.0f - std::exp(-dt_s / tau_s));
-        return ocv.voltage_v(soc) - r0_ohm * current_a - v1;
-    }
-};
+using testplant::Lcg;
+using testplant::lipo_table;
+using testplant::Plant;
 
 // A racing-style power profile: bursts and cruise, constant power per phase.
 float demand_w(float t_s) {
