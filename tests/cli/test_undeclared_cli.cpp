@@ -34,6 +34,10 @@ json simulate_and_trace(const std::string& dir, const std::string& name, const j
     json scenario = json::parse(clitest::read_file(kSource + "/configs/scenarios/4s-racing-healthy-a.json"));
     scenario["name"] = name;
     scenario["monitor_config"] = kSource + "/configs/sim-4s.json";
+    // 15 s on the ground after landing, as this test was designed with. With the suite's
+    // 60 s the residual's interleaved held-out blocks are mostly rest and only soc_shape
+    // passes the held-out test (noted in docs/model-fitting.md).
+    scenario["profile"]["idle_after_s"] = 15;
     for (auto it = pack.begin(); it != pack.end(); ++it) scenario["pack"][it.key()] = it.value();
     const std::string scenario_path = dir + "/" + name + ".json";
     clitest::write_file(scenario_path, scenario.dump(1));

@@ -456,3 +456,32 @@ TEST_CASE("Capacity from the rests before and after a flight; a power-off glitch
     e.update(t_us, v - 1.0f, -0.4f, dt, false);
     CHECK(e.status().rest_capacity_ah == rest_ah);
 }
+
+TEST_CASE("The current offset is not learnt after landing, where the voltage recovers", "[joint][truth]") {
+    // A clean sensor, a flight, then 3 minutes on the ground: the plant's polarisation relaxes
+    // and the voltage rises, which the offset filter would read as a negative offset.
+    TremblayParams rated;
+    rated.capacity_ah = 1.5f;
+    rated.internal_resistance_ohm = 0.025f;
+    Plant p{OcvCurve{}, 1.5f, 0.025f, 0.03f, 40.0f};  // a large, slow branch: 0.6 V at 20 A
+    p.ocv.configure(lipo_table(), 4, rated);
+    JointEstimator::Config jc;
+    jc.ocv = lipo_table();
+    JointEstimator e;
+    e.configure(jc, rated, 4);
+    const float dt = 0.067f;
+    uint64_t t_us = 0;
+    float v = p.ocv.voltage_v(1.0f);
+    e.start(v, 0.0f);
+    float offset_at_takeoff = 0.0f;
+    for (float t = 0.0f; t < 500.0f; t += dt, t_us += 67000) {
+        const bool flying = t >= 60.0f && t < 300.0f;
+        const float i = flying ? 300.0f / v : 0.3f;
+        v = p.step(i, dt);
+        e.update(t_us, v, i, dt, flying);
+        if (t < 60.0f) offset_at_takeoff = e.status().current_offset_a;
+    }
+    CHECK(std::fabs(offset_at_takeoff) < 0.2f);  // what 60 s at 0.3 A can tell
+    CHECK(e.status().current_offset_a == offset_at_takeoff);
+    CHECK_FALSE(e.status().current_offset_fault);
+}

@@ -33,6 +33,7 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     start_soc_ = 1.0f;
     charge_total_ah_ = rest_s_ = 0.0f;
     has_flown_ = false;
+    taken_off_ = false;
     rest_reads_ = 0;
     last_voltage_v_ = 0.0f;
 }
@@ -104,6 +105,11 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     // Below the offset-learning current the pack is on the ground: what the voltage shows
     // there is the offset, never capacity or polarisation.
     const bool ground = current_a < config_.offset_learn_max_current_a;
+    // The offset is learnt on the ground before the first take-off only: after a flight the
+    // pack's voltage recovers for minutes as its polarisation relaxes, which the filter
+    // would read as charge the sensor counted but the pack never gave (a false offset, and a
+    // sensor-fault warning after every landing).
+    taken_off_ = taken_off_ || flying;
     ekf_.predict(current_a, dt_s, ground, config_.ground_soc_process_scale);
     // On the ground the voltage is used as it is: R0 times a ground current is a few mV and
     // constant, while compensating with the offset-corrected current would move y as the
@@ -118,7 +124,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
                               ? r0 / polarisation_ref_ohm_
                               : 1.0f;
     ekf_.correct(compensated_v, ip, (r_sigma * true_a) * (r_sigma * true_a), ocv_, learn,
-                 ground || (flying && config_.learn_offset_in_flight), polarisation_scale_);
+                 (ground && !taken_off_) || (flying && config_.learn_offset_in_flight), polarisation_scale_);
     const CapacityEkf::Status& es = ekf_.status();
     status_.current_offset_a = es.offset_a;
     status_.sigma_current_offset_a = es.sigma_offset_a;

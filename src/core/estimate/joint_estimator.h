@@ -130,6 +130,7 @@ private:
     float charge_total_ah_ = 0.0f;       // offset-corrected, since start
     float rest_s_ = 0.0f;                // on the ground below the rest current, since
     bool has_flown_ = false;
+    bool taken_off_ = false;  // the offset is learnt only before this
     float last_voltage_v_ = 0.0f;
     uint32_t rest_reads_ = 0;
 };

@@ -55,6 +55,10 @@ EstimatorColumn monitor_column(std::string name, std::string description,
                 e.has_resistance = true;
                 e.resistance_ohm = st.resistance_ohm;
             }
+            if (st.rest_capacity_ah > 0.0f) {
+                e.has_rest_capacity = true;
+                e.rest_capacity_ah = st.rest_capacity_ah;
+            }
             e.warnings = st.warnings;
             e.outlier_cell = st.outlier_cell;
             out.push_back(e);
@@ -128,6 +132,8 @@ EstimatorColumn oracle_column() {
                 plant.set_state(snap.state);
                 e.has_capacity = true;
                 e.capacity_ah = t.pack_capacity_ah;
+                e.has_rest_capacity = snap.time_s > t.landing_s;
+                e.rest_capacity_ah = t.pack_capacity_ah;
                 e.has_resistance = true;
                 e.resistance_ohm = plant.pack_r0_ohm();
                 const double flown_s = snap.time_s - t.takeoff_s;

@@ -26,6 +26,8 @@ struct Estimate {
     double capacity_ah = 0.0;
     bool has_resistance = false;
     double resistance_ohm = 0.0;
+    bool has_rest_capacity = false;  // read from the rests before and after a flight
+    double rest_capacity_ah = 0.0;
     uint8_t warnings = 0;      // bit per core::Warning, active after this sample
     int8_t outlier_cell = -1;  // 0-based cell named while the cell warning is active
 };

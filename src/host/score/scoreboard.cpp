@@ -94,6 +94,10 @@ ColumnFlight judge(const std::vector<Estimate>& est, const sim::SimulationResult
             }
         }
     }
+    if (!est.empty() && est.back().has_rest_capacity) {
+        cf.has_cap_rest = true;
+        cf.cap_err_rest = (est.back().rest_capacity_ah - t.pack_capacity_ah) / t.pack_capacity_ah * 100.0;
+    }
     const long iend = index_at(est, t.landing_s);
     if (iend >= 0 && est[static_cast<size_t>(iend)].time_s >= t.takeoff_s) {
         const Estimate& e = est[static_cast<size_t>(iend)];
@@ -265,6 +269,8 @@ std::vector<Row> build_rows(const ScoreResult& r) {
              [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_cap20, c.cap_err20); });
     add_pair("capacity_end", "capacity at the end",
              [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_cap_end, c.cap_err_end); });
+    add_pair("capacity_after_rest", "capacity after the landing rest",
+             [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_cap_rest, c.cap_err_rest); });
     add_pair("resistance_20", "resistance at 20 %",
              [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_res20, c.res_err20); });
     add_pair("resistance_end", "resistance at the end",
@@ -492,6 +498,7 @@ json to_json(const ScoreResult& r) {
         {"remaining_energy_error", "(estimate - truth) / truth, in %, energy to the cutoff"},
         {"capacity_error", "(estimate - weakest cell capacity) / weakest cell capacity, in %"},
         {"resistance_error", "(estimate - pack series ohmic resistance at that instant) / truth, in %"},
+        {"capacity_after_rest", "capacity read from the rests before and after the flight, at the end of the log, against the weakest cell's"},
         {"short_flight", "T < 0.8 x the healthy twin's T"},
         {"false_warning", "low capacity or high resistance warning the pack does not justify, or short flight on a flight that is not short"}};
     json summary = json::object();
@@ -547,6 +554,7 @@ json to_json(const ScoreResult& r) {
                                  {"remaining_energy_error_20_pct", opt(cf.has_energy20, cf.energy_err20)},
                                  {"capacity_error_20_pct", opt(cf.has_cap20, cf.cap_err20)},
                                  {"capacity_error_end_pct", opt(cf.has_cap_end, cf.cap_err_end)},
+                                 {"capacity_error_after_rest_pct", opt(cf.has_cap_rest, cf.cap_err_rest)},
                                  {"resistance_error_20_pct", opt(cf.has_res20, cf.res_err20)},
                                  {"resistance_error_end_pct", opt(cf.has_res_end, cf.res_err_end)},
                                  {"first_warning_after_takeoff_s", warn},

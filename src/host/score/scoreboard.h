@@ -47,6 +47,8 @@ struct ColumnFlight {
     double energy_err20 = 0;
     bool has_cap20 = false, has_cap_end = false, has_res20 = false, has_res_end = false;
     double cap_err20 = 0, cap_err_end = 0, res_err20 = 0, res_err_end = 0;
+    bool has_cap_rest = false;  // capacity read at the rest after landing (end of the log)
+    double cap_err_rest = 0;
     bool warned_in_time = false;
     std::vector<std::string> false_warnings;
     bool cell_warning = false;
