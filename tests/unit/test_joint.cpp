@@ -425,63 +425,63 @@ TEST_CASE("Capacity EKF on a warming pack: polarisation scaled with R0 keeps cap
     CHECK(err_fixed > 0.10f);  // the fixed polarisation reads the recovery as charge (+15 %)
 }
 
+namespace {
+// A 4S pack rated 1.5 Ah / 0.025 ohm on the LiPo table, with the joint estimator riding
+// along from a resting start; step() flies or rests it one 67 ms sample.
+struct RestBench {
+    TremblayParams rated;
+    Plant plant;
+    JointEstimator est;
+    float v = 0.0f;
+    uint64_t t_us = 0;
+    static constexpr float kDt = 0.067f;
+    RestBench(float capacity_ah, float r1_ohm, float tau_s) : plant{OcvCurve{}, capacity_ah, 0.025f, r1_ohm, tau_s} {
+        rated.capacity_ah = 1.5f;
+        rated.internal_resistance_ohm = 0.025f;
+        plant.ocv.configure(lipo_table(), 4, rated);
+        JointEstimator::Config jc;
+        jc.ocv = lipo_table();
+        est.configure(jc, rated, 4);
+        v = plant.ocv.voltage_v(1.0f);
+        est.start(v, 0.0f);
+    }
+    // power_w while flying, else a ground current.
+    void step(bool flying, float power_w, float ground_a) {
+        const float i = flying ? power_w / v : ground_a;
+        v = plant.step(i, kDt);
+        est.update(t_us, v, i, kDt, flying);
+        t_us += 67000;
+    }
+};
+}  // namespace
+
 TEST_CASE("Capacity from the rests before and after a flight; a power-off glitch is no rest", "[joint][truth]") {
     // A 1.2 Ah pack rated 1.5 Ah flies 300 s at 150 W (about 0.8 Ah, 0.7 of its charge),
     // lands and rests 90 s: the OCV read at rest gives the charge drawn as a fall in SOC, so
     // capacity = charge / (SOC before − SOC after). The plant's RC branch (6 s) has relaxed
     // by then, so the reading is within the table interpolation's error.
-    TremblayParams rated;
-    rated.capacity_ah = 1.5f;
-    rated.internal_resistance_ohm = 0.025f;
-    Plant p{OcvCurve{}, 1.2f, 0.025f, 0.008f, 6.0f};
-    p.ocv.configure(lipo_table(), 4, rated);
-    JointEstimator::Config jc;
-    jc.ocv = lipo_table();
-    JointEstimator e;
-    e.configure(jc, rated, 4);
-    const float dt = 0.067f;
-    uint64_t t_us = 0;
-    float v = p.ocv.voltage_v(1.0f);
-    e.start(v, 0.0f);
-    for (float t = 0.0f; t < 410.0f; t += dt, t_us += 67000) {
-        const bool flying = t >= 20.0f && t < 320.0f;
-        const float i = flying ? 150.0f / v : 0.2f;
-        v = p.step(i, dt);
-        e.update(t_us, v, i, dt, flying);
-        if (t < 349.0f) CHECK(e.status().rest_capacity_ah == 0.0f);  // not before 30 s of rest
+    RestBench b(1.2f, 0.008f, 6.0f);
+    for (float t = 0.0f; t < 410.0f; t += RestBench::kDt) {
+        b.step(t >= 20.0f && t < 320.0f, 150.0f, 0.2f);
+        if (t < 349.0f) CHECK(b.est.status().rest_capacity_ah == 0.0f);  // not before 30 s of rest
     }
-    const float rest_ah = e.status().rest_capacity_ah;
+    const float rest_ah = b.est.status().rest_capacity_ah;
     CHECK(rest_ah == Approx(1.2f).epsilon(0.03));
     // The logger's last sample at power-off reads a volt low: no rest, the value stays.
-    e.update(t_us, v - 1.0f, -0.4f, dt, false);
-    CHECK(e.status().rest_capacity_ah == rest_ah);
+    b.est.update(b.t_us, b.v - 1.0f, -0.4f, RestBench::kDt, false);
+    CHECK(b.est.status().rest_capacity_ah == rest_ah);
 }
 
 TEST_CASE("The current offset is not learnt after landing, where the voltage recovers", "[joint][truth]") {
     // A clean sensor, a flight, then 3 minutes on the ground: the plant's polarisation relaxes
     // and the voltage rises, which the offset filter would read as a negative offset.
-    TremblayParams rated;
-    rated.capacity_ah = 1.5f;
-    rated.internal_resistance_ohm = 0.025f;
-    Plant p{OcvCurve{}, 1.5f, 0.025f, 0.03f, 40.0f};  // a large, slow branch: 0.6 V at 20 A
-    p.ocv.configure(lipo_table(), 4, rated);
-    JointEstimator::Config jc;
-    jc.ocv = lipo_table();
-    JointEstimator e;
-    e.configure(jc, rated, 4);
-    const float dt = 0.067f;
-    uint64_t t_us = 0;
-    float v = p.ocv.voltage_v(1.0f);
-    e.start(v, 0.0f);
+    RestBench b(1.5f, 0.03f, 40.0f);  // a large, slow branch: 0.6 V at 20 A
     float offset_at_takeoff = 0.0f;
-    for (float t = 0.0f; t < 500.0f; t += dt, t_us += 67000) {
-        const bool flying = t >= 60.0f && t < 300.0f;
-        const float i = flying ? 300.0f / v : 0.3f;
-        v = p.step(i, dt);
-        e.update(t_us, v, i, dt, flying);
-        if (t < 60.0f) offset_at_takeoff = e.status().current_offset_a;
+    for (float t = 0.0f; t < 500.0f; t += RestBench::kDt) {
+        b.step(t >= 60.0f && t < 300.0f, 300.0f, 0.3f);
+        if (t < 60.0f) offset_at_takeoff = b.est.status().current_offset_a;
     }
     CHECK(std::fabs(offset_at_takeoff) < 0.2f);  // what 60 s at 0.3 A can tell
-    CHECK(e.status().current_offset_a == offset_at_takeoff);
-    CHECK_FALSE(e.status().current_offset_fault);
+    CHECK(b.est.status().current_offset_a == offset_at_takeoff);
+    CHECK_FALSE(b.est.status().current_offset_fault);
 }
