@@ -153,7 +153,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("offset_learn_max_current_a", jc.offset_learn_max_current_a, 0, kBig);
         r.number("rest_capacity_min_rest_s", jc.rest_capacity_min_rest_s, 0, kBig);
         r.number("rest_capacity_max_current_a", jc.rest_capacity_max_current_a, 0, kBig);
-        r.number("rest_capacity_min_soc_drop", jc.rest_capacity_min_soc_drop, 0, 1);
+        r.number("rest_capacity_min_soc_drop", jc.rest_capacity_min_soc_drop, 0.01, 1);
         r.number("ground_soc_process_scale", jc.ground_soc_process_scale, 0, 100);
         r.number("resistance_settle_s", jc.resistance_settle_s, 0, kBig);
         {
@@ -186,7 +186,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("cell_capacity_significance_sigmas", ca.capacity_significance_sigmas, 0, 100);
         r.number("cell_min_charge_ah", ca.min_charge_ah, 0, kBig);
         r.number("cell_min_drift_v", ca.min_drift_v, 0, kBig);
-        r.number("cell_detrend_time_s", ca.detrend_time_s, 0, kBig);
+        r.number("cell_slow_current_time_s", ca.slow_current_time_s, 0, kBig);
         r.number("cell_current_ridge_a2", ca.current_ridge_a2, 0, kBig);
         r.boolean("last_cell_includes_lead", ca.last_cell_includes_lead);
         if (const json* t = r.member("ocv_cell_voltage_v")) {
@@ -329,7 +329,7 @@ json config_to_json(const LoadedConfig& c) {
             {"cell_capacity_significance_sigmas", m.cell_analysis.capacity_significance_sigmas},
             {"cell_min_charge_ah", m.cell_analysis.min_charge_ah},
             {"cell_min_drift_v", m.cell_analysis.min_drift_v},
-            {"cell_detrend_time_s", m.cell_analysis.detrend_time_s},
+            {"cell_slow_current_time_s", m.cell_analysis.slow_current_time_s},
             {"cell_current_ridge_a2", m.cell_analysis.current_ridge_a2},
             {"last_cell_includes_lead", m.cell_analysis.last_cell_includes_lead},
         };

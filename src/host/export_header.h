@@ -144,7 +144,7 @@ void visit_monitor_config(Config& c, F&& f) {
     f("cell_analysis.min_excitation_a2", c.cell_analysis.min_excitation_a2);
     f("cell_analysis.min_pairs", c.cell_analysis.min_pairs);
     f("cell_analysis.current_ridge_a2", c.cell_analysis.current_ridge_a2);
-    f("cell_analysis.detrend_time_s", c.cell_analysis.detrend_time_s);
+    f("cell_analysis.slow_current_time_s", c.cell_analysis.slow_current_time_s);
     f("cell_analysis.resistance_ratio", c.cell_analysis.resistance_ratio);
     f("cell_analysis.capacity_deficit", c.cell_analysis.capacity_deficit);
     f("cell_analysis.min_charge_ah", c.cell_analysis.min_charge_ah);

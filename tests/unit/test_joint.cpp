@@ -19,6 +19,15 @@ using testplant::Lcg;
 using testplant::lipo_table;
 using testplant::Plant;
 
+// The joint estimator with default settings on the LiPo table, for a 4S pack rated `rated`.
+JointEstimator table_estimator(const TremblayParams& rated) {
+    JointEstimator::Config jc;
+    jc.ocv = lipo_table();
+    JointEstimator e;
+    e.configure(jc, rated, 4);
+    return e;
+}
+
 // A racing-style power profile: bursts and cruise, constant power per phase.
 float demand_w(float t_s) {
     const int phase = static_cast<int>(t_s / 3.0f) % 5;
@@ -164,10 +173,7 @@ FlightResult fly(float capacity_factor, float resistance_factor) {
     out.true_total_s = t;
     // Second pass: the estimator rides along.
     Plant p = make_plant();
-    JointEstimator::Config jc;
-    jc.ocv = lipo_table();
-    JointEstimator e;
-    e.configure(jc, rated, 4);
+    JointEstimator e = table_estimator(rated);
     e.start(p.ocv.voltage_v(1.0f), 0.0f);
     Lcg rng;
     float v = p.ocv.voltage_v(1.0f);
@@ -297,10 +303,7 @@ GroundFlight fly_with_offset(float offset_a) {
     out.true_total_s = flight_s;
 
     Plant p = make_plant();
-    JointEstimator::Config jc;
-    jc.ocv = lipo_table();
-    JointEstimator e;
-    e.configure(jc, rated, 4);
+    JointEstimator e = table_estimator(rated);
     Lcg rng;
     uint64_t t_us = 0;
     float v = p.ocv.voltage_v(1.0f);
@@ -352,10 +355,7 @@ TEST_CASE("Hover resistance: slow gusts too small for the short lag, recovered b
         rated.capacity_ah = 1.5f;
         rated.internal_resistance_ohm = 0.025f;
         p.ocv.configure(lipo_table(), 4, rated);
-        JointEstimator::Config jc;
-        jc.ocv = lipo_table();
-        JointEstimator e;
-        e.configure(jc, rated, 4);
+        JointEstimator e = table_estimator(rated);
         e.start(p.ocv.voltage_v(1.0f), 0.0f);
         uint64_t t_us = 0;
         const float dt = 0.067f;
@@ -439,9 +439,7 @@ struct RestBench {
         rated.capacity_ah = 1.5f;
         rated.internal_resistance_ohm = 0.025f;
         plant.ocv.configure(lipo_table(), 4, rated);
-        JointEstimator::Config jc;
-        jc.ocv = lipo_table();
-        est.configure(jc, rated, 4);
+        est = table_estimator(rated);
         v = plant.ocv.voltage_v(1.0f);
         est.start(v, 0.0f);
     }

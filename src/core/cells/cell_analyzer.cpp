@@ -8,7 +8,9 @@ namespace core {
 void CellAnalyzer::reset() {
     status_ = Status{};
     head_ = count_ = 0;
-    sxx_ = n_r_ = n_ = first_charge_ah_ = slow_current_a_ = 0.0f;
+    sxx_ = n_r_ = n_ = first_charge_ah_ = 0.0f;
+    slow_current_ = LowPassFilter{};
+    slow_current_.configure({config_.slow_current_time_s});
     last_time_us_ = 0;
     drift_v_ = 0.0f;
     since_verdict_ = 0;
@@ -117,16 +119,12 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
                    (static_cast<float>(cells) * maxf(k_ref, 1.0e-3f));
     }
     const float drift_v = drift_v_;
-    if (n_ == 0.0f) {
-        first_charge_ah_ = charge_ah;
-        slow_current_a_ = current_a;
-    } else if (time_us > last_time_us_ && config_.detrend_time_s > 0.0f) {
-        const float dt_s = static_cast<float>(time_us - last_time_us_) * 1.0e-6f;
-        slow_current_a_ += clampf(dt_s / config_.detrend_time_s, 0.0f, 1.0f) * (current_a - slow_current_a_);
-    }
+    if (n_ == 0.0f) first_charge_ah_ = charge_ah;
+    const float dt_s = time_us > last_time_us_ ? static_cast<float>(time_us - last_time_us_) * 1.0e-6f : 0.0f;
+    const float slow_current_a = slow_current_.update(current_a, dt_s);  // the first call takes the input
     last_time_us_ = time_us;
     n_ += 1.0f;
-    const float z[kZ] = {-drift_v, current_a, polarisation_current_a, slow_current_a_};
+    const float z[kZ] = {-drift_v, current_a, polarisation_current_a, slow_current_a};
     float dz[kZ];
     for (int k = 0; k < kZ; ++k) {
         dz[k] = z[k] - mz_[k];

@@ -15,6 +15,7 @@
 #pragma once
 #include <stdint.h>
 
+#include "core/estimate/low_pass.h"
 #include "core/model/ocv.h"
 #include "core/sample.h"
 
@@ -34,7 +35,7 @@ public:
         // A third current regressor, low-passed with this time constant: a cell's slow
         // polarisation (tens of seconds) builds up after take-off in step with the drift,
         // and without its own regressor it would read as capacity.
-        float detrend_time_s = 40.0f;
+        float slow_current_time_s = 40.0f;
         float resistance_ratio = 1.10f;     // name a cell above this × the others' median
         float capacity_deficit = 0.10f;     // name a cell this much below the others
         float min_charge_ah = 0.1f;         // charge drawn before capacity is judged
@@ -93,7 +94,7 @@ private:
     static constexpr int kZ = 4;
     float n_ = 0.0f;
     float first_charge_ah_ = 0.0f;  // when the regression began
-    float slow_current_a_ = 0.0f;
+    LowPassFilter slow_current_;  // the third current regressor
     uint64_t last_time_us_ = 0;
     float mz_[kZ] = {};
     float czz_[kZ][kZ] = {};
