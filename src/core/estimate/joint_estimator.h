@@ -19,10 +19,15 @@ class JointEstimator {
 public:
     struct Config {
         DifferenceResistanceEstimator::Config resistance;
-        // Used while `resistance` has too little excitation (a steady hover): a longer lag
-        // (bigger current steps from slow gusts, a little polarisation read as resistance)
-        // and a lower bar.
-        DifferenceResistanceEstimator::Config hover_resistance{0.3f, 60.0f, 0.2f, 10.0f, 0.02f};
+        // Used while `resistance` has too little excitation (a steady hover): a lower bar,
+        // smaller steps, a two-sample lag (slow gusts step the current by a few tenths of an
+        // ampere over it), and fed on the ground too, so the take-off step itself counts.
+        // Fed only in flight it missed the step (the monitor confirms a take-off 0.5 s late)
+        // and learnt from the settling after it, where the current falls while the
+        // polarisation still builds: 4S hovers read R0 about 20 % low, then drifted up, and
+        // the filter took the rising compensated voltage for charge. A 0.3 s lag read the
+        // take-off step 5–9 % high (fast polarisation).
+        DifferenceResistanceEstimator::Config hover_resistance{0.13f, 60.0f, 0.2f, 10.0f, 0.02f};
         CapacityEkf::Config ekf;
         OcvTable ocv;                       // optional; else the model's no-load curve
         float resistance_prior_fraction = 0.5f;  // σ of the configured resistance, as a fraction
