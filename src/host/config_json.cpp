@@ -188,6 +188,8 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("cell_min_drift_v", ca.min_drift_v, 0, kBig);
         r.number("cell_slow_current_time_s", ca.slow_current_time_s, 0, kBig);
         r.number("cell_current_ridge_a2", ca.current_ridge_a2, 0, kBig);
+        r.number("cell_slow_current_ridge_a2", ca.slow_current_ridge_a2, 0, kBig);
+        r.number("cell_tap_artifact_ratio", ca.tap_artifact_ratio, 0, 100);
         r.boolean("last_cell_includes_lead", ca.last_cell_includes_lead);
         if (const json* t = r.member("ocv_cell_voltage_v")) {
             if (!t->is_array() || t->size() < 2 || t->size() > static_cast<size_t>(core::kOcvTableMaxPoints))
@@ -331,6 +333,8 @@ json config_to_json(const LoadedConfig& c) {
             {"cell_min_drift_v", m.cell_analysis.min_drift_v},
             {"cell_slow_current_time_s", m.cell_analysis.slow_current_time_s},
             {"cell_current_ridge_a2", m.cell_analysis.current_ridge_a2},
+            {"cell_slow_current_ridge_a2", m.cell_analysis.slow_current_ridge_a2},
+            {"cell_tap_artifact_ratio", m.cell_analysis.tap_artifact_ratio},
             {"last_cell_includes_lead", m.cell_analysis.last_cell_includes_lead},
         };
         if (jc.ocv.points >= 2) {

@@ -144,6 +144,8 @@ void visit_monitor_config(Config& c, F&& f) {
     f("cell_analysis.min_excitation_a2", c.cell_analysis.min_excitation_a2);
     f("cell_analysis.min_pairs", c.cell_analysis.min_pairs);
     f("cell_analysis.current_ridge_a2", c.cell_analysis.current_ridge_a2);
+    f("cell_analysis.slow_current_ridge_a2", c.cell_analysis.slow_current_ridge_a2);
+    f("cell_analysis.tap_artifact_ratio", c.cell_analysis.tap_artifact_ratio);
     f("cell_analysis.slow_current_time_s", c.cell_analysis.slow_current_time_s);
     f("cell_analysis.resistance_ratio", c.cell_analysis.resistance_ratio);
     f("cell_analysis.capacity_deficit", c.cell_analysis.capacity_deficit);

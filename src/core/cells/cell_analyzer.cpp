@@ -182,6 +182,7 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     for (int k = 0; k < kZ; ++k)
         for (int j = k; j < kZ; ++j) a[k][j] = a[j][k] = czz_[k][j];
     for (int k = 1; k < kZ; ++k) a[k][k] += config_.current_ridge_a2;
+    a[kZ - 1][kZ - 1] += config_.slow_current_ridge_a2;  // z[kZ − 1] is the slow current
     float inv[kZ][kZ];
     if (!invert_spd<kZ>(a, inv)) return;
     // Samples are strongly correlated; count one independent point per 10.
@@ -216,6 +217,19 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
         for (int k = 0; k < cells; ++k)
             if (k != c && k != lead_cell) versus_weakest_other = minf(versus_weakest_other, drift[c] - drift[k]);
         const float deficit = versus_weakest_other / (1.0f + maxf(versus_weakest_other, -0.5f));
+        if (config_.tap_artifact_ratio > 0.0f) {
+            float from_neighbour = -1.0e9f;  // the largest drift gap to a cell sharing a tap
+            float from_other = 1.0e9f;       // the smallest to any other compared cell
+            for (int k = 0; k < cells; ++k) {
+                if (k == c || k == lead_cell) continue;
+                const float gap = drift[c] - drift[k];
+                if (k == c - 1 || k == c + 1) from_neighbour = maxf(from_neighbour, gap);
+                else from_other = minf(from_other, gap);
+            }
+            if (from_neighbour > -1.0e8f && from_other < 1.0e8f &&
+                from_neighbour > config_.tap_artifact_ratio * from_other)
+                continue;
+        }
         // Twice the threshold is beyond what those artefacts reach, and takes the usual bar.
         const float sigmas = deficit > 2.0f * config_.capacity_deficit ? config_.significance_sigmas
                                                                         : config_.capacity_significance_sigmas;

@@ -36,6 +36,13 @@ public:
         // polarisation (tens of seconds) builds up after take-off in step with the drift,
         // and without its own regressor it would read as capacity.
         float slow_current_time_s = 40.0f;
+        // ... and a ridge of its own on that regressor's coefficient. In the first minutes of
+        // a flight the slow current rises in step with a weak cell's drift and took the drift
+        // for itself (a 30 % weak cell was named 137 s into the flight; with the ridge, 42 s).
+        // The ridge fades as the slow current varies (a racing flight passes it in about two
+        // minutes); in a hover it keeps that coefficient near zero, where the intercept
+        // takes a constant slow polarisation anyway.
+        float slow_current_ridge_a2 = 1.0e5f;
         float resistance_ratio = 1.10f;     // name a cell above this × the others' median
         float capacity_deficit = 0.10f;     // name a cell this much below the others
         float min_charge_ah = 0.1f;         // charge drawn before capacity is judged
@@ -50,6 +57,14 @@ public:
         // cell 1 drifts up to 16 % at 4.3 σ with no capacity difference at rest). Beyond
         // twice the deficit threshold the usual bar applies.
         float capacity_significance_sigmas = 5.0f;
+        // Balance-tap artefacts. Cell k is read as tap k − tap k−1, so an error on one tap
+        // moves the two cells sharing it apart by twice what it moves either from the other
+        // cells: a drift ratio of 2 between the neighbour and the nearest other cell, where
+        // a weak cell sits below all of them alike (ratio 1). A cell further from a tap
+        // neighbour than this × from the nearest non-neighbour is not named (0 = off). On
+        // the dissertation's new packs 30 and 32 cell 1 drifts 0.14 below cell 3 and 0.33
+        // below cell 2 (ratio 2.4).
+        float tap_artifact_ratio = 1.5f;
         bool last_cell_includes_lead = true;
     };
     enum Finding : uint8_t { kNone = 0, kHighResistance = 1, kLowCapacity = 2 };
