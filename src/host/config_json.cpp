@@ -131,6 +131,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("resistance_memory_s", jc.resistance.memory_s, 0, kBig);
         r.number("resistance_min_step_a", jc.resistance.min_step_a, 0, kBig);
         r.number("resistance_min_excitation_a2", jc.resistance.min_excitation_a2, 0, kBig);
+        r.number("resistance_trend_sigma_per_s", jc.resistance.trend_sigma_per_s, 0, 1);
         r.number("hover_resistance_lag_s", jc.hover_resistance.lag_s, 0, 60);
         r.number("hover_resistance_min_step_a", jc.hover_resistance.min_step_a, 0, kBig);
         r.number("hover_resistance_min_excitation_a2", jc.hover_resistance.min_excitation_a2, 0, kBig);
@@ -291,6 +292,7 @@ json config_to_json(const LoadedConfig& c) {
             {"resistance_memory_s", jc.resistance.memory_s},
             {"resistance_min_step_a", jc.resistance.min_step_a},
             {"resistance_min_excitation_a2", jc.resistance.min_excitation_a2},
+            {"resistance_trend_sigma_per_s", jc.resistance.trend_sigma_per_s},
             {"hover_resistance_lag_s", jc.hover_resistance.lag_s},
             {"hover_resistance_min_step_a", jc.hover_resistance.min_step_a},
             {"hover_resistance_min_excitation_a2", jc.hover_resistance.min_excitation_a2},

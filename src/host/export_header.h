@@ -94,11 +94,13 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.resistance.min_step_a", c.joint.resistance.min_step_a);
     f("joint.resistance.min_excitation_a2", c.joint.resistance.min_excitation_a2);
     f("joint.resistance.initial_resistance_ohm", c.joint.resistance.initial_resistance_ohm);
+    f("joint.resistance.trend_sigma_per_s", c.joint.resistance.trend_sigma_per_s);
     f("joint.hover_resistance.lag_s", c.joint.hover_resistance.lag_s);
     f("joint.hover_resistance.memory_s", c.joint.hover_resistance.memory_s);
     f("joint.hover_resistance.min_step_a", c.joint.hover_resistance.min_step_a);
     f("joint.hover_resistance.min_excitation_a2", c.joint.hover_resistance.min_excitation_a2);
     f("joint.hover_resistance.initial_resistance_ohm", c.joint.hover_resistance.initial_resistance_ohm);
+    f("joint.hover_resistance.trend_sigma_per_s", c.joint.hover_resistance.trend_sigma_per_s);
     f("joint.ekf.voltage_sigma_v", c.joint.ekf.voltage_sigma_v);
     f("joint.ekf.soc_sigma0", c.joint.ekf.soc_sigma0);
     f("joint.ekf.capacity_sigma0_fraction", c.joint.ekf.capacity_sigma0_fraction);

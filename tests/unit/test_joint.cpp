@@ -85,6 +85,36 @@ TEST_CASE("Difference resistance: one step by hand, then recovery under noise", 
     CHECK(e.status().sigma_ohm < 0.002f);
 }
 
+TEST_CASE("Difference resistance: a warming pack's falling resistance, window mean and trend", "[joint][truth]") {
+    // R0 falls linearly from 0.020 to 0.014 ohm over 120 s of racing (a pack warming from
+    // cold). The 60 s window's mean lags by tens of seconds; the trend fit reads now.
+    Plant p{OcvCurve{}, 1.5f, 0.020f, 0.004f, 1.5f};
+    p.ocv.configure(lipo_table(), 4, TremblayParams{});
+    DifferenceResistanceEstimator plain, trend;
+    DifferenceResistanceEstimator::Config cfg;
+    plain.configure(cfg);
+    cfg.trend_sigma_per_s = 0.002f;
+    trend.configure(cfg);
+    Lcg rng;
+    uint64_t t_us = 0;
+    const float dt = 0.067f;
+    float r_true = 0.0f;
+    for (int k = 0; k * dt < 120.0f; ++k, t_us += 67000) {
+        r_true = 0.020f - 0.006f * (k * dt) / 120.0f;
+        p.r0_ohm = r_true;
+        const float i = 12.0f + 25.0f * static_cast<float>((k / 15) % 3) + 1.5f * rng.next();
+        const float v = std::round(p.step(i, dt) * 100.0f) / 100.0f;
+        plain.update(t_us, v, i);
+        trend.update(t_us, v, i);
+    }
+    INFO("true " << r_true << " window " << plain.status().resistance_ohm << " now " << trend.status().resistance_now_ohm);
+    CHECK(plain.status().resistance_now_ohm == plain.status().resistance_ohm);  // no trend: now = the window's
+    CHECK(plain.status().resistance_ohm > 1.08f * r_true);                      // the window lags
+    CHECK(trend.status().resistance_now_ohm == Approx(r_true).epsilon(0.04));
+    CHECK(trend.status().resistance_ohm == plain.status().resistance_ohm);     // the window mean is kept
+    CHECK(trend.status().sigma_now_ohm > trend.status().sigma_ohm);             // extrapolating costs precision
+}
+
 TEST_CASE("Power-time solver against closed forms", "[joint]") {
     // Flat OCV of 16 V, R 0.05 ohm, 400 W: I solves 0.05·I² − 16·I + 400 = 0 → I = 26.79 A
     // (smaller root); 1 Ah from SOC 1 to 0 takes 1·3600/26.79 = 134.4 s; the loaded voltage

@@ -8,10 +8,11 @@ namespace core {
 void DifferenceResistanceEstimator::configure(const Config& config) {
     config_ = config;
     status_ = Status{};
-    status_.resistance_ohm = config.initial_resistance_ohm;
+    status_.resistance_ohm = status_.resistance_now_ohm = config.initial_resistance_ohm;
     head_ = 0;
     count_ = 0;
     sxx_ = sxy_ = syy_ = n_ = 0.0f;
+    sxxt_ = sxxtt_ = sxyt_ = 0.0f;
     last_us_ = 0;
 }
 
@@ -33,6 +34,12 @@ void DifferenceResistanceEstimator::update(uint64_t time_us, float voltage_v, fl
     sxy_ *= keep;
     syy_ *= keep;
     n_ *= keep;
+    if (config_.trend_sigma_per_s > 0.0f) {
+        // Every pair ages by dt: τ → τ − dt.
+        sxxtt_ = keep * (sxxtt_ - 2.0f * dt_s * sxxt_) + dt_s * dt_s * sxx_;
+        sxxt_ = keep * sxxt_ - dt_s * sxx_;
+        sxyt_ = keep * sxyt_ - dt_s * sxy_;
+    }
     if (pick < 0) return;
     const float di = current_a - i_[pick];
     const float dv = voltage_v - v_[pick];
@@ -45,11 +52,26 @@ void DifferenceResistanceEstimator::update(uint64_t time_us, float voltage_v, fl
     if (sxx_ < config_.min_excitation_a2 || n_ < 3.0f) return;
     const float r = -sxy_ / sxx_;
     if (!(r > 0.0f) || !finitef(r)) return;
-    status_.resistance_ohm = r;
     // Residual variance of ΔV about −R·ΔI over the weighted points, then var(R) = s²/Σx².
     const float rss = maxf(0.0f, syy_ - sxy_ * sxy_ / sxx_);
     const float s2 = rss / maxf(1.0f, n_ - 1.0f);
+    status_.resistance_ohm = r;
     status_.sigma_ohm = sqrtf(s2 / sxx_);
+    status_.resistance_now_ohm = status_.resistance_ohm;
+    status_.sigma_now_ohm = status_.sigma_ohm;
+    if (config_.trend_sigma_per_s > 0.0f) {
+        // −ΔV = (R_now + S·τ)·ΔI, with S ~ N(0, (σ·R)²): a ridge of s²/(σ·R)² on S.
+        const float sigma_s = config_.trend_sigma_per_s * r;
+        const float a11 = sxx_, a12 = sxxt_, a22 = sxxtt_ + s2 / maxf(sigma_s * sigma_s, 1.0e-30f);
+        const float det = a11 * a22 - a12 * a12;
+        if (det > 0.0f && finitef(det)) {
+            const float r_now = (-sxy_ * a22 + sxyt_ * a12) / det;
+            if (r_now > 0.0f && finitef(r_now)) {
+                status_.resistance_now_ohm = r_now;
+                status_.sigma_now_ohm = sqrtf(s2 * a22 / det);
+            }
+        }
+    }
     status_.valid = true;
 }
 

@@ -18,10 +18,17 @@ public:
         float min_step_a = 0.5f;        // smaller current steps carry only noise
         float min_excitation_a2 = 400.0f;  // Σ weighted ΔI² before the estimate counts
         float initial_resistance_ohm = 0.02f;
+        // A pack warming in flight loses resistance steadily, and the forgetting window's
+        // average lags it. With this > 0 a second fit carries a linear trend and gives its
+        // value now (`resistance_now_ohm`); the trend's prior σ is this fraction of R per
+        // second. 0 = no trend (the "now" value is the window's).
+        float trend_sigma_per_s = 0.0f;
     };
     struct Status {
-        float resistance_ohm = 0.0f;
+        float resistance_ohm = 0.0f;  // the forgetting window's mean
         float sigma_ohm = 0.0f;       // standard error of the estimate
+        float resistance_now_ohm = 0.0f;  // with the trend carried to now (see Config)
+        float sigma_now_ohm = 0.0f;
         float excitation_a2 = 0.0f;   // Σ weighted ΔI²
         bool valid = false;
     };
@@ -42,6 +49,8 @@ private:
     int head_ = 0;
     int count_ = 0;
     float sxx_ = 0.0f, sxy_ = 0.0f, syy_ = 0.0f, n_ = 0.0f;
+    // The same sums weighted by each pair's age τ = t_pair − t_now (s, ≤ 0), for the trend.
+    float sxxt_ = 0.0f, sxxtt_ = 0.0f, sxyt_ = 0.0f;
     uint64_t last_us_ = 0;
 };
 

@@ -23,7 +23,7 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     polarisation_slow_current_.configure({config.polarisation_slow_time_s});
     status_ = Status{};
     status_.capacity_ah = rated.capacity_ah;
-    status_.resistance_ohm = rated.internal_resistance_ohm;
+    status_.resistance_ohm = status_.effective_resistance_ohm = rated.internal_resistance_ohm;
     solve_ = kSolveRemaining;
     flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = elapsed_at_solve_s_ = 0.0f;
     short_count_ = 0;
@@ -79,20 +79,15 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     const bool settled = flying_s_ >= config_.resistance_settle_s;
     const DifferenceResistanceEstimator::Status& rs =
         resistance_.status().valid || !settled ? resistance_.status() : hover_resistance_.status();
-    // Combine the difference estimate with the configured value by inverse variance: a
-    // steady hover excites too little to trust the differences alone.
-    const float prior_sigma = config_.resistance_prior_fraction * rated_.internal_resistance_ohm;
-    float r0 = rated_.internal_resistance_ohm;
-    float r_sigma = prior_sigma;
-    if (rs.valid && rs.sigma_ohm > 0.0f && prior_sigma > 0.0f) {
-        const float wp = 1.0f / (prior_sigma * prior_sigma);
-        const float we = 1.0f / (rs.sigma_ohm * rs.sigma_ohm);
-        r0 = (wp * rated_.internal_resistance_ohm + we * rs.resistance_ohm) / (wp + we);
-        r_sigma = sqrtf(1.0f / (wp + we));
-    } else if (rs.valid) {
-        r0 = rs.resistance_ohm;
-        r_sigma = rs.sigma_ohm;
-    }
+    float r_sigma = 0.0f;
+    const float r0 = fuse_with_prior(rs.valid, rs.resistance_ohm, rs.sigma_ohm, &r_sigma);
+    // Reported: the resistance now, the pack's warming trend carried through. The filter
+    // and the flight-time solves keep the window mean r0: with the single polarisation
+    // state, the lag of r0 carries part of the slow polarisation, and switching them to
+    // the trend-corrected value cost remaining time and energy (docs/estimator.md).
+    float r_now_sigma = 0.0f;
+    status_.resistance_ohm = fuse_with_prior(rs.valid, rs.resistance_now_ohm, rs.sigma_now_ohm, &r_now_sigma);
+    status_.effective_resistance_ohm = r0;
 
     // Capacity and polarisation are learnt only once R0 is measured (or, with too little
     // excitation to measure it, after resistance_settle_s of flight on the prior): an R0
@@ -159,9 +154,8 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     status_.ocv_slope_v_per_soc = es.ocv_slope_v_per_soc;
     status_.capacity_ah = es.capacity_ah * (1.0f - weakest_deficit_);
     status_.sigma_capacity_ah = es.sigma_capacity_ah;
-    status_.resistance_ohm = r0;
-    status_.measured_resistance_ohm = rs.valid ? rs.resistance_ohm : 0.0f;
-    status_.measured_resistance_sigma_ohm = rs.valid ? rs.sigma_ohm : 0.0f;
+    status_.measured_resistance_ohm = rs.valid ? rs.resistance_now_ohm : 0.0f;
+    status_.measured_resistance_sigma_ohm = rs.valid ? rs.sigma_now_ohm : 0.0f;
     status_.polarisation_ohm = es.polarisation_ohm * polarisation_scale_;
     status_.polarisation_current_a = ip;
     status_.mean_power_w = flying_s_ > 0.0f ? flying_energy_j_ / flying_s_ : 0.0f;
@@ -177,6 +171,25 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     }
 }
 
+float JointEstimator::fuse_with_prior(bool valid, float measured_ohm, float sigma_ohm, float* sigma_out) const {
+    // Inverse-variance combination with the configured value: a steady hover excites too
+    // little to trust the differences alone.
+    const float prior_ohm = rated_.internal_resistance_ohm;
+    const float prior_sigma = config_.resistance_prior_fraction * prior_ohm;
+    if (valid && sigma_ohm > 0.0f && prior_sigma > 0.0f) {
+        const float wp = 1.0f / (prior_sigma * prior_sigma);
+        const float we = 1.0f / (sigma_ohm * sigma_ohm);
+        *sigma_out = sqrtf(1.0f / (wp + we));
+        return (wp * prior_ohm + we * measured_ohm) / (wp + we);
+    }
+    if (valid) {
+        *sigma_out = sigma_ohm;
+        return measured_ohm;
+    }
+    *sigma_out = prior_sigma;
+    return prior_ohm;
+}
+
 void JointEstimator::start_solve() {
     const CapacityEkf::Status& es = ekf_.status();
     // The filter sees the mean cell; with a weak cell named, the others hold a little more
@@ -184,7 +197,7 @@ void JointEstimator::start_solve() {
     const float share = weakest_deficit_ > 0.0f ? 1.0f / static_cast<float>(cells_) : 0.0f;
     const float q = es.capacity_ah / (1.0f - weakest_deficit_ * share);
     const float ratio = 1.0f - weakest_deficit_;
-    const float r_total = status_.resistance_ohm + status_.polarisation_ohm;
+    const float r_total = status_.effective_resistance_ohm + status_.polarisation_ohm;
     // A healthy pack: rated resistance, and the polarisation the state holds at it.
     const float r_rated = rated_.internal_resistance_ohm + es.polarisation_ohm;
     // The charge at take-off as the present estimate sees it.

@@ -18,7 +18,9 @@ namespace core {
 class JointEstimator {
 public:
     struct Config {
-        DifferenceResistanceEstimator::Config resistance;
+        // The short-lag estimate, reporting its trend carried to now (0.2 %/s prior σ: a
+        // cold pack's R0 can halve in a few minutes of flight).
+        DifferenceResistanceEstimator::Config resistance{0.05f, 60.0f, 0.5f, 400.0f, 0.02f, 0.002f};
         // Used while `resistance` has too little excitation (a steady hover): a lower bar,
         // smaller steps, a two-sample lag (slow gusts step the current by a few tenths of an
         // ampere over it), and fed on the ground too, so the take-off step itself counts.
@@ -72,7 +74,8 @@ public:
         float soc = 0.0f;
         float capacity_ah = 0.0f;
         float sigma_capacity_ah = 0.0f;
-        float resistance_ohm = 0.0f;       // ohmic (short-lag) resistance, the prior folded in
+        float resistance_ohm = 0.0f;       // ohmic (short-lag) resistance now, the prior folded in
+        float effective_resistance_ohm = 0.0f;  // the window mean the filter and the solves use
         float measured_resistance_ohm = 0.0f;  // from the differences alone (0 until valid)
         float measured_resistance_sigma_ohm = 0.0f;
         float polarisation_ohm = 0.0f;
@@ -106,6 +109,7 @@ public:
 private:
     enum Solve : uint8_t { kSolveRemaining = 0, kSolveTotal, kSolveExpected, kSolveCapacityOnly, kSolveResistanceOnly, kSolveCount };
     void start_solve();
+    float fuse_with_prior(bool valid, float measured_ohm, float sigma_ohm, float* sigma_out) const;
     void finish_solve();
 
     Config config_;
