@@ -376,17 +376,32 @@ TEST_CASE("Joint estimator with an offset current sensor: flagged, corrected, no
     CHECK(std::fabs(clean.at20.remaining_time_s - 0.8f * clean.true_total_s) < 0.08f * clean.true_total_s);
 }
 
+namespace {
+
+// A 1.5 Ah 4S plant and a joint estimator rated 1.5 Ah / 0.025 ohm, started full.
+struct HoverBench {
+    Plant plant;
+    JointEstimator estimator;
+};
+HoverBench hover_bench(float r0_ohm, float r1_ohm, float tau_s, float start_current_a) {
+    TremblayParams rated;
+    rated.capacity_ah = 1.5f;
+    rated.internal_resistance_ohm = 0.025f;
+    HoverBench b{Plant{OcvCurve{}, 1.5f, r0_ohm, r1_ohm, tau_s}, table_estimator(rated)};
+    b.plant.ocv.configure(lipo_table(), 4, rated);
+    b.estimator.start(b.plant.ocv.voltage_v(1.0f), start_current_a);
+    return b;
+}
+
+}  // namespace
+
 TEST_CASE("Hover resistance: slow gusts too small for the short lag, recovered by the long one", "[joint][truth]") {
     // A steady hover at ~9 A with 0.8 A gusts (2.5 rad/s): consecutive samples differ by
     // far less than the short-lag estimator's 0.5 A minimum step.
     for (float r_true : {0.02f, 0.04f}) {
-        Plant p{OcvCurve{}, 1.5f, r_true, 0.0f, 6.0f};
-        TremblayParams rated;
-        rated.capacity_ah = 1.5f;
-        rated.internal_resistance_ohm = 0.025f;
-        p.ocv.configure(lipo_table(), 4, rated);
-        JointEstimator e = table_estimator(rated);
-        e.start(p.ocv.voltage_v(1.0f), 0.0f);
+        HoverBench b = hover_bench(r_true, 0.0f, 6.0f, 0.0f);
+        Plant& p = b.plant;
+        JointEstimator& e = b.estimator;
         uint64_t t_us = 0;
         const float dt = 0.067f;
         Lcg rng;
@@ -408,13 +423,9 @@ TEST_CASE("Hover resistance: the take-off step counts, the settling after it doe
     // logged in 10 mV steps as in the raw format. The monitor confirms a take-off 0.5 s
     // after the current crosses 1 A, so only an estimator fed on the ground sees the step.
     const float r_true = 0.018f;
-    Plant p{OcvCurve{}, 1.5f, r_true, 0.006f, 1.5f};
-    TremblayParams rated;
-    rated.capacity_ah = 1.5f;
-    rated.internal_resistance_ohm = 0.025f;
-    p.ocv.configure(lipo_table(), 4, rated);
-    JointEstimator e = table_estimator(rated);
-    e.start(p.ocv.voltage_v(1.0f), 0.9f);
+    HoverBench b = hover_bench(r_true, 0.006f, 1.5f, 0.9f);
+    Plant& p = b.plant;
+    JointEstimator& e = b.estimator;
     uint64_t t_us = 0;
     const float dt = 0.067f;
     const float takeoff_s = 30.0f;
