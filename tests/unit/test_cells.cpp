@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/cells/cell_analyzer.h"
+#include "core/estimate/joint_estimator.h"
 #include "core/estimate/power_time_solver.h"
 #include "core/model/ocv.h"
 #include "ecm_plant.h"
@@ -85,6 +86,26 @@ TEST_CASE("Flight-time solver: a weak cell pulls the pack to the cutoff early, b
     while (!s.advance(c, 50)) {
     }
     CHECK(s.result().charge_ah == Approx(1.0f).epsilon(2e-3));
+}
+
+TEST_CASE("Joint estimator: the weakest cell's capacity from the mean cell, by hand", "[cells][joint]") {
+    // The pack voltage shows the mean cell. 4 cells, one 30 % below the other three: the
+    // others hold 1.5 / (1 − 0.3/4) = 1.6216 Ah and the weak one 0.7 × that = 1.1351 Ah,
+    // not 0.7 × 1.5 = 1.05 Ah (the weak cell counted twice).
+    TremblayParams rated;
+    rated.capacity_ah = 1.5f;
+    JointEstimator::Config jc;
+    jc.ocv = testplant::lipo_table();
+    JointEstimator e;
+    e.configure(jc, rated, 4);
+    OcvCurve ocv;
+    ocv.configure(testplant::lipo_table(), 4, rated);
+    e.start(ocv.voltage_v(1.0f), 0.0f);
+    e.update(67000, ocv.voltage_v(1.0f), 0.0f, 0.067f, false);  // on the ground: capacity stays at its prior
+    REQUIRE(e.status().capacity_ah == Approx(1.5f));
+    e.set_weakest_cell_deficit(0.3f);
+    e.update(134000, ocv.voltage_v(1.0f), 0.0f, 0.067f, false);
+    CHECK(e.status().capacity_ah == Approx(1.5f * 0.7f / 0.925f).epsilon(1e-4));
 }
 
 TEST_CASE("Cell check: a weak cell is named and its deficit recovered; healthy and high-R cells are not", "[cells][truth]") {

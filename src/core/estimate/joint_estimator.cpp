@@ -144,8 +144,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         const float soc_rest = CapacityEkf::soc_at_rest_voltage(ocv_, voltage_v + true_a * r0);
         const float drop = start_soc_ - soc_rest;
         // The curve reads the mean cell; like capacity_ah, report what the weakest holds.
-        if (drop >= config_.rest_capacity_min_soc_drop)
-            status_.rest_capacity_ah = charge_total_ah_ / drop * (1.0f - weakest_deficit_);
+        if (drop >= config_.rest_capacity_min_soc_drop) status_.rest_capacity_ah = weakest_cell_ah(charge_total_ah_ / drop);
     }
     if (flying) {
         flying_s_ += dt_s;
@@ -154,7 +153,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     }
     status_.soc = clampf(es.soc, 0.0f, 1.0f);
     status_.ocv_slope_v_per_soc = es.ocv_slope_v_per_soc;
-    status_.capacity_ah = es.capacity_ah * (1.0f - weakest_deficit_);
+    status_.capacity_ah = weakest_cell_ah(es.capacity_ah);
     status_.sigma_capacity_ah = es.sigma_capacity_ah;
     status_.measured_resistance_ohm = rs.valid ? rs.resistance_now_ohm : 0.0f;
     status_.measured_resistance_sigma_ohm = rs.valid ? rs.sigma_now_ohm : 0.0f;
@@ -171,6 +170,14 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         // Between refreshes the remaining time runs down with the clock.
         status_.remaining_time_s = maxf(0.0f, results_[kSolveRemaining] - (flying_s_ - elapsed_at_solve_s_));
     }
+}
+
+float JointEstimator::weakest_cell_ah(float mean_cell_ah) const {
+    // The pack voltage shows the mean cell, which already holds the weak cell's share: the
+    // others hold mean / (1 − d/N), the weak one (1 − d) times that (d: its deficit against
+    // the others). Scaling the mean by (1 − d) alone counted the weak cell twice.
+    const float share = 1.0f / static_cast<float>(cells_);
+    return mean_cell_ah * (1.0f - weakest_deficit_) / (1.0f - weakest_deficit_ * share);
 }
 
 float JointEstimator::fuse_with_prior(bool valid, float measured_ohm, float sigma_ohm, float* sigma_out) const {

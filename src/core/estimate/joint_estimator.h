@@ -110,6 +110,7 @@ private:
     enum Solve : uint8_t { kSolveRemaining = 0, kSolveTotal, kSolveExpected, kSolveCapacityOnly, kSolveResistanceOnly, kSolveCount };
     void start_solve();
     float fuse_with_prior(bool valid, float measured_ohm, float sigma_ohm, float* sigma_out) const;
+    float weakest_cell_ah(float mean_cell_ah) const;
     void finish_solve();
 
     Config config_;
