@@ -87,8 +87,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     // and the flight-time solves keep the window mean r0: with the single polarisation
     // state, the lag of r0 carries part of the slow polarisation, and switching them to
     // the trend-corrected value cost remaining time and energy (docs/estimator.md).
-    float r_now_sigma = 0.0f;
-    status_.resistance_ohm = fuse_with_prior(rs.valid, rs.resistance_now_ohm, rs.sigma_now_ohm, &r_now_sigma);
+    status_.resistance_ohm = fuse_with_prior(rs.valid, rs.resistance_now_ohm, rs.sigma_now_ohm, nullptr);
     status_.effective_resistance_ohm = r0;
 
     // Capacity and polarisation are learnt only once R0 is measured (or, with too little
@@ -152,7 +151,6 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         charge_since_takeoff_ah_ += true_a * dt_s / 3600.0f;
     }
     status_.soc = clampf(es.soc, 0.0f, 1.0f);
-    status_.ocv_slope_v_per_soc = es.ocv_slope_v_per_soc;
     status_.capacity_ah = weakest_cell_ah(es.capacity_ah);
     status_.sigma_capacity_ah = es.sigma_capacity_ah;
     status_.measured_resistance_ohm = rs.valid ? rs.resistance_now_ohm : 0.0f;
@@ -172,39 +170,38 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     }
 }
 
-float JointEstimator::weakest_cell_ah(float mean_cell_ah) const {
+float JointEstimator::other_cells_ah(float mean_cell_ah) const {
     // The pack voltage shows the mean cell, which already holds the weak cell's share: the
     // others hold mean / (1 − d/N), the weak one (1 − d) times that (d: its deficit against
-    // the others). Scaling the mean by (1 − d) alone counted the weak cell twice.
-    const float share = 1.0f / static_cast<float>(cells_);
-    return mean_cell_ah * (1.0f - weakest_deficit_) / (1.0f - weakest_deficit_ * share);
+    // the others). Scaling the mean by (1 − d) alone had counted the weak cell twice.
+    return mean_cell_ah / (1.0f - weakest_deficit_ / static_cast<float>(cells_));
+}
+
+float JointEstimator::weakest_cell_ah(float mean_cell_ah) const {
+    return other_cells_ah(mean_cell_ah) * (1.0f - weakest_deficit_);
 }
 
 float JointEstimator::fuse_with_prior(bool valid, float measured_ohm, float sigma_ohm, float* sigma_out) const {
     // Inverse-variance combination with the configured value: a steady hover excites too
-    // little to trust the differences alone.
+    // little to trust the differences alone. sigma_out may be null.
     const float prior_ohm = rated_.internal_resistance_ohm;
     const float prior_sigma = config_.resistance_prior_fraction * prior_ohm;
     if (valid && sigma_ohm > 0.0f && prior_sigma > 0.0f) {
         const float wp = 1.0f / (prior_sigma * prior_sigma);
         const float we = 1.0f / (sigma_ohm * sigma_ohm);
-        *sigma_out = sqrtf(1.0f / (wp + we));
+        if (sigma_out) *sigma_out = sqrtf(1.0f / (wp + we));
         return (wp * prior_ohm + we * measured_ohm) / (wp + we);
     }
-    if (valid) {
-        *sigma_out = sigma_ohm;
-        return measured_ohm;
-    }
-    *sigma_out = prior_sigma;
-    return prior_ohm;
+    if (sigma_out) *sigma_out = valid ? sigma_ohm : prior_sigma;
+    return valid ? measured_ohm : prior_ohm;
 }
 
 void JointEstimator::start_solve() {
     const CapacityEkf::Status& es = ekf_.status();
-    // The filter sees the mean cell; with a weak cell named, the others hold a little more
-    // and the weak one a fraction (1 − deficit) of that (see PowerTimeSolver::start).
+    // The filter sees the mean cell; with a weak cell named, the solver steps the others
+    // down and the weak one, a fraction (1 − deficit) of them, beside them.
     const float share = weakest_deficit_ > 0.0f ? 1.0f / static_cast<float>(cells_) : 0.0f;
-    const float q = es.capacity_ah / (1.0f - weakest_deficit_ * share);
+    const float q = other_cells_ah(es.capacity_ah);
     const float ratio = 1.0f - weakest_deficit_;
     const float r_total = status_.effective_resistance_ohm + status_.polarisation_ohm;
     // A healthy pack: rated resistance, and the polarisation the state holds at it.

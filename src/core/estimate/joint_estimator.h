@@ -80,7 +80,6 @@ public:
         float measured_resistance_sigma_ohm = 0.0f;
         float polarisation_ohm = 0.0f;
         float polarisation_current_a = 0.0f;  // the low-passed current the polarisation sees
-        float ocv_slope_v_per_soc = 0.0f;  // the filter's dOCV/dSOC (for the cell check)
         float mean_power_w = 0.0f;         // since take-off
         float remaining_time_s = 0.0f;
         float remaining_energy_wh = 0.0f;
@@ -110,6 +109,7 @@ private:
     enum Solve : uint8_t { kSolveRemaining = 0, kSolveTotal, kSolveExpected, kSolveCapacityOnly, kSolveResistanceOnly, kSolveCount };
     void start_solve();
     float fuse_with_prior(bool valid, float measured_ohm, float sigma_ohm, float* sigma_out) const;
+    float other_cells_ah(float mean_cell_ah) const;
     float weakest_cell_ah(float mean_cell_ah) const;
     void finish_solve();
 

@@ -27,9 +27,9 @@ namespace {
 using nlohmann::json;
 namespace fs = std::filesystem;
 
-// The cell a column last named is one of the flight's outlier cells (by the truth).
-bool named_outlier(const FlightScore& f, const ColumnFlight& c) {
-    return std::find(f.outlier_cells.begin(), f.outlier_cells.end(), c.named_cell) != f.outlier_cells.end();
+// Cell `cell` (0-based) is one of the flight's outlier cells (by the truth).
+bool is_outlier(const std::vector<int>& outlier_cells, int cell) {
+    return std::find(outlier_cells.begin(), outlier_cells.end(), cell) != outlier_cells.end();
 }
 
 constexpr double kFractions[3] = {0.1, 0.2, 0.5};
@@ -127,9 +127,7 @@ ColumnFlight judge(const std::vector<Estimate>& est, const sim::SimulationResult
         if ((e.warnings >> core::kWarnCellOutlier) & 1u) {
             cf.cell_warning = true;
             cf.named_cell = e.outlier_cell;
-            const bool is_outlier = std::find(t.outlier_cells.begin(), t.outlier_cells.end(),
-                                              static_cast<int>(e.outlier_cell)) != t.outlier_cells.end();
-            if (!correct_cell && is_outlier) {
+            if (!correct_cell && is_outlier(t.outlier_cells, e.outlier_cell)) {
                 correct_cell = true;
                 correct_cell_s = std::max(0.0, e.time_s - t.takeoff_s);
             }
@@ -303,12 +301,12 @@ std::vector<Row> build_rows(const ScoreResult& r) {
               [](const FlightScore& f, const ColumnFlight& c, Count& n) {
                   if (f.weak_cell < 0) return;
                   ++n.n;
-                  if (c.cell_warning && named_outlier(f, c)) ++n.k;
+                  if (c.cell_warning && is_outlier(f.outlier_cells, c.named_cell)) ++n.k;
               });
     add_count("cell_outlier_false_positives", "cell outlier: false alarms (flights)",
               [](const FlightScore& f, const ColumnFlight& c, Count& n) {
                   ++n.n;
-                  if (c.cell_warning && !named_outlier(f, c)) ++n.k;
+                  if (c.cell_warning && !is_outlier(f.outlier_cells, c.named_cell)) ++n.k;
               });
     add_count("sensor_faults_flagged", "sensor faults flagged as sensor faults",
               [](const FlightScore& f, const ColumnFlight& c, Count& n) {
