@@ -157,22 +157,8 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("rest_capacity_min_soc_drop", jc.rest_capacity_min_soc_drop, 0.01, 1);
         r.number("ground_soc_process_scale", jc.ground_soc_process_scale, 0, 100);
         r.number("resistance_settle_s", jc.resistance_settle_s, 0, kBig);
-        {
-            bool learn = jc.learn_offset_in_flight;
-            if (const json* b = r.member("learn_offset_in_flight")) {
-                if (!b->is_boolean()) r.fail(r.child("learn_offset_in_flight"), "expected true or false");
-                learn = b->get<bool>();
-            }
-            jc.learn_offset_in_flight = learn;
-        }
-        {
-            bool follows = jc.polarisation_follows_resistance;
-            if (const json* b = r.member("polarisation_follows_resistance")) {
-                if (!b->is_boolean()) r.fail(r.child("polarisation_follows_resistance"), "expected true or false");
-                follows = b->get<bool>();
-            }
-            jc.polarisation_follows_resistance = follows;
-        }
+        r.boolean("learn_offset_in_flight", jc.learn_offset_in_flight);
+        r.boolean("polarisation_follows_resistance", jc.polarisation_follows_resistance);
         r.number("solver_steps", jc.solver_steps, 2, 1000);
         r.number("solver_steps_per_update", jc.solver_steps_per_update, 1, 1000);
         r.number("short_flight_fraction", jc.short_flight_fraction, 0, 1);
