@@ -18,7 +18,7 @@ cmu="$data/cmu-m100/flights/70.csv"
 ref_cfg="$root/configs/reference-modified.json"
 cmu_manifest="$root/configs/manifests/cmu-m100.json"
 for f in "$bin" "$raw" "$cmu"; do
-  [ -e "$f" ] || { echo "bench: missing $f" >&2; exit 2; }
+  [ -e "$f" ] || { echo "bench: missing $f (build first; point BATTSIM_DATA_DIR at the shared data)" >&2; exit 2; }
 done
 
 field() { sed -n "s/^$1: //p"; }  # value of one "key: value" line of `battsim bench`

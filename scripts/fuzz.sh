@@ -8,12 +8,18 @@ build="$root/build-fuzz"
 seconds=${FUZZ_SECONDS:-60}
 data=${BATTSIM_DATA_DIR:-$root/../shared/data}
 
-CC=clang CXX=clang++ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBATTSIM_FUZZ=ON >/dev/null
+# As in scripts/test.sh: an explicit BATTSIM_DATA_DIR wins over a cached one.
+set -- ${BATTSIM_DATA_DIR:+"-DBATTSIM_DATA_DIR=$BATTSIM_DATA_DIR"}
+CC=clang CXX=clang++ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBATTSIM_FUZZ=ON "$@" >/dev/null
 cmake --build "$build" -j"$(nproc)" --target fuzz_reader fuzz_monitor
 
 corpus="$build/corpus"
 mkdir -p "$corpus/reader" "$corpus/monitor" "$build/crashes"
-# Seeds: small real logs of every format (not copied into the repository).
+# Seeds: small real logs of every format (not copied into the repository), when the shared
+# data is there; the committed seeds and regressions always.
+if [ ! -d "$data" ]; then
+  echo "fuzz: shared data not found at $data (set BATTSIM_DATA_DIR); its real-log seeds skipped"
+fi
 for f in "$data/px4/test.ulg" "$data/ardupilot/robert_lefebvre_octo_PM.log" "$root/tests/fuzz/seeds/"*; do
   [ -f "$f" ] && cp "$f" "$corpus/reader/" || true
 done

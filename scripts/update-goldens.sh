@@ -5,6 +5,7 @@ set -eu
 root=$(cd "$(dirname "$0")/.." && pwd)
 bin=${BATTSIM:-$root/build/battsim}
 data=${BATTSIM_DATA_DIR:-$root/../shared/data}
+[ -d "$data" ] || { echo "update-goldens: shared data not found at $data; set BATTSIM_DATA_DIR" >&2; exit 2; }
 for set in modified original; do
   out=$root/tests/golden/predictive-bms-$set
   mkdir -p "$out"

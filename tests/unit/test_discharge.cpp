@@ -156,7 +156,7 @@ TEST_CASE("Samsung 30Q C/10 discharge", "[discharge][data]") {
     for (size_t i = 1; i < r.table.size(); ++i) CHECK(r.table[i].consumed_mah >= r.table[i - 1].consumed_mah - 1.0);
 }
 
-TEST_CASE("battsim discharge writes its outputs and exits with the documented codes", "[discharge][cli]") {
+TEST_CASE("battsim discharge writes its outputs and exits with the documented codes", "[discharge][cli][data]") {
     const std::string bin = BATTSIM_BINARY;
     const std::string dir = testsupport::scratch_dir("discharge") + "/run";
     const std::string log = std::string(BATTSIM_DATA_DIR) + "/samsung-30q/Q30_S001_4C.csv";

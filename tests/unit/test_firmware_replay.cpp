@@ -112,7 +112,7 @@ std::string run_fw_host(const std::string& args) {
 }  // namespace
 
 TEST_CASE("firmware on the raw flights: samples and cell-independent status equal battsim replay bit for bit",
-          "[firmware][replay]") {
+          "[firmware][replay][data]") {
     const host::LoadedConfig config = reference_config();
     for (int flight : {29, 30, 32, 34}) {
         INFO("flight " << flight);
@@ -150,7 +150,7 @@ TEST_CASE("firmware on the raw flights: samples and cell-independent status equa
 }
 
 TEST_CASE("firmware monitor's SD series equals battsim replay of the firmware logger's record, byte for byte",
-          "[firmware][replay]") {
+          "[firmware][replay][data]") {
     const std::string dir = fwtest::temp_dir("fwreplay");
     for (int flight : {29, 30, 32, 34}) {
         INFO("flight " << flight);
@@ -194,7 +194,7 @@ TEST_CASE("firmware monitor's SD series equals battsim replay of the firmware lo
 }
 
 TEST_CASE("firmware built with a fitted config runs its model extensions as battsim replay does, byte for byte",
-          "[firmware][replay][extension]") {
+          "[firmware][replay][extension][data]") {
     // configs/fitted/pbms-flight30-cnhl5.json: two RC branches, self-heating, Arrhenius R and K.
     const std::string dir = fwtest::temp_dir("fwfitted");
     const int flight = 30;
@@ -228,7 +228,7 @@ TEST_CASE("firmware built with a fitted config runs its model extensions as batt
     CHECK(fwtest::read_file(plain_sd + "/battsim/log0001.csv") != sd_series);
 }
 
-TEST_CASE("firmware statuses equal replay's bit for bit on the logger's record, cells included", "[firmware][replay]") {
+TEST_CASE("firmware statuses equal replay's bit for bit on the logger's record, cells included", "[firmware][replay][data]") {
     const host::LoadedConfig config = reference_config();
     const std::string dir = fwtest::temp_dir("fwexact");
     for (int flight : {29, 34}) {
@@ -263,7 +263,7 @@ TEST_CASE("firmware statuses equal replay's bit for bit on the logger's record, 
     }
 }
 
-TEST_CASE("firmware's twin of the current average follows the monitor's exactly", "[firmware]") {
+TEST_CASE("firmware's twin of the current average follows the monitor's exactly", "[firmware][data]") {
     const FirmwareRun fw = run_monitor(flight_path(30), "");
     size_t valid = 0;
     for (size_t i = 0; i < fw.statuses.size(); ++i) {
@@ -274,7 +274,7 @@ TEST_CASE("firmware's twin of the current average follows the monitor's exactly"
     CHECK(valid > 1000);
 }
 
-TEST_CASE("firmware keeps the long-term averages on the SD card across flights", "[firmware][replay]") {
+TEST_CASE("firmware keeps the long-term averages on the SD card across flights", "[firmware][replay][data]") {
     const std::string sd = fwtest::temp_dir("fwavg");
     const FirmwareRun first = run_monitor(flight_path(29), sd);
     REQUIRE_FALSE(first.state.averages_loaded);
@@ -328,7 +328,7 @@ TEST_CASE("firmware keeps the long-term averages on the SD card across flights",
     CHECK(differs);
 }
 
-TEST_CASE("firmware counts the readings it missed from the log's gaps", "[firmware]") {
+TEST_CASE("firmware counts the readings it missed from the log's gaps", "[firmware][data]") {
     for (int flight : {29, 32}) {
         INFO("flight " << flight);
         const FirmwareRun fw = run_monitor(flight_path(flight), "");
@@ -346,7 +346,7 @@ TEST_CASE("firmware counts the readings it missed from the log's gaps", "[firmwa
     }
 }
 
-TEST_CASE("firmware outputs switch on and off from the serial line", "[firmware]") {
+TEST_CASE("firmware outputs switch on and off from the serial line", "[firmware][data]") {
     const std::string sd = fwtest::temp_dir("fwswitch");
     const FirmwareRun fw = run_monitor(flight_path(32), sd,
                                        {{0, "hello\n"}, {100, "out sd off\n"}, {200, "out uart off\nstatus\n"},
@@ -368,7 +368,7 @@ TEST_CASE("firmware outputs switch on and off from the serial line", "[firmware]
     CHECK(fw.display_frames <= 45);
 }
 
-TEST_CASE("firmware sends no data before a host says hello", "[firmware]") {
+TEST_CASE("firmware sends no data before a host says hello", "[firmware][data]") {
     const FirmwareRun fw = run_monitor(flight_path(34), "", {});
     CHECK(fw.uart.find('$') == std::string::npos);
     // "BMS" once a second of log time.
@@ -404,7 +404,10 @@ TEST_CASE("battsim_fw_host reports a bad log with file, line and column", "[firm
 
     r = fwtest::run(BATTSIM_FW_HOST_BINARY, "--program nope " + fwtest::q(bad));
     CHECK(r.exit_code == 2);
-    r = fwtest::run(BATTSIM_FW_HOST_BINARY, "--sd " + fwtest::q(dir + "/no-card") + " " + fwtest::q(flight_path(29)));
+    // A readable log written here, so this check needs no shared data.
+    const std::string good = dir + "/good.csv";
+    fwtest::write_file(good, "629,16.66,4.14,4.16,4.17,4.18,781.44,0.67,\n");
+    r = fwtest::run(BATTSIM_FW_HOST_BINARY, "--sd " + fwtest::q(dir + "/no-card") + " " + fwtest::q(good));
     CHECK(r.exit_code == 5);
     CHECK(r.err.find("expected an existing directory") != std::string::npos);
 }

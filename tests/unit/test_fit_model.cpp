@@ -21,7 +21,7 @@ const std::string kFlights = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/fl
 LoadedConfig modified_config() { return load_config_file(std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-modified.json"); }
 }  // namespace
 
-TEST_CASE("The fit's simulation is the monitor's model, bit for bit", "[fit]") {
+TEST_CASE("The fit's simulation is the monitor's model, bit for bit", "[fit][data]") {
     const LoadedConfig config = modified_config();
     ReaderOptions reader;
     reader.shunt = config.monitor.shunt;
@@ -53,7 +53,7 @@ TEST_CASE("The fit's simulation is the monitor's model, bit for bit", "[fit]") {
     }
 }
 
-TEST_CASE("The monitor runs a fitted config's extensions as the fit simulated them", "[fit][extension]") {
+TEST_CASE("The monitor runs a fitted config's extensions as the fit simulated them", "[fit][extension][data]") {
     // Flight 29's config carries a current-sensor correction, two RC branches and self-heating;
     // flight 30's two RC branches and self-heating.
     for (const char* name : {"29", "30"}) {

@@ -91,7 +91,7 @@ TEST_CASE("Envelope thinning keeps the extremes", "[plot]") {
     for (size_t i = 1; i < xo.size(); ++i) CHECK(xo[i] >= xo[i - 1]);
 }
 
-TEST_CASE("plot_replay from memory and from the replay's series CSV", "[plot]") {
+TEST_CASE("plot_replay from memory and from the replay's series CSV", "[plot][data]") {
     const std::string log = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/30.csv";
     const std::string series = temp("series.csv"), png1 = temp("r1.png"), png2 = temp("r2.png");
     ReplayOptions ro;

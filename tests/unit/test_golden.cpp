@@ -4,26 +4,14 @@
 #include <catch2/catch.hpp>
 
 #include <fstream>
-#include <sys/stat.h>
 
 #include "host/replay.h"
 #include "host/report/json_compare.h"
 
 using namespace battsim::host;
 
-namespace {
-bool exists(const std::string& p) {
-    struct stat st;
-    return ::stat(p.c_str(), &st) == 0;
-}
-}  // namespace
-
-TEST_CASE("Golden summaries of the predictive-bms flights", "[golden]") {
+TEST_CASE("Golden summaries of the predictive-bms flights", "[golden][data]") {
     const std::string data = BATTSIM_DATA_DIR;
-    if (!exists(data + "/predictive-bms/flights/30.csv")) {
-        WARN("shared data not found at " << data << "; golden replays skipped");
-        return;
-    }
     for (const char* set : {"modified", "original"}) {
         ReplayOptions opt;
         opt.config = load_config_file(std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-" + set + ".json");
@@ -47,9 +35,8 @@ TEST_CASE("Golden summaries of the predictive-bms flights", "[golden]") {
     }
 }
 
-TEST_CASE("Replay is deterministic", "[golden]") {
+TEST_CASE("Replay is deterministic", "[golden][data]") {
     const std::string log = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/34.csv";
-    if (!exists(log)) return;
     ReplayOptions opt;
     opt.config = default_config();
     CHECK(replay_log(log, opt).dump() == replay_log(log, opt).dump());

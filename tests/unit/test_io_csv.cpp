@@ -6,7 +6,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -18,7 +17,6 @@
 
 using namespace battsim;
 using namespace battsim::host;
-namespace fs = std::filesystem;
 
 namespace {
 
@@ -45,8 +43,6 @@ std::vector<core::Sample> read_all(const std::string& path, const ReaderOptions&
     if (info) *info = r->info();
     return v;
 }
-
-bool data_dir_present() { return fs::is_directory(std::string(BATTSIM_DATA_DIR)); }
 
 const char* kRawRow1 = "627,16.57,4.14,4.14,4.14,4.16,47.99,0.39,\n";
 const char* kRawRow2 = "694,16.57,4.14,4.14,4.14,4.16,173.53,0.44,\n";
@@ -484,10 +480,6 @@ TEST_CASE("line reader streams across block boundaries", "[io]") {
 // Real data
 
 TEST_CASE("raw reader on predictive-bms flight 30", "[io][data]") {
-    if (!data_dir_present()) {
-        WARN("data dir " << BATTSIM_DATA_DIR << " absent; skipped");
-        return;
-    }
     const std::string p = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/30.csv";
     REQUIRE(detect_log_format(p) == LogFormat::RawPbms);
     SourceInfo info;
@@ -518,10 +510,6 @@ TEST_CASE("raw reader on predictive-bms flight 30", "[io][data]") {
 }
 
 TEST_CASE("headered reader with the CMU M100 mapping on flight 1", "[io][data]") {
-    if (!data_dir_present()) {
-        WARN("data dir " << BATTSIM_DATA_DIR << " absent; skipped");
-        return;
-    }
     const std::string p = std::string(BATTSIM_DATA_DIR) + "/cmu-m100/flights/1.csv";
     ReaderOptions opt;
     opt.columns.time = "time";

@@ -1,13 +1,12 @@
 // Flight-log readers: ArduPilot DataFlash (binary + text) and PX4 ULog.
-// Real logs from the shared data folder (skipped with a warning if absent), and malformed
-// inputs built byte by byte in this file.
+// Real logs from the shared data folder (tagged [data]: CMake leaves them out when the folder
+// is absent; a missing file is a failure), and malformed inputs built byte by byte in this file.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -20,7 +19,6 @@
 
 using namespace battsim;
 using namespace battsim::host;
-namespace fs = std::filesystem;
 
 namespace {
 
@@ -72,13 +70,6 @@ bool any_note(const ReadResult& r, const std::string& needle) {
 }
 
 std::string data_path(const char* rel) { return std::string(BATTSIM_DATA_DIR) + rel; }
-
-bool have_file(const std::string& p) {
-    std::error_code ec;
-    if (fs::exists(p, ec)) return true;
-    WARN("data file not found, test skipped: " << p);
-    return false;
-}
 
 double seconds(const core::Sample& s) { return static_cast<double>(s.time_us) / 1e6; }
 
@@ -241,9 +232,8 @@ std::string ulog_good_prefix() {
 // =================================================================================================
 // Real logs
 
-TEST_CASE("DataFlash binary log171.bin: CURR rows with TimeMS", "[io-logs]") {
+TEST_CASE("DataFlash binary log171.bin: CURR rows with TimeMS", "[io-logs][data]") {
     const std::string p = data_path("/ardupilot/log171.bin");
-    if (!have_file(p)) return;
     const auto r = read_all(Kind::DfBinary, p);
     REQUIRE(r.samples.size() == 2384);
     CHECK(r.samples.front().voltage_v == Approx(16.54).margin(0.005));
@@ -266,9 +256,8 @@ TEST_CASE("DataFlash binary log171.bin: CURR rows with TimeMS", "[io-logs]") {
     CHECK(r.notes.empty());
 }
 
-TEST_CASE("DataFlash text underpowered.log: no time source, spacing inferred", "[io-logs]") {
+TEST_CASE("DataFlash text underpowered.log: no time source, spacing inferred", "[io-logs][data]") {
     const std::string p = data_path("/ardupilot/underpowered.log");
-    if (!have_file(p)) return;
     const auto r = read_all(Kind::DfText, p);
     REQUIRE(r.samples.size() == 430);
     CHECK(r.samples.front().voltage_v == Approx(11.98).margin(0.005));
@@ -288,9 +277,8 @@ TEST_CASE("DataFlash text underpowered.log: no time source, spacing inferred", "
     CHECK(imax == Approx(32.40).margin(0.01));
 }
 
-TEST_CASE("DataFlash text robert_lefebvre_octo_PM.log: GPS time, pre-fix rows placed before it", "[io-logs]") {
+TEST_CASE("DataFlash text robert_lefebvre_octo_PM.log: GPS time, pre-fix rows placed before it", "[io-logs][data]") {
     const std::string p = data_path("/ardupilot/robert_lefebvre_octo_PM.log");
-    if (!have_file(p)) return;
     const auto r = read_all(Kind::DfText, p);
     // All 68 CURR rows are kept: the 11 rows logged before the GPS fix get inferred times
     // (the inferred spacing before the first GPS time) and a note says so.
@@ -321,9 +309,8 @@ TEST_CASE("DataFlash text robert_lefebvre_octo_PM.log: GPS time, pre-fix rows pl
     CHECK(imax == Approx(25.64).margin(0.01));
 }
 
-TEST_CASE("PX4 ULog test.ulg: battery_status multi_id 0", "[io-logs]") {
+TEST_CASE("PX4 ULog test.ulg: battery_status multi_id 0", "[io-logs][data]") {
     const std::string p = data_path("/px4/test.ulg");
-    if (!have_file(p)) return;
     const auto r = read_all(Kind::Ulog, p);
     REQUIRE(r.samples.size() == 46);
     CHECK(r.samples.front().voltage_v == Approx(13.75).margin(0.005));
