@@ -56,16 +56,49 @@ def best_fit(t, v, grids):
     return best
 
 
+class BadLog(Exception):
+    pass
+
+
+def read_raw(path):
+    """time_s, bus voltage, current (A) of a raw flight; BadLog names file, line and column."""
+    t, v, i = [], [], []
+    try:
+        with open(path, newline="") as f:
+            for line, row in enumerate(csv.reader(f), start=1):
+                if not row:
+                    continue
+                for col in (1, 2, 7):
+                    try:
+                        value = float(row[col - 1]) if len(row) >= col else None
+                    except ValueError:
+                        value = None
+                    if value is None or not math.isfinite(value):
+                        found = repr(row[col - 1]) if len(row) >= col else "nothing"
+                        raise BadLog(f"{path}:{line}:{col}: expected a number (raw flight log: time_ms, bus V, "
+                                 f"4 cells, current_ma, ...), found {found}")
+                t.append(float(row[0]) / 1000.0)   # time_ms
+                v.append(float(row[1]))            # bus voltage
+                i.append(float(row[6]) / 1000.0)   # current_ma, positive = discharge
+    except OSError as e:
+        raise BadLog(f"{path}: cannot read: {e.strerror}")
+    if not t:
+        raise BadLog(f"{path}: no rows")
+    return t, v, i
+
+
 def main(paths):
     fast = [0.5, 1, 2, 3, 5, 8]
     slow = list(range(6, 40, 2)) + list(range(40, 600, 10))
     single = [x * 0.5 for x in range(1, 20)] + list(range(10, 400, 5))
+    failed = 0
     for path in paths:
-        with open(path, newline="") as f:
-            rows = [r for r in csv.reader(f) if r]
-        t = [float(r[0]) / 1000.0 for r in rows]   # time_ms
-        v = [float(r[1]) for r in rows]            # bus voltage
-        i = [float(r[6]) / 1000.0 for r in rows]   # current_ma, positive = discharge
+        try:
+            t, v, i = read_raw(path)
+        except BadLog as e:  # report it and go on with the other files
+            print(e, file=sys.stderr)
+            failed += 1
+            continue
         flying = [k for k in range(len(i)) if i[k] > FLYING_A]
         if not flying:
             print(f"{path}: no flight")
@@ -90,9 +123,10 @@ def main(paths):
         ms, taus, coef = best_fit(rt, rv, [fast, slow])
         parts = ", ".join(f"tau {tau:g} s: {-b:.3f} V ({-1000 * b / current:.1f} mOhm)" for tau, b in zip(taus, coef[1:]))
         print(f"  two exponentials: {parts}; rms {1000 * math.sqrt(ms):.1f} mV")
+    return failed
 
 
 if __name__ == "__main__":
     if len(sys.argv) < 2:
         sys.exit(__doc__)
-    main(sys.argv[1:])
+    sys.exit(1 if main(sys.argv[1:]) else 0)

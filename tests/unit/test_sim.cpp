@@ -392,6 +392,33 @@ TEST_CASE("Scenario files: the held-out suite shares no seed or name with the tu
     }
 }
 
+TEST_CASE("Scenario files: each ablation is its original with only the named plant part taken out", "[sim]") {
+    const std::string src = std::string(BATTSIM_SOURCE_DIR) + "/configs/";
+    const std::vector<std::string> files = find_scenario_files({src + "scenarios-ablation"});
+    CHECK(files.size() >= 4);
+    for (const std::string& f : files) {
+        INFO(f);
+        const Scenario a = load_scenario(f);
+        const std::string::size_type cut = a.name.find("-no");
+        REQUIRE(cut != std::string::npos);
+        const std::string suffix = a.name.substr(cut + 1);
+        const Scenario o = load_scenario(src + "scenarios/" + a.name.substr(0, cut) + ".json");
+        CHECK(a.seed == o.seed);
+        CHECK(a.config.monitor.cells_in_series == o.config.monitor.cells_in_series);
+        CHECK(a.profile.flight_s == o.profile.flight_s);
+        const bool no_rc = suffix == "norc" || suffix == "norc-nospread";
+        const bool no_spread = suffix == "nospread" || suffix == "norc-nospread";
+        REQUIRE((no_rc || no_spread || suffix == "nor2"));
+        CHECK(o.pack.r2_ohm > 0.0);
+        CHECK(a.pack.r2_ohm == (suffix == "nospread" ? o.pack.r2_ohm : 0.0));
+        CHECK(a.pack.r1_ohm == (no_rc ? 0.0 : o.pack.r1_ohm));
+        CHECK(a.pack.capacity_spread == (no_spread ? 0.0 : o.pack.capacity_spread));
+        CHECK(a.pack.resistance_spread == (no_spread ? 0.0 : o.pack.resistance_spread));
+        CHECK(a.pack.r0_ohm == o.pack.r0_ohm);
+        CHECK(a.pack.capacity_ah == o.pack.capacity_ah);
+    }
+}
+
 TEST_CASE("The plant at 7 degC against flight 32: voltage against charge drawn", "[sim][data]") {
     // The shared flight 32 (a new CNHL 1500 mAh 4S at about 7 degC) and a simulated racing
     // flight in the same conditions: the IR-corrected pack voltage per cell, binned by
