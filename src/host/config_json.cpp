@@ -178,6 +178,11 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("cell_slow_current_ridge_a2", ca.slow_current_ridge_a2, 0, kBig);
         r.number("cell_tap_artifact_ratio", ca.tap_artifact_ratio, 0, 100);
         r.boolean("last_cell_includes_lead", ca.last_cell_includes_lead);
+        r.number("cell_step_min_a", ca.step.min_step_a, 0, kBig);
+        r.number("cell_step_band_a", ca.step.steady_band_a, 0, kBig);
+        r.number("cell_step_band_fraction", ca.step.steady_band_fraction, 0, 1);
+        r.number("cell_step_noise_floor_v", ca.step.noise_floor_v, 0, 1);
+        r.number("cell_step_max_wait_samples", ca.step.max_wait_samples, 1, 60000);
         if (const json* t = r.member("ocv_cell_voltage_v")) {
             if (!t->is_array() || t->size() < 2 || t->size() > static_cast<size_t>(core::kOcvTableMaxPoints))
                 r.fail(r.child("ocv_cell_voltage_v"), "expected an array of 2.." + std::to_string(core::kOcvTableMaxPoints) +
@@ -324,6 +329,11 @@ json config_to_json(const LoadedConfig& c) {
             {"cell_slow_current_ridge_a2", m.cell_analysis.slow_current_ridge_a2},
             {"cell_tap_artifact_ratio", m.cell_analysis.tap_artifact_ratio},
             {"last_cell_includes_lead", m.cell_analysis.last_cell_includes_lead},
+            {"cell_step_min_a", m.cell_analysis.step.min_step_a},
+            {"cell_step_band_a", m.cell_analysis.step.steady_band_a},
+            {"cell_step_band_fraction", m.cell_analysis.step.steady_band_fraction},
+            {"cell_step_noise_floor_v", m.cell_analysis.step.noise_floor_v},
+            {"cell_step_max_wait_samples", m.cell_analysis.step.max_wait_samples},
         };
         if (jc.ocv.points >= 2) {
             json t = json::array();

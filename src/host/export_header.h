@@ -156,6 +156,11 @@ void visit_monitor_config(Config& c, F&& f) {
     f("cell_analysis.significance_sigmas", c.cell_analysis.significance_sigmas);
     f("cell_analysis.capacity_significance_sigmas", c.cell_analysis.capacity_significance_sigmas);
     f("cell_analysis.last_cell_includes_lead", c.cell_analysis.last_cell_includes_lead);
+    f("cell_analysis.step.min_step_a", c.cell_analysis.step.min_step_a);
+    f("cell_analysis.step.steady_band_a", c.cell_analysis.step.steady_band_a);
+    f("cell_analysis.step.steady_band_fraction", c.cell_analysis.step.steady_band_fraction);
+    f("cell_analysis.step.noise_floor_v", c.cell_analysis.step.noise_floor_v);
+    f("cell_analysis.step.max_wait_samples", c.cell_analysis.step.max_wait_samples);
     f("warnings.low_capacity_fraction", c.warnings.low_capacity_fraction);
     f("warnings.high_resistance_factor", c.warnings.high_resistance_factor);
     f("warnings.min_resistance_updates", c.warnings.min_resistance_updates);

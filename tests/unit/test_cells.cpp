@@ -2,8 +2,10 @@
 // flight-time solver's weak-cell pack voltage by hand.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <utility>
 
 #include "core/cells/cell_analyzer.h"
+#include "core/cells/step_resistance.h"
 #include "core/estimate/joint_estimator.h"
 #include "core/estimate/power_time_solver.h"
 #include "core/model/ocv.h"
@@ -167,4 +169,99 @@ TEST_CASE("Cell check: the slow current's ridge lets a weak cell's early drift c
     CellAnalyzer::Config off;
     off.slow_current_ridge_a2 = 0.0f;
     CHECK(fly(q, unit_r, 150.0f, 0.0f, off).first_named_s > 100.0f);
+}
+
+TEST_CASE("Cell steps: each cell's ΔV/ΔI between two steady windows, and its noise, by hand", "[cells]") {
+    CellStepResistance s;
+    s.configure(CellStepResistance::Config{});  // 4 A steps, band 1 A or 10 %, 2.5 mV floor
+    const float rest[3] = {4.000f, 4.000f, 4.000f};
+    for (int n = 0; n < 8; ++n) s.update(rest, 3, 1.0f);
+    REQUIRE(s.status().steps == 0);
+    // Take-off to 11 A; cell 1 dithers ±5 mV about its mean, the others read one level.
+    for (int n = 0; n < 8; ++n) {
+        const float v[3] = {n % 2 ? 3.945f : 3.955f, 3.940f, 3.930f};
+        s.update(v, 3, 11.0f);
+        if (n < 7) REQUIRE(s.status().steps == 0);  // the after-window needs 8 settled samples
+    }
+    REQUIRE(s.status().steps == 1);
+    CHECK(s.status().resistance_ohm[0] == Approx(0.005f).epsilon(1e-3));
+    CHECK(s.status().resistance_ohm[1] == Approx(0.006f).epsilon(1e-3));
+    CHECK(s.status().resistance_ohm[2] == Approx(0.007f).epsilon(1e-3));
+    // Cells 2 and 3: both windows at the floor, (2.5 mV)²/8 each: σ = √(2 · 6.25e-6 / 8) / 10 A.
+    CHECK(s.status().sigma_ohm[1] == Approx(1.25e-4f).epsilon(1e-3));
+    // Cell 1's after-window: sample variance 8 · (5 mV)² / 7 = 2.857e-5 V², over 8 samples
+    // 3.571e-6; with the before window's 7.8125e-7: σ = √4.353e-6 / 10 A = 2.0863e-4 Ω.
+    CHECK(s.status().sigma_ohm[0] == Approx(2.0863e-4f).epsilon(2e-3));
+
+    SECTION("landing back to 1 A: a second step, the same resistances, σ down by √2") {
+        for (int n = 0; n < 8; ++n) s.update(rest, 3, 1.0f);
+        REQUIRE(s.status().steps == 2);
+        CHECK(s.status().resistance_ohm[1] == Approx(0.006f).epsilon(1e-3));
+        CHECK(s.status().sigma_ohm[1] == Approx(1.25e-4f / std::sqrt(2.0f)).epsilon(1e-3));
+    }
+    SECTION("no step: a 3 A change, a one-sample spike, a current that never settles") {
+        const float v[3] = {3.945f, 3.940f, 3.930f};
+        for (int n = 0; n < 8; ++n) s.update(v, 3, 14.0f);
+        s.update(v, 3, 30.0f);
+        for (int n = 0; n < 8; ++n) s.update(v, 3, 11.0f);
+        // Oscillating beyond the 32-sample wait, then settling at 30 A: no step (with no limit
+        // on the wait, 11 → 30 A would count).
+        for (int n = 0; n < 40; ++n) s.update(v, 3, n % 2 ? 25.0f : 11.0f);
+        for (int n = 0; n < 8; ++n) s.update(v, 3, 30.0f);
+        CHECK(s.status().steps == 1);
+    }
+}
+
+namespace {
+// A hover: 10 s on the ground at 0.5 A, a take-off to 10 A (± 0.3 A of gusts), samples every
+// 134 ms through 8 mV taps with 4 mV of noise. Cell 4 carries the lead and is not compared.
+// Returns the cell named and when (s after take-off; −1: never).
+std::pair<int, float> hover(const float resistance_factor[4], float seconds,
+                            const CellAnalyzer::Config& config = CellAnalyzer::Config{}) {
+    testplant::Plant cells[4];
+    for (int c = 0; c < 4; ++c) {
+        cells[c] = testplant::Plant{OcvCurve{}, 1.5f, 0.004f * resistance_factor[c], 0.002f * resistance_factor[c], 2.0f};
+        cells[c].ocv.configure(testplant::lipo_table(), 1, TremblayParams{});
+    }
+    OcvCurve pack_ocv;
+    pack_ocv.configure(testplant::lipo_table(), 4, TremblayParams{});
+    CellAnalyzer a;
+    a.configure(config);
+    testplant::Lcg rng;
+    const float dt = 0.134f;
+    float ip = 0.0f, charge = 0.0f;
+    for (int n = 0; n * dt < seconds + 10.0f; ++n) {
+        const float t = n * dt;
+        const bool flying = t >= 10.0f;
+        const float i = flying ? 10.0f + 0.3f * rng.next() : 0.5f;
+        ip += (i - ip) * dt / 5.0f;
+        charge += i * dt / 3600.0f;
+        float v[4];
+        for (int c = 0; c < 4; ++c) v[c] = std::round((cells[c].step(i, dt) + 0.004f * rng.next()) / 0.008f) * 0.008f;
+        a.observe(v, 4, i);
+        if (!flying) continue;
+        a.update(static_cast<uint64_t>(t * 1.0e6f), v, 4, i, ip, charge, cells[0].soc, pack_ocv);
+        if (a.status().flagged_cell >= 0) return {a.status().flagged_cell, t - 10.0f};
+    }
+    return {-1, -1.0f};
+}
+}  // namespace
+
+TEST_CASE("Cell check: a hover names a high-resistance cell from its take-off step", "[cells][truth]") {
+    // The short-lag differences never get enough excitation in a hover: this is the step's
+    // verdict alone.
+    SECTION("cell 2 with 60 % more resistance: named within seconds, as resistance") {
+        const float r[4] = {1.0f, 1.6f, 1.0f, 1.0f};
+        const std::pair<int, float> named = hover(r, 120.0f);
+        CHECK(named.first == 1);
+        CHECK(named.second >= 0.0f);
+        CHECK(named.second < 5.0f);
+        CellAnalyzer::Config off;
+        off.step.min_step_a = 0.0f;
+        CHECK(hover(r, 120.0f, off).first == -1);
+    }
+    SECTION("a ±5 % spread, and the lead cell at +60 %: nobody named") {
+        const float r[4] = {1.05f, 0.95f, 1.0f, 1.6f};
+        CHECK(hover(r, 120.0f).first == -1);
+    }
 }

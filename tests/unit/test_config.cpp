@@ -9,7 +9,11 @@ TEST_CASE("Config JSON round-trips", "[config]") {
     LoadedConfig c = default_config();
     c.monitor.battery.capacity_ah = 2.2f;
     c.monitor.warnings.cell_outlier_score = 0.7f;
+    c.monitor.cell_analysis.step.steady_band_fraction = 0.2f;
+    c.monitor.cell_analysis.step.max_wait_samples = 20;
     LoadedConfig back = config_from_json(config_to_json(c), "test");
+    CHECK(back.monitor.cell_analysis.step.steady_band_fraction == 0.2f);
+    CHECK(back.monitor.cell_analysis.step.max_wait_samples == 20);
     CHECK(back.monitor.battery.capacity_ah == 2.2f);
     CHECK(back.monitor.warnings.cell_outlier_score == 0.7f);
     CHECK(config_to_json(back) == config_to_json(c));
@@ -31,6 +35,11 @@ TEST_CASE("Config errors name the key", "[config]") {
     j = config_to_json(default_config());
     j["battery"]["exponential_capacity_ah"] = 5;
     CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("must be below capacity_ah"));
+
+    j = config_to_json(default_config());
+    j["joint"]["cell_step_band_fraction"] = 2;
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("$.joint.cell_step_band_fraction") &&
+                                                           Catch::Contains("out of range"));
 
     j = config_to_json(default_config());
     j["schema"] = "other";

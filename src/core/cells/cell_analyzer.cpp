@@ -7,6 +7,9 @@ namespace core {
 
 void CellAnalyzer::reset() {
     status_ = Status{};
+    step_seen_ = 0;
+    step_cell_ = -1;
+    step_excess_ = 0.0f;
     head_ = count_ = 0;
     sxx_ = n_r_ = n_ = first_charge_ah_ = 0.0f;
     slow_current_ = LowPassFilter{};
@@ -147,7 +150,11 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     since_verdict_ = 0;
     const bool r_ready = sxx_ >= config_.min_excitation_a2 && n_r_ >= config_.min_pairs;
     float sigma_r[kMaxCells] = {};
-    if (r_ready) {
+    if (!r_ready) {
+        // Reported until the short-lag differences take over: the steps' (which carry the
+        // first half second's polarisation too).
+        for (int c = 0; c < cells; ++c) status_.resistance_ohm[c] = steps_.status().resistance_ohm[c];
+    } else {
         for (int c = 0; c < cells; ++c) {
             status_.resistance_ohm[c] = -sxy_[c] / sxx_;
             const float rss = maxf(0.0f, syy_[c] - sxy_[c] * sxy_[c] / sxx_);
@@ -161,6 +168,7 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     // A resistance verdict needs at least two other cells to take a median of: against a
     // single other cell, ordinary cell-to-cell spread reads as an outlier.
     const int compared = cells - 1 - (lead_cell >= 0 ? 1 : 0);
+    if (compared >= 2) step_verdict(cells, lead_cell, compared, &worst);
     if (r_ready && compared >= 2) {
         for (int c = 0; c < cells; ++c) {
             if (c == lead_cell) continue;
@@ -239,6 +247,38 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
             status_.flagged_cell = static_cast<int8_t>(c);
             status_.finding = kLowCapacity;
         }
+    }
+}
+
+void CellAnalyzer::step_verdict(int cells, int lead_cell, int others, float* worst) {
+    const CellStepResistance::Status& st = steps_.status();
+    if (st.steps == 0) return;
+    // The steps change a few times a flight; their verdict is kept in between.
+    if (st.steps != step_seen_) {
+        step_seen_ = st.steps;
+        step_cell_ = -1;
+        step_excess_ = 0.0f;
+        for (int c = 0; c < cells; ++c) {
+            if (c == lead_cell) continue;
+            const float med = median_excluding(st.resistance_ohm, cells, c, lead_cell);
+            if (!(med > 0.0f)) continue;
+            float others_var = 0.0f;  // the median's variance, taken as the noisiest other's over their count
+            for (int k = 0; k < cells; ++k)
+                if (k != c && k != lead_cell) others_var = maxf(others_var, st.sigma_ohm[k] * st.sigma_ohm[k]);
+            const float ratio = config_.resistance_ratio;
+            const float sigma =
+                sqrtf(st.sigma_ohm[c] * st.sigma_ohm[c] + ratio * ratio * others_var / static_cast<float>(others));
+            const float excess = st.resistance_ohm[c] / med - 1.0f;
+            if (st.resistance_ohm[c] - ratio * med > config_.significance_sigmas * sigma && excess > step_excess_) {
+                step_excess_ = excess;
+                step_cell_ = static_cast<int8_t>(c);
+            }
+        }
+    }
+    if (step_cell_ >= 0 && step_excess_ > *worst) {
+        *worst = step_excess_;
+        status_.flagged_cell = step_cell_;
+        status_.finding = kHighResistance;
     }
 }
 

@@ -15,6 +15,7 @@
 #pragma once
 #include <stdint.h>
 
+#include "core/cells/step_resistance.h"
 #include "core/estimate/low_pass.h"
 #include "core/model/ocv.h"
 #include "core/sample.h"
@@ -66,6 +67,11 @@ public:
         // below cell 2 (ratio 2.4).
         float tap_artifact_ratio = 1.5f;
         bool last_cell_includes_lead = true;
+        // Until the short-lag differences are ready (a hover never gets there), the
+        // resistance verdict rests on the big steps. Those are few (two in a hover) and
+        // their noise is itself estimated from 8 samples, so a cell is named only when its
+        // excess is beyond the threshold by significance_sigmas, not merely beyond it.
+        CellStepResistance::Config step;
     };
     enum Finding : uint8_t { kNone = 0, kHighResistance = 1, kLowCapacity = 2 };
     struct Status {
@@ -79,6 +85,7 @@ public:
 
     void configure(const Config& config) {
         config_ = config;
+        steps_.configure(config.step);  // not in reset(): the first flying update resets, after the take-off step
         reset();
     }
     void reset();
@@ -86,11 +93,21 @@ public:
     // pack's curve); polarisation_current_a: its low-passed current.
     void update(uint64_t time_us, const float* cell_v, int cells, float current_a, float polarisation_current_a,
                 float charge_ah, float pack_soc, const OcvCurve& ocv);
+    // Every sample with valid cell voltages, on the ground as well: the steps' windows.
+    void observe(const float* cell_v, int cells, float current_a) { steps_.update(cell_v, cells, current_a); }
     void break_history() { count_ = 0; }
+    const CellStepResistance::Status& step_status() const { return steps_.status(); }
     const Status& status() const { return status_; }
 
 private:
+    // others: the compared cells besides the judged one.
+    void step_verdict(int cells, int lead_cell, int others, float* worst);
+
     static constexpr int kHistory = 8;
+    CellStepResistance steps_;
+    uint16_t step_seen_ = 0;  // the step count step_cell_ was judged at
+    int8_t step_cell_ = -1;
+    float step_excess_ = 0.0f;
     static constexpr int kVerdictEvery = 8;
     int since_verdict_ = 0;
     float drift_v_ = 0.0f;  // the regressor's secant, refreshed with the verdicts
