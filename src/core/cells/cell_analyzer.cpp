@@ -175,8 +175,8 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
             const float med = median_excluding(status_.resistance_ohm, cells, c, lead_cell);
             if (!(med > 0.0f)) continue;
             const float excess = status_.resistance_ohm[c] / med - 1.0f;
-            if (excess > config_.resistance_ratio - 1.0f &&
-                status_.resistance_ohm[c] - med > config_.significance_sigmas * sigma_r[c] && excess > worst) {
+            const float margin_ohm = status_.resistance_ohm[c] - config_.resistance_ratio * med;
+            if (margin_ohm > config_.significance_sigmas * sigma_r[c] && excess > worst) {
                 worst = excess;
                 status_.flagged_cell = static_cast<int8_t>(c);
                 status_.finding = kHighResistance;
