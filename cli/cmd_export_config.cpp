@@ -12,15 +12,18 @@ namespace {
 struct ExportArgs {
     std::string firmware;
     std::string output = "-";
+    std::string estimator;  // empty = as the config says
 };
 
 std::function<int()> setup(CLI::App& sub) {
     auto a = std::make_shared<ExportArgs>();
     sub.add_option("--firmware", a->firmware, "Config JSON to export as the firmware's C++ header")->required();
     sub.add_option("-o,--output", a->output, "Header to write (\"-\" = standard output)")->capture_default_str();
+    sub.add_option("--estimator", a->estimator, "Estimator compiled in: reference or joint; default from the config")
+        ->check(CLI::IsMember({"reference", "joint"}));
     return [a]() -> int {
         try {
-            host::export_firmware_config(a->firmware, a->output);
+            host::export_firmware_config(a->firmware, a->output, a->estimator);
         } catch (const host::ConfigError& e) {
             std::cerr << "battsim export-config: " << e.what() << "\n";
             return kExitConfigError;

@@ -10,7 +10,6 @@
 
 #include "host/batch/manifest.h"
 #include "host/config_json.h"
-#include "host/config_json.h"
 #include "host/io/sample_reader.h"
 
 namespace battsim {

@@ -21,6 +21,8 @@ echo "== ESP8266 cross-compile and size budget"
 sh "$root/scripts/cross-compile.sh" --header "$build/firmware/generated/battsim_config.h"
 # The fitted config's header too: model extensions compiled for the target as constants.
 sh "$root/scripts/cross-compile.sh" --header "$build/firmware/generated-fitted/battsim_config.h" >/dev/null
+# ... and the joint estimator's (configs/sim-4s.json with its OCV table).
+sh "$root/scripts/cross-compile.sh" --header "$build/firmware/generated-joint/battsim_config.h" >/dev/null
 
 if [ "${BATTSIM_QUICK:-0}" = 1 ]; then exit 0; fi
 

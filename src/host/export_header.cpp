@@ -114,11 +114,19 @@ std::string firmware_config_header(const LoadedConfig& config, const std::string
     return h;
 }
 
-void export_firmware_config(const std::string& json_path, const std::string& out_path) {
-    const LoadedConfig config = load_config_file(json_path);
+void export_firmware_config(const std::string& json_path, const std::string& out_path, const std::string& estimator) {
+    LoadedConfig config = load_config_file(json_path);
     std::string source = json_path;
     const std::string::size_type slash = source.find_last_of('/');
     if (slash != std::string::npos) source = source.substr(slash + 1);  // no build paths in the header
+    if (estimator == "reference") {
+        config.monitor.estimator = core::EstimatorKind::Reference;
+    } else if (estimator == "joint") {
+        config.monitor.estimator = core::EstimatorKind::Joint;
+    } else if (!estimator.empty()) {
+        throw std::invalid_argument("--estimator: expected reference or joint, found \"" + estimator + "\"");
+    }
+    if (!estimator.empty()) source += " with --estimator " + estimator;
     write_file_atomic(out_path, firmware_config_header(config, source));
 }
 

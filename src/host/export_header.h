@@ -194,8 +194,11 @@ std::string float_literal(float v);
 std::string firmware_config_header(const LoadedConfig& config, const std::string& source);
 
 // Loads `json_path` (throws ConfigError) and writes the header to `out_path` atomically
-// ("-" = standard output; throws std::runtime_error when it cannot write).
-void export_firmware_config(const std::string& json_path, const std::string& out_path);
+// ("-" = standard output; throws std::runtime_error when it cannot write). `estimator`
+// ("reference" or "joint") overrides the config's, as `battsim replay --estimator` does;
+// empty keeps it (anything else: std::invalid_argument).
+void export_firmware_config(const std::string& json_path, const std::string& out_path,
+                            const std::string& estimator = "");
 
 }  // namespace host
 }  // namespace battsim

@@ -168,4 +168,17 @@ TEST_CASE("battsim export-config writes the header and reports bad input", "[exp
     CHECK(r.exit_code == 5);
     r = fwtest::run(BATTSIM_BINARY, "export-config -o " + fwtest::q(out));
     CHECK(r.exit_code == 2);
+
+    // --estimator overrides the config's (the reference config says reference), and says so.
+    r = fwtest::run(BATTSIM_BINARY, "export-config --firmware " + fwtest::q(fwtest::reference_config_path()) +
+                                        " --estimator joint");
+    REQUIRE(r.exit_code == 0);
+    host::LoadedConfig joint = host::load_config_file(fwtest::reference_config_path());
+    REQUIRE(joint.monitor.estimator == core::EstimatorKind::Reference);
+    joint.monitor.estimator = core::EstimatorKind::Joint;
+    CHECK(r.out == host::firmware_config_header(joint, "reference-modified.json with --estimator joint"));
+    r = fwtest::run(BATTSIM_BINARY, "export-config --firmware " + fwtest::q(fwtest::reference_config_path()) +
+                                        " --estimator kalman");
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.find("--estimator") != std::string::npos);
 }

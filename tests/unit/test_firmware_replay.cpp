@@ -16,6 +16,8 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "app/averages_file.h"
@@ -226,6 +228,67 @@ TEST_CASE("firmware built with a fitted config runs its model extensions as batt
     REQUIRE(mkdir(plain_sd.c_str(), 0755) == 0);
     run_fw_host("--sd " + fwtest::q(plain_sd) + " " + fwtest::q(flight_path(flight)));
     CHECK(fwtest::read_file(plain_sd + "/battsim/log0001.csv") != sd_series);
+}
+
+TEST_CASE("firmware built with the joint estimator runs it, cell check included, as battsim replay does, byte for byte",
+          "[firmware][replay][joint][data]") {
+    // configs/sim-4s.json exported with --estimator joint. Flight 34's cell 1 is named for
+    // resistance 26 s into the flight, so the cell check's output is in the series too.
+    const std::string dir = fwtest::temp_dir("fwjoint");
+    for (int flight : {30, 34}) {
+        INFO("flight " << flight);
+        const std::string tag = std::to_string(flight);
+        const std::string sd = dir + "/sd" + tag;
+        REQUIRE(mkdir(sd.c_str(), 0755) == 0);
+        const fwtest::Run m =
+            fwtest::run(BATTSIM_FW_HOST_JOINT_BINARY, "--sd " + fwtest::q(sd) + " " + fwtest::q(flight_path(flight)));
+        INFO(m.err);
+        REQUIRE(m.exit_code == 0);
+        const std::string uart = dir + "/logger" + tag + ".uart";
+        run_fw_host("--program logger --uart " + fwtest::q(uart) + " " + fwtest::q(flight_path(flight)));
+        const host::serial::DecodedStream rec = host::serial::decode_device_stream(fwtest::read_file(uart));
+        REQUIRE(rec.corrupt == 0);
+        std::string csv;
+        for (const std::string& l : rec.csv_lines) csv += l + "\n";
+        const std::string logged = dir + "/logger" + tag + ".csv";
+        fwtest::write_file(logged, csv);
+        const std::string replay_series = dir + "/replay" + tag + ".csv";
+        const fwtest::Run r = fwtest::run(BATTSIM_BINARY, "replay " + fwtest::q(logged) + " --config " +
+                                                              fwtest::q(BATTSIM_FW_JOINT_CONFIG) +
+                                                              " --estimator joint --series " + fwtest::q(replay_series));
+        INFO(r.err);
+        REQUIRE(r.exit_code == 0);
+        const std::string expected = fwtest::read_file(replay_series);
+        const std::string sd_series = fwtest::read_file(sd + "/battsim/log0001.csv");
+        REQUIRE(sd_series.size() == expected.size());
+        REQUIRE(sd_series == expected);
+        // The joint estimator was really on: the reference build's series differs, and on
+        // flight 34 the cell-outlier bit (4) is raised.
+        const std::string plain_sd = dir + "/sd-plain" + tag;
+        REQUIRE(mkdir(plain_sd.c_str(), 0755) == 0);
+        run_fw_host("--sd " + fwtest::q(plain_sd) + " " + fwtest::q(flight_path(flight)));
+        CHECK(fwtest::read_file(plain_sd + "/battsim/log0001.csv") != sd_series);
+        if (flight == 34) {
+            std::istringstream lines(sd_series);
+            std::string line;
+            std::getline(lines, line);
+            size_t column = 0;
+            {
+                std::istringstream head(line);
+                std::string name;
+                while (std::getline(head, name, ',') && name != "warnings") ++column;
+            }
+            bool cell_outlier = false;
+            while (std::getline(lines, line)) {
+                std::istringstream row(line);
+                std::string field;
+                for (size_t k = 0; k <= column && std::getline(row, field, ','); ++k) {
+                }
+                if (!field.empty() && (std::stoi(field) & 4) != 0) cell_outlier = true;
+            }
+            CHECK(cell_outlier);
+        }
+    }
 }
 
 TEST_CASE("firmware statuses equal replay's bit for bit on the logger's record, cells included", "[firmware][replay][data]") {
