@@ -213,18 +213,25 @@ TEST_CASE("Cell steps: each cell's ΔV/ΔI between two steady windows, and its n
 }
 
 namespace {
+// Four 1.5 Ah cells, R0 4 mΩ and a 2 s RC branch of 2 mΩ, both scaled per cell.
+struct FourCells {
+    testplant::Plant cell[4];
+    OcvCurve pack_ocv;
+    explicit FourCells(const float resistance_factor[4]) {
+        for (int c = 0; c < 4; ++c) {
+            cell[c] = testplant::Plant{OcvCurve{}, 1.5f, 0.004f * resistance_factor[c], 0.002f * resistance_factor[c], 2.0f};
+            cell[c].ocv.configure(testplant::lipo_table(), 1, TremblayParams{});
+        }
+        pack_ocv.configure(testplant::lipo_table(), 4, TremblayParams{});
+    }
+};
+
 // A hover: 10 s on the ground at 0.5 A, a take-off to 10 A (± 0.3 A of gusts), samples every
 // 134 ms through 8 mV taps with 4 mV of noise. Cell 4 carries the lead and is not compared.
 // Returns the cell named and when (s after take-off; −1: never).
 std::pair<int, float> hover(const float resistance_factor[4], float seconds,
                             const CellAnalyzer::Config& config = CellAnalyzer::Config{}) {
-    testplant::Plant cells[4];
-    for (int c = 0; c < 4; ++c) {
-        cells[c] = testplant::Plant{OcvCurve{}, 1.5f, 0.004f * resistance_factor[c], 0.002f * resistance_factor[c], 2.0f};
-        cells[c].ocv.configure(testplant::lipo_table(), 1, TremblayParams{});
-    }
-    OcvCurve pack_ocv;
-    pack_ocv.configure(testplant::lipo_table(), 4, TremblayParams{});
+    FourCells pack(resistance_factor);
     CellAnalyzer a;
     a.configure(config);
     testplant::Lcg rng;
@@ -237,10 +244,10 @@ std::pair<int, float> hover(const float resistance_factor[4], float seconds,
         ip += (i - ip) * dt / 5.0f;
         charge += i * dt / 3600.0f;
         float v[4];
-        for (int c = 0; c < 4; ++c) v[c] = std::round((cells[c].step(i, dt) + 0.004f * rng.next()) / 0.008f) * 0.008f;
+        for (int c = 0; c < 4; ++c) v[c] = std::round((pack.cell[c].step(i, dt) + 0.004f * rng.next()) / 0.008f) * 0.008f;
         a.observe(v, 4, i);
         if (!flying) continue;
-        a.update(static_cast<uint64_t>(t * 1.0e6f), v, 4, i, ip, charge, cells[0].soc, pack_ocv);
+        a.update(static_cast<uint64_t>(t * 1.0e6f), v, 4, i, ip, charge, pack.cell[0].soc, pack.pack_ocv);
         if (a.status().flagged_cell >= 0) return {a.status().flagged_cell, t - 10.0f};
     }
     return {-1, -1.0f};
@@ -270,13 +277,7 @@ namespace {
 // Racing throttle for the short-lag differences: a new current in 10–40 A every 0.2 s, 67 ms
 // samples through 1 mV taps with 4 mV of noise, steps off. Returns the final status.
 CellAnalyzer::Status race(const float resistance_factor[4], float seconds, CellAnalyzer::Config config = CellAnalyzer::Config{}) {
-    testplant::Plant cells[4];
-    for (int c = 0; c < 4; ++c) {
-        cells[c] = testplant::Plant{OcvCurve{}, 1.5f, 0.004f * resistance_factor[c], 0.002f * resistance_factor[c], 2.0f};
-        cells[c].ocv.configure(testplant::lipo_table(), 1, TremblayParams{});
-    }
-    OcvCurve pack_ocv;
-    pack_ocv.configure(testplant::lipo_table(), 4, TremblayParams{});
+    FourCells pack(resistance_factor);
     config.step.min_step_a = 0.0f;
     CellAnalyzer a;
     a.configure(config);
@@ -288,8 +289,8 @@ CellAnalyzer::Status race(const float resistance_factor[4], float seconds, CellA
         ip += (i - ip) * dt / 5.0f;
         charge += i * dt / 3600.0f;
         float v[4];
-        for (int c = 0; c < 4; ++c) v[c] = std::round((cells[c].step(i, dt) + 0.004f * rng.next()) / 0.001f) * 0.001f;
-        a.update(static_cast<uint64_t>(n * dt * 1.0e6f), v, 4, i, ip, charge, cells[0].soc, pack_ocv);
+        for (int c = 0; c < 4; ++c) v[c] = std::round((pack.cell[c].step(i, dt) + 0.004f * rng.next()) / 0.001f) * 0.001f;
+        a.update(static_cast<uint64_t>(n * dt * 1.0e6f), v, 4, i, ip, charge, pack.cell[0].soc, pack.pack_ocv);
     }
     return a.status();
 }

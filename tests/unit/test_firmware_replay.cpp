@@ -111,6 +111,33 @@ std::string run_fw_host(const std::string& args) {
     return r.out;
 }
 
+// The firmware discharge logger's record of `flight`, decoded and kept as the CSV `battsim
+// log` writes (DIR/logger-TAG.csv); returns its path and, in *lines, its row count.
+std::string logger_record(int flight, const std::string& dir, const std::string& tag, size_t* lines = nullptr) {
+    const std::string uart = dir + "/logger-" + tag + ".uart";
+    run_fw_host("--program logger --uart " + fwtest::q(uart) + " " + fwtest::q(flight_path(flight)));
+    const host::serial::DecodedStream rec = host::serial::decode_device_stream(fwtest::read_file(uart));
+    REQUIRE(rec.corrupt == 0);
+    REQUIRE(rec.partial_bytes == 0);
+    REQUIRE(rec.before_header == 0);
+    std::string csv;
+    for (const std::string& l : rec.csv_lines) csv += l + "\n";
+    const std::string path = dir + "/logger-" + tag + ".csv";
+    fwtest::write_file(path, csv);
+    if (lines) *lines = rec.csv_lines.size();
+    return path;
+}
+
+// The series CSV of `battsim replay LOG --config CONFIG ARGS`.
+std::string replay_series(const std::string& log, const std::string& config, const std::string& args) {
+    const std::string out = log + ".series.csv";
+    const fwtest::Run r = fwtest::run(BATTSIM_BINARY, "replay " + fwtest::q(log) + " --config " + fwtest::q(config) + " " +
+                                                          args + " --series " + fwtest::q(out));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    return fwtest::read_file(out);
+}
+
 }  // namespace
 
 TEST_CASE("firmware on the raw flights: samples and cell-independent status equal battsim replay bit for bit",
@@ -159,30 +186,12 @@ TEST_CASE("firmware monitor's SD series equals battsim replay of the firmware lo
         const std::string sd = dir + "/sd" + std::to_string(flight);
         REQUIRE(mkdir(sd.c_str(), 0755) == 0);
         const std::string monitor_uart = dir + "/monitor-" + std::to_string(flight) + ".uart";
-        const std::string logger_uart = dir + "/logger-" + std::to_string(flight) + ".uart";
         run_fw_host("--sd " + fwtest::q(sd) + " --uart " + fwtest::q(monitor_uart) + " " + fwtest::q(flight_path(flight)));
-        run_fw_host("--program logger --uart " + fwtest::q(logger_uart) + " " + fwtest::q(flight_path(flight)));
-
-        // The logger's stream as `battsim log` records it.
-        const host::serial::DecodedStream rec = host::serial::decode_device_stream(fwtest::read_file(logger_uart));
-        REQUIRE(rec.corrupt == 0);
-        REQUIRE(rec.partial_bytes == 0);
-        REQUIRE(rec.before_header == 0);
-        std::string csv;
-        for (const std::string& l : rec.csv_lines) csv += l + "\n";
-        const std::string logged = dir + "/logger-" + std::to_string(flight) + ".csv";
-        fwtest::write_file(logged, csv);
-
-        const std::string replay_series = dir + "/replay-" + std::to_string(flight) + ".csv";
-        const fwtest::Run r = fwtest::run(BATTSIM_BINARY, "replay " + fwtest::q(logged) + " --config " +
-                                                              fwtest::q(fwtest::reference_config_path()) + " --series " +
-                                                              fwtest::q(replay_series));
-        INFO(r.err);
-        REQUIRE(r.exit_code == 0);
-
+        size_t logged_rows = 0;
+        const std::string logged = logger_record(flight, dir, std::to_string(flight), &logged_rows);
+        const std::string expected = replay_series(logged, fwtest::reference_config_path(), "");
         const std::string sd_series = fwtest::read_file(sd + "/battsim/log0001.csv");
-        const std::string expected = fwtest::read_file(replay_series);
-        REQUIRE(std::count(expected.begin(), expected.end(), '\n') == static_cast<long>(rec.csv_lines.size()));
+        REQUIRE(std::count(expected.begin(), expected.end(), '\n') == static_cast<long>(logged_rows));
         REQUIRE(sd_series.size() == expected.size());
         REQUIRE(sd_series == expected);
 
@@ -202,24 +211,10 @@ TEST_CASE("firmware built with a fitted config runs its model extensions as batt
     const int flight = 30;
     const std::string sd = dir + "/sd";
     REQUIRE(mkdir(sd.c_str(), 0755) == 0);
-    const std::string logger_uart = dir + "/logger.uart";
     const fwtest::Run m = fwtest::run(BATTSIM_FW_HOST_FITTED_BINARY, "--sd " + fwtest::q(sd) + " " + fwtest::q(flight_path(flight)));
     INFO(m.err);
     REQUIRE(m.exit_code == 0);
-    run_fw_host("--program logger --uart " + fwtest::q(logger_uart) + " " + fwtest::q(flight_path(flight)));
-    const host::serial::DecodedStream rec = host::serial::decode_device_stream(fwtest::read_file(logger_uart));
-    REQUIRE(rec.corrupt == 0);
-    std::string csv;
-    for (const std::string& l : rec.csv_lines) csv += l + "\n";
-    const std::string logged = dir + "/logger.csv";
-    fwtest::write_file(logged, csv);
-    const std::string replay_series = dir + "/replay.csv";
-    const fwtest::Run r = fwtest::run(BATTSIM_BINARY, "replay " + fwtest::q(logged) + " --config " +
-                                                          fwtest::q(BATTSIM_FW_FITTED_CONFIG) + " --series " +
-                                                          fwtest::q(replay_series));
-    INFO(r.err);
-    REQUIRE(r.exit_code == 0);
-    const std::string expected = fwtest::read_file(replay_series);
+    const std::string expected = replay_series(logger_record(flight, dir, "30"), BATTSIM_FW_FITTED_CONFIG, "");
     const std::string sd_series = fwtest::read_file(sd + "/battsim/log0001.csv");
     REQUIRE(sd_series.size() == expected.size());
     REQUIRE(sd_series == expected);
@@ -244,21 +239,8 @@ TEST_CASE("firmware built with the joint estimator runs it, cell check included,
             fwtest::run(BATTSIM_FW_HOST_JOINT_BINARY, "--sd " + fwtest::q(sd) + " " + fwtest::q(flight_path(flight)));
         INFO(m.err);
         REQUIRE(m.exit_code == 0);
-        const std::string uart = dir + "/logger" + tag + ".uart";
-        run_fw_host("--program logger --uart " + fwtest::q(uart) + " " + fwtest::q(flight_path(flight)));
-        const host::serial::DecodedStream rec = host::serial::decode_device_stream(fwtest::read_file(uart));
-        REQUIRE(rec.corrupt == 0);
-        std::string csv;
-        for (const std::string& l : rec.csv_lines) csv += l + "\n";
-        const std::string logged = dir + "/logger" + tag + ".csv";
-        fwtest::write_file(logged, csv);
-        const std::string replay_series = dir + "/replay" + tag + ".csv";
-        const fwtest::Run r = fwtest::run(BATTSIM_BINARY, "replay " + fwtest::q(logged) + " --config " +
-                                                              fwtest::q(BATTSIM_FW_JOINT_CONFIG) +
-                                                              " --estimator joint --series " + fwtest::q(replay_series));
-        INFO(r.err);
-        REQUIRE(r.exit_code == 0);
-        const std::string expected = fwtest::read_file(replay_series);
+        const std::string expected =
+            replay_series(logger_record(flight, dir, tag), BATTSIM_FW_JOINT_CONFIG, "--estimator joint");
         const std::string sd_series = fwtest::read_file(sd + "/battsim/log0001.csv");
         REQUIRE(sd_series.size() == expected.size());
         REQUIRE(sd_series == expected);
@@ -296,13 +278,7 @@ TEST_CASE("firmware statuses equal replay's bit for bit on the logger's record, 
     const std::string dir = fwtest::temp_dir("fwexact");
     for (int flight : {29, 34}) {
         INFO("flight " << flight);
-        const std::string uart = dir + "/logger.uart";
-        run_fw_host("--program logger --uart " + fwtest::q(uart) + " " + fwtest::q(flight_path(flight)));
-        const host::serial::DecodedStream rec = host::serial::decode_device_stream(fwtest::read_file(uart));
-        std::string csv;
-        for (const std::string& l : rec.csv_lines) csv += l + "\n";
-        const std::string logged = dir + "/logger.csv";
-        fwtest::write_file(logged, csv);
+        const std::string logged = logger_record(flight, dir, std::to_string(flight));
 
         const FirmwareRun fw = run_monitor(flight_path(flight), "");
         const ReplayRun rp = run_replay(logged, config, host::CurrentSource::Auto);

@@ -71,10 +71,8 @@ public:
         // below cell 2 (ratio 2.4).
         float tap_artifact_ratio = 1.5f;
         bool last_cell_includes_lead = true;
-        // Until the short-lag differences are ready (a hover never gets there), the
-        // resistance verdict rests on the big steps. Those are few (two in a hover) and
-        // their noise is itself estimated from 8 samples, so a cell is named only when its
-        // excess is beyond the threshold by significance_sigmas, not merely beyond it.
+        // The resistance verdict also rests on the big steps, beside the short-lag
+        // differences (and alone in a hover, which never readies those).
         CellStepResistance::Config step;
     };
     enum Finding : uint8_t { kNone = 0, kHighResistance = 1, kLowCapacity = 2 };
@@ -100,7 +98,6 @@ public:
     // Every sample with valid cell voltages, on the ground as well: the steps' windows.
     void observe(const float* cell_v, int cells, float current_a) { steps_.update(cell_v, cells, current_a); }
     void break_history() { count_ = 0; }
-    const CellStepResistance::Status& step_status() const { return steps_.status(); }
     const Status& status() const { return status_; }
 
 private:
