@@ -419,6 +419,30 @@ TEST_CASE("Scenario files: each ablation is its original with only the named pla
     }
 }
 
+TEST_CASE("Scenario files: the truth runs to the cutoff the monitor is asked about", "[sim]") {
+    // The truth's remaining time runs to cutoff_v_per_cell (loaded); each scenario's monitor
+    // config names its own minimum flight voltage. Until the sixth session the truth said
+    // 3.3 V per cell against the configs' 3.325, so every column answered another question.
+    // Now the truth takes the config's unless the scenario sets its own.
+    const std::string src = std::string(BATTSIM_SOURCE_DIR) + "/configs/";
+    const std::vector<std::string> files =
+        find_scenario_files({src + "scenarios", src + "scenarios-holdout", src + "scenarios-ablation"});
+    REQUIRE(files.size() > 60);
+    for (const std::string& f : files) {
+        INFO(f);
+        const Scenario s = load_scenario(f);
+        CHECK(s.config.monitor.flight_time.min_flight_voltage_v ==
+              Approx(s.cutoff_v_per_cell * s.config.monitor.cells_in_series).epsilon(1e-6));
+    }
+    // sim-4s.json asks for 13.3 V: 3.325 V per cell. A scenario's own value wins.
+    const std::string healthy = src + "scenarios/4s-racing-healthy-a.json";
+    CHECK(load_scenario(healthy).cutoff_v_per_cell == Approx(3.325).epsilon(1e-6));
+    std::ifstream in(healthy);
+    nlohmann::json j = nlohmann::json::parse(in);
+    j["truth"]["cutoff_v_per_cell"] = 3.4;
+    CHECK(scenario_from_json(j, "x.json", src + "scenarios").cutoff_v_per_cell == 3.4);
+}
+
 TEST_CASE("The plant at 7 degC against flight 32: voltage against charge drawn", "[sim][data]") {
     // The shared flight 32 (a new CNHL 1500 mAh 4S at about 7 degC) and a simulated racing
     // flight in the same conditions: the IR-corrected pack voltage per cell, binned by

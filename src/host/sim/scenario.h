@@ -66,7 +66,9 @@ struct Scenario {
     bool initial_temperature_given = false;  // false: the pack starts at ambient
     ProfileParams profile;           // mean_power_w <= 0: 90 W (racing) or 35 W (hover) per cell × Ah/1.55
     SensorParams sensor;
-    double cutoff_v_per_cell = 3.3;  // loaded, on the low-passed pack voltage
+    // Loaded, on the low-passed pack voltage. Unless $.truth sets it: the monitor config's
+    // min_flight_voltage_v per cell, so the truth answers the question the monitor is asked.
+    double cutoff_v_per_cell = 3.3;
     double cutoff_filter_s = 5.0;
     double decimation_s = 1.0;       // truth series spacing
     double step_s = 0.002;           // plant integration step
