@@ -35,7 +35,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--out-dir", a->out_dir, "Write NAME.csv and NAME.truth.json here for every scenario");
     sub.add_option("--seed", a->seed, "Override the scenario's seed");
     sub.add_option("--format", a->format, "Override the log format: raw (4 cells only) or csv");
-    sub.add_option("--cutoff-v-per-cell", a->cutoff, "Override the truth's loaded cutoff voltage per cell (default 3.3)");
+    sub.add_option("--cutoff-v-per-cell", a->cutoff, "Override the truth's loaded cutoff voltage per cell (default: the monitor config's min_flight_voltage_v per cell)");
     return [a]() -> int {
         if (a->output.empty() == a->out_dir.empty()) {
             std::cerr << "battsim simulate: give exactly one of -o/--output (one scenario) or --out-dir\n";
