@@ -55,8 +55,8 @@ void CellStepResistance::update(const float* cell_v, int cells, float current_a)
     }
     // The current leaves a steady window: that window is the step's "before". (The mean
     // test first: the window's own check is the loop.)
-    if (!moving_ && count_ == kWindow && fabsf(current_a - sum_a_ / static_cast<float>(kWindow)) > band_a(sum_a_ / static_cast<float>(kWindow)) &&
-        ring_steady()) {
+    const float mean_a = sum_a_ / static_cast<float>(kWindow);
+    if (!moving_ && count_ == kWindow && fabsf(current_a - mean_a) > band_a(mean_a) && ring_steady()) {
         summarise(&before_);
         moving_ = true;
         waited_ = 0;
@@ -75,8 +75,8 @@ void CellStepResistance::update(const float* cell_v, int cells, float current_a)
     if (!moving_) return;
     ++waited_;
     // The newest sample near the mean first: a current still moving rarely passes it.
-    if (count_ == kWindow && fabsf(current_a - sum_a_ / static_cast<float>(kWindow)) <= band_a(sum_a_ / static_cast<float>(kWindow)) &&
-        ring_steady()) {
+    const float settled_mean_a = sum_a_ / static_cast<float>(kWindow);
+    if (count_ == kWindow && fabsf(current_a - settled_mean_a) <= band_a(settled_mean_a) && ring_steady()) {
         moving_ = false;  // settled: this window is the "after" (and the next step's "before")
         Window after;
         summarise(&after);
