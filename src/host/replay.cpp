@@ -59,6 +59,17 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     j["estimator"] = options.config.monitor.estimator == core::EstimatorKind::Joint ? "joint" : "reference";
     nlohmann::json body = summary.to_json(info.cell_count);
     for (auto it = body.begin(); it != body.end(); ++it) j[it.key()] = it.value();
+    // The joint cell check's step measurements at the end of the log (take-off, landing, the
+    // bursts' clean edges): how many, and each cell's ΔV/ΔI with its standard error.
+    if (options.config.monitor.estimator == core::EstimatorKind::Joint && info.cell_count > 0 && j["flight"].is_object()) {
+        const core::CellStepResistance::Status& st = monitor->cell_analyzer().step_status();
+        nlohmann::json r = nlohmann::json::array(), s = nlohmann::json::array();
+        for (int c = 0; c < info.cell_count && c < core::kMaxCells; ++c) {
+            r.push_back(st.steps > 0 ? nlohmann::json(round_sig(st.resistance_ohm[c], 4)) : nlohmann::json(nullptr));
+            s.push_back(st.steps > 0 ? nlohmann::json(round_sig(st.sigma_ohm[c], 2)) : nlohmann::json(nullptr));
+        }
+        j["flight"]["cell_steps"] = {{"count", st.steps}, {"resistance_ohm", r}, {"sigma_ohm", s}};
+    }
     if (series) series->commit();
     return j;
 }

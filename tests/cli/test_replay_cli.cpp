@@ -40,6 +40,27 @@ TEST_CASE("replay --json prints a parseable summary", "[cli]") {
     CHECK(j["flight"]["duration_s"].get<double>() == Approx(149 * 0.067 - 0.469).margin(0.07));
 }
 
+TEST_CASE("replay --estimator joint reports the cell step check's measurements", "[cli]") {
+    // One step, 0.25 → 20 A, every cell 0.15 V lower: 0.15 / 19.75 A = 7.59 mΩ each. The
+    // windows read one level throughout, so σ is the floor's: 2.5 mV · √(2/8) / 19.75 A.
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/ok.csv", raw_log());
+    auto r = run("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --estimator joint --json");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const auto steps = nlohmann::json::parse(r.out)["flight"]["cell_steps"];
+    INFO(steps.dump());
+    CHECK(steps["count"] == 1);
+    REQUIRE(steps["resistance_ohm"].size() == 4);
+    for (int c = 0; c < 4; ++c) {
+        CHECK(steps["resistance_ohm"][c].get<double>() == Approx(0.15 / 19.75).epsilon(0.01));
+        CHECK(steps["sigma_ohm"][c].get<double>() == Approx(0.0025 * 0.5 / 19.75).epsilon(0.02));
+    }
+    // The reference estimator has no step check.
+    r = run("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --json");
+    CHECK_FALSE(nlohmann::json::parse(r.out)["flight"].contains("cell_steps"));
+}
+
 TEST_CASE("replay writes series and summary files atomically", "[cli]") {
     const std::string dir = clitest::temp_dir();
     clitest::write_file(dir + "/ok.csv", raw_log());

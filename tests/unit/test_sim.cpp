@@ -421,9 +421,9 @@ TEST_CASE("Scenario files: each ablation is its original with only the named pla
 
 TEST_CASE("Scenario files: the truth runs to the cutoff the monitor is asked about", "[sim]") {
     // The truth's remaining time runs to cutoff_v_per_cell (loaded); each scenario's monitor
-    // config names its own minimum flight voltage. Until the sixth session the truth said
-    // 3.3 V per cell against the configs' 3.325, so every column answered another question.
-    // Now the truth takes the config's unless the scenario sets its own.
+    // config names its own minimum flight voltage. A fixed 3.3 V per cell against the
+    // configs' 3.325 had every column answer another question than the truth's, so the
+    // truth takes the config's unless the scenario sets its own.
     const std::string src = std::string(BATTSIM_SOURCE_DIR) + "/configs/";
     const std::vector<std::string> files =
         find_scenario_files({src + "scenarios", src + "scenarios-holdout", src + "scenarios-ablation"});
@@ -441,6 +441,15 @@ TEST_CASE("Scenario files: the truth runs to the cutoff the monitor is asked abo
     nlohmann::json j = nlohmann::json::parse(in);
     j["truth"]["cutoff_v_per_cell"] = 3.4;
     CHECK(scenario_from_json(j, "x.json", src + "scenarios").cutoff_v_per_cell == 3.4);
+    // A config whose minimum flight voltage is no cutoff (0 V) is named, with the way out.
+    json cfg = config_to_json(default_config());
+    cfg["monitor"]["min_flight_voltage_v"] = 0.0;
+    j.erase("truth");
+    CHECK_THROWS_WITH(scenario_from_json(j, "x.json", "", &cfg),
+                      Catch::Contains("x.json: $.monitor_config: its min_flight_voltage_v gives 0.0") &&
+                          Catch::Contains("set $.truth.cutoff_v_per_cell"));
+    j["truth"]["cutoff_v_per_cell"] = 3.3;
+    CHECK(scenario_from_json(j, "x.json", "", &cfg).cutoff_v_per_cell == 3.3);
 }
 
 TEST_CASE("The plant at 7 degC against flight 32: voltage against charge drawn", "[sim][data]") {

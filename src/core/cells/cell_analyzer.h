@@ -99,6 +99,7 @@ public:
     void observe(const float* cell_v, int cells, float current_a) { steps_.update(cell_v, cells, current_a); }
     void break_history() { count_ = 0; }
     const Status& status() const { return status_; }
+    const CellStepResistance::Status& step_status() const { return steps_.status(); }
 
 private:
     // others: the compared cells besides the judged one.

@@ -358,12 +358,12 @@ Scenario scenario_from_json(const json& j, const std::string& origin, const std:
                             std::to_string(s.pack.cells));
     }
     if (!cutoff_given) {
-        // The truth runs to the cutoff the monitor is asked about. (Until the sixth session
-        // it was 3.3 V per cell whatever the config said, 3.325 in all of the suite's.)
+        // The truth runs to the cutoff the monitor is asked about: a fixed one graded every
+        // column against a flight of another length than the one it predicts.
         const double v = static_cast<double>(s.config.monitor.flight_time.min_flight_voltage_v) / s.pack.cells;
         if (!(v >= 2.0 && v <= 4.5)) {
-            throw ScenarioError(origin + ": $.monitor_config: its min_flight_voltage_v is " + std::to_string(v) +
-                                " V per cell, outside 2..4.5; set $.truth.cutoff_v_per_cell");
+            throw ScenarioError(origin + ": $.monitor_config: its min_flight_voltage_v gives " + std::to_string(v) +
+                                " V per cell as the truth's cutoff, outside 2..4.5; set $.truth.cutoff_v_per_cell");
         }
         s.cutoff_v_per_cell = v;
     }
