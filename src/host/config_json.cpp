@@ -178,6 +178,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("cell_slow_current_ridge_a2", ca.slow_current_ridge_a2, 0, kBig);
         r.number("cell_tap_artifact_ratio", ca.tap_artifact_ratio, 0, 100);
         r.boolean("last_cell_includes_lead", ca.last_cell_includes_lead);
+        r.boolean("first_cell_includes_lead", ca.first_cell_includes_lead);
         r.number("cell_step_min_a", ca.step.min_step_a, 0, kBig);
         r.number("cell_step_band_a", ca.step.steady_band_a, 0, kBig);
         r.number("cell_step_band_fraction", ca.step.steady_band_fraction, 0, 1);
@@ -329,6 +330,7 @@ json config_to_json(const LoadedConfig& c) {
             {"cell_slow_current_ridge_a2", m.cell_analysis.slow_current_ridge_a2},
             {"cell_tap_artifact_ratio", m.cell_analysis.tap_artifact_ratio},
             {"last_cell_includes_lead", m.cell_analysis.last_cell_includes_lead},
+            {"first_cell_includes_lead", m.cell_analysis.first_cell_includes_lead},
             {"cell_step_min_a", m.cell_analysis.step.min_step_a},
             {"cell_step_band_a", m.cell_analysis.step.steady_band_a},
             {"cell_step_band_fraction", m.cell_analysis.step.steady_band_fraction},

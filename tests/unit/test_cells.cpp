@@ -315,3 +315,30 @@ TEST_CASE("Cell check: a cell is named for resistance only when it is over the b
     no_margin.significance_sigmas = 0.0f;
     CHECK(race(edge, 120.0f, no_margin).flagged_cell == 2);
 }
+
+TEST_CASE("Cell check: a first cell read against the monitor's ground is never named for resistance; the others still are",
+          "[cells][truth]") {
+    // first_cell_includes_lead: the reference logger reads cell 1 as tap 1 against its own
+    // ground, which may carry part of the main current's return path.
+    CellAnalyzer::Config lead;
+    lead.first_cell_includes_lead = true;
+    const float cell1[4] = {1.3f, 1.0f, 1.0f, 1.0f};
+    const float cell2[4] = {1.0f, 1.3f, 1.0f, 1.0f};
+    SECTION("short-lag differences (racing)") {
+        CHECK(race(cell1, 120.0f).flagged_cell == 0);  // the contrast: without the flag cell 1 is named
+        const CellAnalyzer::Status s = race(cell1, 120.0f, lead);
+        CHECK(s.flagged_cell == -1);
+        CHECK(s.resistance_ohm[0] / s.resistance_ohm[1] == Approx(1.3f).margin(0.02f));  // still measured and reported
+        // Cell 1 stays among the others: cell 2 is judged against the median of cells 1 and 3.
+        const CellAnalyzer::Status w = race(cell2, 120.0f, lead);
+        CHECK(w.flagged_cell == 1);
+        CHECK(w.finding == CellAnalyzer::kHighResistance);
+    }
+    SECTION("the take-off step (hover)") {
+        const float cell1_hover[4] = {1.6f, 1.0f, 1.0f, 1.0f};
+        const float cell2_hover[4] = {1.0f, 1.6f, 1.0f, 1.0f};
+        CHECK(hover(cell1_hover, 120.0f).first == 0);
+        CHECK(hover(cell1_hover, 120.0f, lead).first == -1);
+        CHECK(hover(cell2_hover, 120.0f, lead).first == 1);
+    }
+}

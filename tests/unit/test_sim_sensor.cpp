@@ -243,3 +243,35 @@ TEST_CASE("Sensor faults are visible in the log and leave the truth alone", "[si
         CHECK(max_gap > 900.0);
     }
 }
+
+TEST_CASE("A ground path carrying the main current: the bus and cell 1 read I·R low, the other cells not",
+          "[sim][sensor]") {
+    // The monitor's ground reaches the pack's negative also through the main lead: every
+    // reading against it (bus, tap 1 and up) is low by I·R. Cell 1 is tap 1 alone, cells 2–3
+    // are tap differences, cell 4 is bus − tap 3, so only the bus and cell 1 move.
+    const SimulationResult clean = simulate(scenario());
+    const SimulationResult wired = simulate(scenario(R"({"sensor": {"ground_lead_ohm": 0.002}})"));
+    const std::vector<RawRow> a = parse_raw(clean.log_text);
+    const std::vector<RawRow> b = parse_raw(wired.log_text);
+    REQUIRE(a.size() == b.size());
+    double current = 0, bus = 0, cell[4] = {};
+    int n = 0;
+    for (size_t k = 0; k < a.size(); ++k) {
+        if (a[k].t_ms < 35000 || a[k].t_ms > 120000) continue;  // in flight
+        current += a[k].current_ma / 1000.0;
+        bus += a[k].bus - b[k].bus;
+        for (int c = 0; c < 4; ++c) cell[c] += a[k].cell[c] - b[k].cell[c];
+        ++n;
+    }
+    REQUIRE(n > 1000);
+    const double drop_v = 0.002 * current / n;  // the flight's mean I·R (the shunt's offset is a few mA)
+    CHECK(drop_v > 0.03);
+    CHECK(bus / n == Approx(drop_v).epsilon(0.03));
+    CHECK(cell[0] / n == Approx(drop_v).epsilon(0.05));
+    for (int c = 1; c < 4; ++c) CHECK(std::fabs(cell[c] / n) < 0.1 * drop_v);
+    // Wiring, not a fault: the truth is the same, and the key round-trips (absent at 0).
+    CHECK_FALSE(wired.truth.sensor_faulty);
+    CHECK(wired.truth.total_flight_time_s == clean.truth.total_flight_time_s);
+    CHECK(truth_to_json(wired)["scenario"]["sensor"]["ground_lead_ohm"] == 0.002);
+    CHECK_FALSE(truth_to_json(clean)["scenario"]["sensor"].contains("ground_lead_ohm"));
+}

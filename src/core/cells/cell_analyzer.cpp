@@ -166,12 +166,16 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     status_.finding = kNone;
     float worst = 0.0f;
     // A resistance verdict needs at least two other cells to take a median of: against a
-    // single other cell, ordinary cell-to-cell spread reads as an outlier.
+    // single other cell, ordinary cell-to-cell spread reads as an outlier. A first cell read
+    // against the monitor's ground (first_cell_includes_lead) is never named for resistance,
+    // but stays among the others: its ground path can only raise their median, so it costs
+    // sensitivity, never a false alarm, and a 4S pack keeps two others per judged cell.
+    const int first_lead = config_.first_cell_includes_lead && lead_cell != 0 ? 0 : -1;
     const int compared = cells - 1 - (lead_cell >= 0 ? 1 : 0);
-    if (compared >= 2) step_verdict(cells, lead_cell, compared, &worst);
+    if (compared >= 2) step_verdict(cells, lead_cell, first_lead, compared, &worst);
     if (r_ready && compared >= 2) {
         for (int c = 0; c < cells; ++c) {
-            if (c == lead_cell) continue;
+            if (c == lead_cell || c == first_lead) continue;
             const float med = median_excluding(status_.resistance_ohm, cells, c, lead_cell);
             if (!(med > 0.0f)) continue;
             const float excess = status_.resistance_ohm[c] / med - 1.0f;
@@ -250,7 +254,7 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     }
 }
 
-void CellAnalyzer::step_verdict(int cells, int lead_cell, int others, float* worst) {
+void CellAnalyzer::step_verdict(int cells, int lead_cell, int first_lead, int others, float* worst) {
     const CellStepResistance::Status& st = steps_.status();
     if (st.steps == 0) return;
     // The steps change a few times a flight; their verdict is kept in between.
@@ -259,7 +263,7 @@ void CellAnalyzer::step_verdict(int cells, int lead_cell, int others, float* wor
         step_cell_ = -1;
         step_excess_ = 0.0f;
         for (int c = 0; c < cells; ++c) {
-            if (c == lead_cell) continue;
+            if (c == lead_cell || c == first_lead) continue;
             const float med = median_excluding(st.resistance_ohm, cells, c, lead_cell);
             if (!(med > 0.0f)) continue;
             float others_var = 0.0f;  // the median's variance, taken as the noisiest other's over their count

@@ -16,6 +16,7 @@
 // pack − last balance tap, so it carries the main lead and connector resistance; with
 // `last_cell_includes_lead` it is never compared with the others (its resistance carries the
 // lead, its drift mixes the two converters' gain errors); its values are still reported.
+// With `first_cell_includes_lead` the first cell is never named for resistance (see Config).
 #pragma once
 #include <stdint.h>
 
@@ -71,6 +72,14 @@ public:
         // below cell 2 (ratio 2.4).
         float tap_artifact_ratio = 1.5f;
         bool last_cell_includes_lead = true;
+        // The first cell is read as tap 1 against the monitor's ground. Where that ground
+        // also reaches the pack's negative through the main lead (the monitor powered from
+        // the drone), part of the main current's return path is in the reading: cell 1 then
+        // sags more per ampere than the cell does: it is never named for resistance (it
+        // still counts among the others' median, which a ground path can only raise). Its
+        // capacity drift is unaffected (the current regressors absorb an ohmic path) and
+        // still judged.
+        bool first_cell_includes_lead = false;
         // The resistance verdict also rests on the big steps, beside the short-lag
         // differences (and alone in a hover, which never readies those).
         CellStepResistance::Config step;
@@ -103,7 +112,7 @@ public:
 
 private:
     // others: the compared cells besides the judged one.
-    void step_verdict(int cells, int lead_cell, int others, float* worst);
+    void step_verdict(int cells, int lead_cell, int first_lead, int others, float* worst);
 
     static constexpr int kHistory = 8;
     CellStepResistance steps_;

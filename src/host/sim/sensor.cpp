@@ -185,15 +185,16 @@ void SensorChain::feed(double t_s, double dt_s, const TrueValues& v, bool airbor
     const double shunt_mv = (sensed_a * 1000.0 - static_cast<double>(p_.shunt.offset_ma)) *
                             static_cast<double>(p_.shunt.scale_mv_per_10a) / 10000.0;
 
-    acc226_.bus += v.voltage_v * dt_s;
+    const double ground_v = v.current_a * p_.ground_lead_ohm;  // the monitor's ground above the pack's negative
+    acc226_.bus += (v.voltage_v - ground_v) * dt_s;
     acc226_.shunt += shunt_mv * dt_s;
     acc226_.weight += dt_s;
     double tap = 0.0;
     for (int k = 0; k + 1 < cells_; ++k) {
         tap += v.cell_v[k];
-        double tv = tap;
+        double tv = tap - ground_v;
         // An open input floats to a few tens of millivolts.
-        if (k + 1 == f.loose_tap) tv = tap * (1.0 - open_weight) + 0.02 * open_weight;
+        if (k + 1 == f.loose_tap) tv = tv * (1.0 - open_weight) + 0.02 * open_weight;
         acc3221_.taps[k] += tv * dt_s;
     }
     acc3221_.weight += dt_s;

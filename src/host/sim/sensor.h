@@ -70,6 +70,11 @@ struct SensorParams {
     double bus_gain_sd = 0.0005;
     double tap_gain_sd = 0.001;
     double tap_offset_sd_v = 0.004;
+    // Wiring, not a fault: resistance of the main current's return path between the pack's
+    // negative (balance pin 0) and the monitor's ground, as when the monitor is also
+    // grounded through the drone (a BEC). Every reading against that ground (the bus and
+    // each tap) is low by I·R, so cell 1 and the pack read that much more resistance.
+    double ground_lead_ohm = 0.0;
     bool unit_given = false;  // true: use `unit` as is; false: draw it from the seed
     SensorUnit unit;
     core::ShuntCalibration shunt;
