@@ -1,5 +1,7 @@
 // Runs the battsim binary from the outside, as a user or a script would.
 #pragma once
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "test_files.h"
@@ -17,5 +19,13 @@ inline std::string temp_dir() { return testsupport::scratch_dir("cli"); }
 inline Result run(const std::string& args) { return testsupport::run_program(BATTSIM_BINARY, args); }
 
 inline std::string q(const std::string& s) { return testsupport::shell_quoted(s); }
+
+// Runs `args`, requires exit 0 (showing standard error if not) and parses standard output.
+inline nlohmann::json run_json(const std::string& args) {
+    const Result r = run(args);
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    return nlohmann::json::parse(r.out);
+}
 
 }  // namespace clitest

@@ -27,10 +27,7 @@ std::string raw_log(int rest_rows = 150, int load_rows = 150) {
 TEST_CASE("replay --json prints a parseable summary", "[cli]") {
     const std::string dir = clitest::temp_dir();
     clitest::write_file(dir + "/ok.csv", raw_log());
-    auto r = run("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --json");
-    INFO(r.err);
-    REQUIRE(r.exit_code == 0);
-    auto j = nlohmann::json::parse(r.out);
+    const auto j = clitest::run_json("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --json");
     CHECK(j["schema"] == "battsim.summary");
     CHECK(j["schema_version"] == 1);
     CHECK(j["samples"]["total"] == 300);
@@ -45,10 +42,8 @@ TEST_CASE("replay --estimator joint reports the cell step check's measurements",
     // windows read one level throughout, so σ is the floor's: 2.5 mV · √(2/8) / 19.75 A.
     const std::string dir = clitest::temp_dir();
     clitest::write_file(dir + "/ok.csv", raw_log());
-    auto r = run("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --estimator joint --json");
-    INFO(r.err);
-    REQUIRE(r.exit_code == 0);
-    const auto steps = nlohmann::json::parse(r.out)["flight"]["cell_steps"];
+    const auto steps =
+        clitest::run_json("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --estimator joint --json")["flight"]["cell_steps"];
     INFO(steps.dump());
     CHECK(steps["count"] == 1);
     REQUIRE(steps["resistance_ohm"].size() == 4);
@@ -57,8 +52,7 @@ TEST_CASE("replay --estimator joint reports the cell step check's measurements",
         CHECK(steps["sigma_ohm"][c].get<double>() == Approx(0.0025 * 0.5 / 19.75).epsilon(0.02));
     }
     // The reference estimator has no step check.
-    r = run("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --json");
-    CHECK_FALSE(nlohmann::json::parse(r.out)["flight"].contains("cell_steps"));
+    CHECK_FALSE(clitest::run_json("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --json")["flight"].contains("cell_steps"));
 }
 
 TEST_CASE("replay writes series and summary files atomically", "[cli]") {

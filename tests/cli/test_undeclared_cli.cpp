@@ -98,10 +98,7 @@ TEST_CASE("A ground path in cell 1's reading, undeclared: named as a bad cell; d
     REQUIRE(clitest::run("simulate '" + scenario_path + "' -o '" + log + "'").exit_code == 0);
 
     const auto replay = [&](const std::string& config) {
-        const clitest::Result r = clitest::run("replay '" + log + "' -c '" + config + "' --estimator joint --json");
-        INFO(r.err);
-        REQUIRE(r.exit_code == 0);
-        return json::parse(r.out);
+        return clitest::run_json("replay '" + log + "' -c '" + config + "' --estimator joint --json");
     };
     const auto named_cell = [](const json& summary) {
         for (const json& w : summary["warnings"])
