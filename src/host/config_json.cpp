@@ -150,6 +150,27 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("ocv_soc_sigma", jc.ekf.ocv_soc_sigma, 0, 1);
         r.number("offset_sigma0_a", jc.ekf.offset_sigma0_a, 0, 100);
         r.number("offset_process_a_per_sqrt_s", jc.ekf.offset_process_a_per_sqrt_s, 0, 10);
+        if (const json* h = r.member("health_filter")) {
+            ObjectReader rh(*h, r.child("health_filter"), origin);
+            core::JointEstimator::Config::HealthFilter& hf = jc.health;
+            rh.boolean("enabled", hf.enabled);
+            rh.number("polarisation_time_s", hf.polarisation_time_s, 0, kBig);
+            rh.number("polarisation_slow_time_s", hf.polarisation_slow_time_s, 0, kBig);
+            rh.number("polarisation_slow_share", hf.polarisation_slow_share, 0, 1);
+            rh.boolean("polarisation_follows_resistance", hf.polarisation_follows_resistance);
+            rh.number("voltage_sigma_v", hf.ekf.voltage_sigma_v, 1e-6, 100);
+            rh.number("soc_sigma0", hf.ekf.soc_sigma0, 0, 1);
+            rh.number("capacity_sigma0_fraction", hf.ekf.capacity_sigma0_fraction, 0, 10);
+            rh.number("polarisation_initial_ohm", hf.ekf.polarisation_initial_ohm, 0, 10);
+            rh.number("polarisation_sigma0_ohm", hf.ekf.polarisation_sigma0_ohm, 0, 10);
+            rh.number("soc_process_per_sqrt_s", hf.ekf.soc_process_per_sqrt_s, 0, 1);
+            rh.number("capacity_process_fraction_per_sqrt_s", hf.ekf.capacity_process_fraction_per_sqrt_s, 0, 1);
+            rh.number("polarisation_process_ohm_per_sqrt_s", hf.ekf.polarisation_process_ohm_per_sqrt_s, 0, 1);
+            rh.number("gate_sigmas", hf.ekf.gate_sigmas, 1, 1000);
+            rh.number("ocv_soc_sigma", hf.ekf.ocv_soc_sigma, 0, 1);
+            rh.number("offset_sigma0_a", hf.ekf.offset_sigma0_a, 0, 100);
+            rh.number("offset_process_a_per_sqrt_s", hf.ekf.offset_process_a_per_sqrt_s, 0, 10);
+        }
         r.number("offset_fault_a", jc.offset_fault_a, 0, kBig);
         r.number("offset_learn_max_current_a", jc.offset_learn_max_current_a, 0, kBig);
         r.number("rest_capacity_min_rest_s", jc.rest_capacity_min_rest_s, 0, kBig);
@@ -336,6 +357,26 @@ json config_to_json(const LoadedConfig& c) {
             {"cell_step_band_fraction", m.cell_analysis.step.steady_band_fraction},
             {"cell_step_noise_floor_v", m.cell_analysis.step.noise_floor_v},
             {"cell_step_max_wait_samples", m.cell_analysis.step.max_wait_samples},
+        };
+        const core::JointEstimator::Config::HealthFilter& hf = jc.health;
+        jj["health_filter"] = {
+            {"enabled", hf.enabled},
+            {"polarisation_time_s", hf.polarisation_time_s},
+            {"polarisation_slow_time_s", hf.polarisation_slow_time_s},
+            {"polarisation_slow_share", hf.polarisation_slow_share},
+            {"polarisation_follows_resistance", hf.polarisation_follows_resistance},
+            {"voltage_sigma_v", hf.ekf.voltage_sigma_v},
+            {"soc_sigma0", hf.ekf.soc_sigma0},
+            {"capacity_sigma0_fraction", hf.ekf.capacity_sigma0_fraction},
+            {"polarisation_initial_ohm", hf.ekf.polarisation_initial_ohm},
+            {"polarisation_sigma0_ohm", hf.ekf.polarisation_sigma0_ohm},
+            {"soc_process_per_sqrt_s", hf.ekf.soc_process_per_sqrt_s},
+            {"capacity_process_fraction_per_sqrt_s", hf.ekf.capacity_process_fraction_per_sqrt_s},
+            {"polarisation_process_ohm_per_sqrt_s", hf.ekf.polarisation_process_ohm_per_sqrt_s},
+            {"gate_sigmas", hf.ekf.gate_sigmas},
+            {"ocv_soc_sigma", hf.ekf.ocv_soc_sigma},
+            {"offset_sigma0_a", hf.ekf.offset_sigma0_a},
+            {"offset_process_a_per_sqrt_s", hf.ekf.offset_process_a_per_sqrt_s},
         };
         if (jc.ocv.points >= 2) {
             json t = json::array();

@@ -115,6 +115,25 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.ekf.offset_process_a_per_sqrt_s", c.joint.ekf.offset_process_a_per_sqrt_s);
     f("joint.ekf.min_capacity_fraction", c.joint.ekf.min_capacity_fraction);
     f("joint.ekf.max_capacity_fraction", c.joint.ekf.max_capacity_fraction);
+    f("joint.health.enabled", c.joint.health.enabled);
+    f("joint.health.ekf.voltage_sigma_v", c.joint.health.ekf.voltage_sigma_v);
+    f("joint.health.ekf.soc_sigma0", c.joint.health.ekf.soc_sigma0);
+    f("joint.health.ekf.capacity_sigma0_fraction", c.joint.health.ekf.capacity_sigma0_fraction);
+    f("joint.health.ekf.polarisation_initial_ohm", c.joint.health.ekf.polarisation_initial_ohm);
+    f("joint.health.ekf.polarisation_sigma0_ohm", c.joint.health.ekf.polarisation_sigma0_ohm);
+    f("joint.health.ekf.soc_process_per_sqrt_s", c.joint.health.ekf.soc_process_per_sqrt_s);
+    f("joint.health.ekf.capacity_process_fraction_per_sqrt_s", c.joint.health.ekf.capacity_process_fraction_per_sqrt_s);
+    f("joint.health.ekf.polarisation_process_ohm_per_sqrt_s", c.joint.health.ekf.polarisation_process_ohm_per_sqrt_s);
+    f("joint.health.ekf.gate_sigmas", c.joint.health.ekf.gate_sigmas);
+    f("joint.health.ekf.ocv_soc_sigma", c.joint.health.ekf.ocv_soc_sigma);
+    f("joint.health.ekf.offset_sigma0_a", c.joint.health.ekf.offset_sigma0_a);
+    f("joint.health.ekf.offset_process_a_per_sqrt_s", c.joint.health.ekf.offset_process_a_per_sqrt_s);
+    f("joint.health.ekf.min_capacity_fraction", c.joint.health.ekf.min_capacity_fraction);
+    f("joint.health.ekf.max_capacity_fraction", c.joint.health.ekf.max_capacity_fraction);
+    f("joint.health.polarisation_time_s", c.joint.health.polarisation_time_s);
+    f("joint.health.polarisation_slow_time_s", c.joint.health.polarisation_slow_time_s);
+    f("joint.health.polarisation_slow_share", c.joint.health.polarisation_slow_share);
+    f("joint.health.polarisation_follows_resistance", c.joint.health.polarisation_follows_resistance);
     f("joint.ocv.points", c.joint.ocv.points);
     for (int i = 0; i < core::kOcvTableMaxPoints; ++i) {
         f("joint.ocv.cell_voltage_v[" + std::to_string(i) + "]", c.joint.ocv.cell_voltage_v[i]);

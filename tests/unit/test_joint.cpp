@@ -3,6 +3,8 @@
 // resistance, one RC branch), not the Tremblay model the reference monitor runs.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 #include "core/estimate/capacity_ekf.h"
 #include "core/estimate/difference_resistance.h"
@@ -19,10 +21,12 @@ using testplant::Lcg;
 using testplant::lipo_table;
 using testplant::Plant;
 
-// The joint estimator with default settings on the LiPo table, for a 4S pack rated `rated`.
-JointEstimator table_estimator(const TremblayParams& rated) {
+// The joint estimator with default settings on the LiPo table, for a 4S pack rated `rated`
+// (health = false: the tracking filter alone, as before the health filter).
+JointEstimator table_estimator(const TremblayParams& rated, bool health = true) {
     JointEstimator::Config jc;
     jc.ocv = lipo_table();
+    jc.health.enabled = health;
     JointEstimator e;
     e.configure(jc, rated, 4);
     return e;
@@ -180,13 +184,15 @@ struct FlightResult {
 
 // Flies the plant at the demand profile until the loaded voltage reaches 13.3 V and
 // records the estimator at 20 % of that (true) flight time.
-FlightResult fly(float capacity_factor, float resistance_factor) {
+// rp_ohm, tau_s: the plant's one RC branch at resistance factor 1.
+FlightResult fly(float capacity_factor, float resistance_factor, bool health = true, float rp_ohm = 0.008f,
+                 float tau_s = 6.0f) {
     const float dt = 0.067f;
     TremblayParams rated;
     rated.capacity_ah = 1.5f;
     rated.internal_resistance_ohm = 0.025f;
     auto make_plant = [&]() {
-        Plant p{OcvCurve{}, 1.5f * capacity_factor, 0.025f * resistance_factor, 0.008f * resistance_factor, 6.0f};
+        Plant p{OcvCurve{}, 1.5f * capacity_factor, 0.025f * resistance_factor, rp_ohm * resistance_factor, tau_s};
         p.ocv.configure(lipo_table(), 4, rated);
         return p;
     };
@@ -203,7 +209,7 @@ FlightResult fly(float capacity_factor, float resistance_factor) {
     out.true_total_s = t;
     // Second pass: the estimator rides along.
     Plant p = make_plant();
-    JointEstimator e = table_estimator(rated);
+    JointEstimator e = table_estimator(rated, health);
     e.start(p.ocv.voltage_v(1.0f), 0.0f);
     Lcg rng;
     float v = p.ocv.voltage_v(1.0f);
@@ -228,8 +234,16 @@ FlightResult fly(float capacity_factor, float resistance_factor) {
 }  // namespace
 
 TEST_CASE("Joint estimator on injected packs: capacity, resistance, warnings by 20 %", "[joint][truth]") {
+    // This plant's one 6 s branch is neither filter's shape: the health filter (3 s and a
+    // 30 s share) reads the healthy pack 7 % low at 20 % where the tracking filter alone read
+    // 4 % low, and a pack 1.5 × as resistive 7.5 % low where that read 24 % low.
     const FlightResult healthy = fly(1.0f, 1.0f);
-    CHECK(healthy.at20.capacity_ah == Approx(1.5f).epsilon(0.05));
+    CHECK(healthy.at20.capacity_ah == Approx(1.5f).epsilon(0.08));
+    const FlightResult warmer = fly(1.0f, 1.5f);
+    CHECK(warmer.at20.capacity_ah == Approx(1.5f).epsilon(0.08));
+    const FlightResult warmer_tracking = fly(1.0f, 1.5f, false);
+    CHECK(warmer_tracking.at20.capacity_ah < 0.8f * 1.5f);  // the contrast: the tracking filter alone
+    CHECK(warmer_tracking.at20.remaining_time_s > 0.0f);
     CHECK(healthy.at20.resistance_ohm == Approx(0.025f).epsilon(0.06));
     CHECK_FALSE(healthy.warned);
     // Remaining time at 20 %, as a share of the true flight.
@@ -248,6 +262,27 @@ TEST_CASE("Joint estimator on injected packs: capacity, resistance, warnings by 
     if (resistive.warned) CHECK((resistive.cause & JointEstimator::kCauseResistance) != 0);
 }
 
+
+// Not run by default (hidden tag): capacity error at 20 % of the flight on one-branch
+// plants of other shapes than either filter's, tracking filter alone against the health
+// filter; docs/estimator.md quotes it. Run: build/tests/unit_tests "[survey]" -s
+TEST_CASE("Survey: capacity at 20 % on one-branch plants", "[.][survey]") {
+    const float packs[5][2] = {{1.0f, 1.0f}, {0.7f, 1.0f}, {0.8f, 1.0f}, {1.0f, 1.5f}, {0.8f, 1.5f}};
+    for (float tau_s : {2.0f, 6.0f, 20.0f}) {
+        for (float rp_ohm : {0.004f, 0.008f, 0.016f}) {
+            for (bool health : {false, true}) {
+                std::string row;
+                for (const auto& pk : packs) {
+                    const FlightResult r = fly(pk[0], pk[1], health, rp_ohm, tau_s);
+                    char cell[32];
+                    std::snprintf(cell, sizeof cell, " %+6.1f", 100.0f * (r.at20.capacity_ah / (1.5f * pk[0]) - 1.0f));
+                    row += cell;
+                }
+                WARN("tau " << tau_s << " s, Rp " << rp_ohm << " ohm, " << (health ? "health " : "tracking") << row);
+            }
+        }
+    }
+}
 
 TEST_CASE("OCV continued past full for a resting voltage above the table", "[joint]") {
     OcvCurve c;

@@ -21,14 +21,20 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     polarisation_current_.configure({config.polarisation_time_s});
     polarisation_slow_current_ = LowPassFilter{};
     polarisation_slow_current_.configure({config.polarisation_slow_time_s});
+    health_ekf_.configure(config.health.ekf, rated.capacity_ah);
+    health_current_ = LowPassFilter{};
+    health_current_.configure({config.health.polarisation_time_s});
+    health_slow_current_ = LowPassFilter{};
+    health_slow_current_.configure({config.health.polarisation_slow_time_s});
     status_ = Status{};
     status_.capacity_ah = rated.capacity_ah;
     status_.resistance_ohm = status_.effective_resistance_ohm = rated.internal_resistance_ohm;
     solve_ = kSolveRemaining;
-    flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = elapsed_at_solve_s_ = 0.0f;
+    flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = solve_started_s_ = 0.0f;
+    end_s_ = total_wh_ = solve_energy_wh_ = 0.0f;
     short_count_ = 0;
     was_flying_ = false;
-    polarisation_scale_ = 1.0f;
+    polarisation_scale_ = health_scale_ = 1.0f;
     polarisation_ref_ohm_ = 0.0f;
     start_soc_ = 1.0f;
     charge_total_ah_ = rest_s_ = 0.0f;
@@ -44,6 +50,9 @@ void JointEstimator::start(float voltage_v, float current_a) {
     start_soc_ = soc;
     polarisation_current_.reset(current_a);
     polarisation_slow_current_.reset(current_a);
+    health_ekf_.start(soc);
+    health_current_.reset(current_a);
+    health_slow_current_.reset(current_a);
     status_.started = true;
     status_.soc = clampf(soc, 0.0f, 1.0f);
 }
@@ -61,7 +70,8 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     flying = flying && (true_a >= takeoff_a || current_a >= config_.offset_learn_max_current_a);
     if (flying && !was_flying_) {
         // A take-off: the flight's accumulators start again.
-        flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = elapsed_at_solve_s_ = 0.0f;
+        flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = solve_started_s_ = 0.0f;
+        end_s_ = total_wh_ = solve_energy_wh_ = 0.0f;
         short_count_ = 0;
     }
     was_flying_ = flying;
@@ -120,8 +130,21 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     polarisation_scale_ = config_.polarisation_follows_resistance && polarisation_ref_ohm_ > 0.0f
                               ? r0 / polarisation_ref_ohm_
                               : 1.0f;
-    ekf_.correct(compensated_v, ip, (r_sigma * true_a) * (r_sigma * true_a), ocv_, learn,
-                 (ground && !taken_off_) || (flying && config_.learn_offset_in_flight), polarisation_scale_);
+    const float r0_var_v2 = (r_sigma * true_a) * (r_sigma * true_a);
+    const bool learn_offset = (ground && !taken_off_) || (flying && config_.learn_offset_in_flight);
+    ekf_.correct(compensated_v, ip, r0_var_v2, ocv_, learn, learn_offset, polarisation_scale_);
+    if (config_.health.enabled) {
+        const float w = config_.health.polarisation_slow_share;
+        float hip = health_current_.update(current_a, dt_s);
+        if (w > 0.0f) hip = (1.0f - w) * hip + w * health_slow_current_.update(current_a, dt_s);
+        health_ekf_.predict(current_a, dt_s, ground, config_.ground_soc_process_scale);
+        health_scale_ = config_.health.polarisation_follows_resistance && polarisation_ref_ohm_ > 0.0f
+                            ? r0 / polarisation_ref_ohm_
+                            : 1.0f;
+        health_ekf_.correct(compensated_v, hip, r0_var_v2, ocv_, learn, learn_offset, health_scale_);
+    } else {
+        health_scale_ = polarisation_scale_;
+    }
     const CapacityEkf::Status& es = ekf_.status();
     status_.current_offset_a = es.offset_a;
     status_.sigma_current_offset_a = es.sigma_offset_a;
@@ -151,8 +174,8 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         charge_since_takeoff_ah_ += true_a * dt_s / 3600.0f;
     }
     status_.soc = clampf(es.soc, 0.0f, 1.0f);
-    status_.capacity_ah = weakest_cell_ah(es.capacity_ah);
-    status_.sigma_capacity_ah = es.sigma_capacity_ah;
+    status_.capacity_ah = weakest_cell_ah(health().capacity_ah);
+    status_.sigma_capacity_ah = health().sigma_capacity_ah;
     status_.measured_resistance_ohm = rs.valid ? rs.resistance_now_ohm : 0.0f;
     status_.measured_resistance_sigma_ohm = rs.valid ? rs.sigma_now_ohm : 0.0f;
     status_.polarisation_ohm = es.polarisation_ohm * polarisation_scale_;
@@ -166,7 +189,8 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     }
     if (status_.time_valid) {
         // Between refreshes the remaining time runs down with the clock.
-        status_.remaining_time_s = maxf(0.0f, results_[kSolveRemaining] - (flying_s_ - elapsed_at_solve_s_));
+        status_.remaining_time_s = maxf(0.0f, end_s_ - flying_s_);
+        status_.remaining_energy_wh = maxf(0.0f, total_wh_ - flying_energy_j_ / 3600.0f);
     }
 }
 
@@ -197,20 +221,23 @@ float JointEstimator::fuse_with_prior(bool valid, float measured_ohm, float sigm
 }
 
 void JointEstimator::start_solve() {
-    const CapacityEkf::Status& es = ekf_.status();
+    // The remaining time follows the tracking filter; the verdict's four solves the health one.
+    const CapacityEkf::Status& es = solve_ == kSolveRemaining ? ekf_.status() : health();
     // The filter sees the mean cell; with a weak cell named, the solver steps the others
     // down and the weak one, a fraction (1 − deficit) of them, beside them.
     const float share = weakest_deficit_ > 0.0f ? 1.0f / static_cast<float>(cells_) : 0.0f;
     const float q = other_cells_ah(es.capacity_ah);
     const float ratio = 1.0f - weakest_deficit_;
-    const float r_total = status_.effective_resistance_ohm + status_.polarisation_ohm;
+    const float scale = solve_ == kSolveRemaining ? polarisation_scale_ : health_scale_;
+    const float r_total = status_.effective_resistance_ohm + es.polarisation_ohm * scale;
     // A healthy pack: rated resistance, and the polarisation the state holds at it.
     const float r_rated = rated_.internal_resistance_ohm + es.polarisation_ohm;
     // The charge at take-off as the present estimate sees it.
     const float soc_takeoff = clampf(es.soc + charge_since_takeoff_ah_ / es.capacity_ah, 0.0f, 1.0f);
     if (solve_ == kSolveRemaining) {
         solve_power_w_ = status_.mean_power_w;
-        elapsed_at_solve_s_ = flying_s_;
+        solve_started_s_ = flying_s_;
+        solve_energy_wh_ = flying_energy_j_ / 3600.0f;
     }
     const float p = solve_power_w_;
     const float v_min = config_.min_voltage_v;
@@ -227,7 +254,12 @@ void JointEstimator::start_solve() {
 void JointEstimator::finish_solve() {
     const PowerTimeSolver::Result& r = solver_.result();
     results_[solve_] = r.time_s;
-    if (solve_ == kSolveRemaining) status_.remaining_energy_wh = r.energy_wh;
+    if (solve_ == kSolveRemaining) {
+        // The result is the time (and energy) left when the solve began: both run down from
+        // then, and the previous result keeps its own start until this one replaces it.
+        end_s_ = solve_started_s_ + r.time_s;
+        total_wh_ = solve_energy_wh_ + r.energy_wh;
+    }
     solve_ = static_cast<uint8_t>((solve_ + 1) % kSolveCount);
     if (solve_ != kSolveRemaining) return;
 

@@ -1,0 +1,144 @@
+#!/usr/bin/env python3
+"""Random search over the joint estimator's filter settings, scored on a simulated suite.
+
+Each sample copies configs/ to a temporary directory, sets the sampled keys in the
+`joint` section (or, with --health, in `joint.health_filter`) of every monitor config the
+suites use, runs `battsim score --json` on the suite and appends one JSON line: the
+settings and the joint column's figures. At the end it prints the settings that no other
+sample beats on every figure at once (the trade-off frontier), best first by the issue's
+targets. Standard library only.
+
+    python3 scripts/joint-search.py --samples 250 --seed 1 --out /tmp/search.jsonl
+    python3 scripts/joint-search.py --samples 180 --around best.json --out /tmp/near.jsonl
+
+--around FILE samples log-normally (sigma 0.4) around the settings in FILE (a JSON object
+of keys), crossing them with a grid of polarisation shapes; without it the keys are drawn
+log-uniformly from the ranges below. The first line is always the committed settings.
+"""
+import argparse
+import itertools
+import json
+import math
+import os
+import random
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# The configs the suites' scenarios name as their monitor configs.
+MONITOR_CONFIGS = ["sim-4s.json", "sim-4s-1300.json", "sim-4s-1800.json",
+                   "generic-3s.json", "generic-6s.json", "reference-modified.json"]
+RANGES = {  # log-uniform ranges for the noise keys
+    "voltage_sigma_v": (0.01, 0.05),
+    "soc_sigma0": (0.01, 0.06),
+    "capacity_sigma0_fraction": (0.08, 0.3),
+    "polarisation_initial_ohm": (0.002, 0.012),
+    "polarisation_sigma0_ohm": (0.003, 0.03),
+    "soc_process_per_sqrt_s": (5e-5, 8e-4),
+    "capacity_process_fraction_per_sqrt_s": (5e-6, 8e-5),
+    "polarisation_process_ohm_per_sqrt_s": (2e-5, 5e-4),
+    "ocv_soc_sigma": (0.005, 0.05),
+}
+SHAPES = list(itertools.product([2, 3, 4], [20, 30, 40, 60], [0.1, 0.2, 0.3, 0.4, 0.5]))
+
+
+def log_uniform(rng, lo, hi):
+    return math.exp(rng.uniform(math.log(lo), math.log(hi)))
+
+
+def sample_random(rng):
+    p = {k: log_uniform(rng, lo, hi) for k, (lo, hi) in RANGES.items()}
+    p["polarisation_time_s"] = rng.choice([2, 3, 4, 5, 5, 7])
+    share = rng.choice([0, 0, 0, 0.2, 0.3, 0.45, 0.6])
+    if share > 0:
+        p["polarisation_slow_share"] = share
+        p["polarisation_slow_time_s"] = rng.choice([20, 30, 40, 60])
+    p["polarisation_follows_resistance"] = rng.random() < 0.3
+    return p
+
+
+def sample_around(rng, centre, k):
+    fast, slow, share = SHAPES[k % len(SHAPES)]
+    p = dict(centre)
+    p.update(polarisation_time_s=fast, polarisation_slow_time_s=slow, polarisation_slow_share=share)
+    if k >= len(SHAPES):  # after one pass over the shapes with the centre's noise keys
+        for key in RANGES:
+            if key in centre:
+                p[key] = centre[key] * math.exp(rng.gauss(0.0, 0.4))
+    return p
+
+
+def score(battsim, suite, settings, health):
+    with tempfile.TemporaryDirectory() as tmp:
+        configs = os.path.join(tmp, "configs")
+        shutil.copytree(os.path.join(ROOT, "configs"), configs)
+        for name in MONITOR_CONFIGS:
+            path = os.path.join(configs, name)
+            with open(path) as f:
+                c = json.load(f)
+            joint = c.setdefault("joint", {})
+            (joint.setdefault("health_filter", {}) if health else joint).update(settings)
+            with open(path, "w") as f:
+                json.dump(c, f)
+        out = os.path.join(tmp, "score.json")
+        r = subprocess.run([battsim, "score", "-j2", "--columns", "oracle,joint", "--json", "-o", out,
+                            os.path.join(configs, suite)], capture_output=True, text=True)
+        if r.returncode != 0:
+            return None
+        with open(out) as f:
+            d = json.load(f)
+    s = d["summary"]
+    joint = lambda k: s[k]["joint"]
+    above = [abs(f["estimators"]["joint"]["remaining_time_error_pct"][1]) -
+             abs(f["estimators"]["oracle"]["remaining_time_error_pct"][1]) for f in d["flights"]]
+    return {
+        "above_oracle_20": statistics.median(above), "above_oracle_20_largest": max(above),
+        "remaining_time_50": joint("remaining_time_50")["median_abs"],
+        "energy_20": joint("remaining_energy_20")["median_abs"],
+        "capacity_20": joint("capacity_20")["median_abs"], "capacity_end": joint("capacity_end")["median_abs"],
+        "early_warnings": joint("early_warnings")["count"], "false_warnings": joint("false_warnings")["count"],
+    }
+
+
+LOWER = ["above_oracle_20", "above_oracle_20_largest", "remaining_time_50", "energy_20", "capacity_20",
+         "capacity_end", "false_warnings"]
+
+
+def beats(a, b):  # a at least as good as b on every figure, better on one
+    pairs = [(a[k], b[k]) for k in LOWER] + [(-a["early_warnings"], -b["early_warnings"])]
+    return all(x <= y for x, y in pairs) and any(x < y for x, y in pairs)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--battsim", default=os.path.join(ROOT, "build", "battsim"))
+    ap.add_argument("--suite", default="scenarios", help="suite directory under configs/")
+    ap.add_argument("--samples", type=int, default=100)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--around", help="JSON file of settings to sample around")
+    ap.add_argument("--health", action="store_true", help="set the keys in joint.health_filter")
+    ap.add_argument("--out", required=True, help="JSON lines, appended")
+    a = ap.parse_args()
+    rng = random.Random(a.seed)
+    centre = json.load(open(a.around)) if a.around else None
+    with open(a.out, "a") as out:
+        rows = []
+        for k in range(-1, a.samples):
+            p = {} if k < 0 else (sample_around(rng, centre, k) if centre else sample_random(rng))
+            m = score(a.battsim, a.suite, p, a.health)
+            out.write(json.dumps({"settings": p, "figures": m}) + "\n")
+            out.flush()
+            if m:
+                rows.append((p, m))
+            print(f"{k + 1}/{a.samples}", file=sys.stderr)
+    front = [(p, m) for p, m in rows if not any(beats(m2, m) for _, m2 in rows)]
+    front.sort(key=lambda r: (-r[1]["early_warnings"], r[1]["false_warnings"], r[1]["above_oracle_20"]))
+    for p, m in front:
+        print(json.dumps({"figures": {k: round(v, 2) for k, v in m.items()}, "settings": p}))
+
+
+if __name__ == "__main__":
+    main()
