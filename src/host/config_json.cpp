@@ -34,6 +34,40 @@ json config_number(float x) {
 }
 
 namespace {
+// The capacity EKF's keys, read and written alike for the tracking filter (in `joint`)
+// and the health filter (in `joint.health_filter`).
+void read_ekf_keys(ObjectReader& r, core::CapacityEkf::Config& e) {
+    r.number("voltage_sigma_v", e.voltage_sigma_v, 1e-6, 100);
+    r.number("soc_sigma0", e.soc_sigma0, 0, 1);
+    r.number("capacity_sigma0_fraction", e.capacity_sigma0_fraction, 0, 10);
+    r.number("polarisation_initial_ohm", e.polarisation_initial_ohm, 0, 10);
+    r.number("polarisation_sigma0_ohm", e.polarisation_sigma0_ohm, 0, 10);
+    r.number("soc_process_per_sqrt_s", e.soc_process_per_sqrt_s, 0, 1);
+    r.number("capacity_process_fraction_per_sqrt_s", e.capacity_process_fraction_per_sqrt_s, 0, 1);
+    r.number("polarisation_process_ohm_per_sqrt_s", e.polarisation_process_ohm_per_sqrt_s, 0, 1);
+    r.number("gate_sigmas", e.gate_sigmas, 1, 1000);
+    r.number("ocv_soc_sigma", e.ocv_soc_sigma, 0, 1);
+    r.number("offset_sigma0_a", e.offset_sigma0_a, 0, 100);
+    r.number("offset_process_a_per_sqrt_s", e.offset_process_a_per_sqrt_s, 0, 10);
+}
+
+json ekf_keys_json(const core::CapacityEkf::Config& e) {
+    return {
+        {"voltage_sigma_v", e.voltage_sigma_v},
+        {"soc_sigma0", e.soc_sigma0},
+        {"capacity_sigma0_fraction", e.capacity_sigma0_fraction},
+        {"polarisation_initial_ohm", e.polarisation_initial_ohm},
+        {"polarisation_sigma0_ohm", e.polarisation_sigma0_ohm},
+        {"soc_process_per_sqrt_s", e.soc_process_per_sqrt_s},
+        {"capacity_process_fraction_per_sqrt_s", e.capacity_process_fraction_per_sqrt_s},
+        {"polarisation_process_ohm_per_sqrt_s", e.polarisation_process_ohm_per_sqrt_s},
+        {"gate_sigmas", e.gate_sigmas},
+        {"ocv_soc_sigma", e.ocv_soc_sigma},
+        {"offset_sigma0_a", e.offset_sigma0_a},
+        {"offset_process_a_per_sqrt_s", e.offset_process_a_per_sqrt_s},
+    };
+}
+
 // Every float of the config in its shortest exact form (the fields are all float).
 void shorten_floats(json& j) {
     if (j.is_number_float()) {
@@ -138,18 +172,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("polarisation_time_s", jc.polarisation_time_s, 0, kBig);
         r.number("polarisation_slow_time_s", jc.polarisation_slow_time_s, 0, kBig);
         r.number("polarisation_slow_share", jc.polarisation_slow_share, 0, 1);
-        r.number("voltage_sigma_v", jc.ekf.voltage_sigma_v, 1e-6, 100);
-        r.number("soc_sigma0", jc.ekf.soc_sigma0, 0, 1);
-        r.number("capacity_sigma0_fraction", jc.ekf.capacity_sigma0_fraction, 0, 10);
-        r.number("polarisation_initial_ohm", jc.ekf.polarisation_initial_ohm, 0, 10);
-        r.number("polarisation_sigma0_ohm", jc.ekf.polarisation_sigma0_ohm, 0, 10);
-        r.number("soc_process_per_sqrt_s", jc.ekf.soc_process_per_sqrt_s, 0, 1);
-        r.number("capacity_process_fraction_per_sqrt_s", jc.ekf.capacity_process_fraction_per_sqrt_s, 0, 1);
-        r.number("polarisation_process_ohm_per_sqrt_s", jc.ekf.polarisation_process_ohm_per_sqrt_s, 0, 1);
-        r.number("gate_sigmas", jc.ekf.gate_sigmas, 1, 1000);
-        r.number("ocv_soc_sigma", jc.ekf.ocv_soc_sigma, 0, 1);
-        r.number("offset_sigma0_a", jc.ekf.offset_sigma0_a, 0, 100);
-        r.number("offset_process_a_per_sqrt_s", jc.ekf.offset_process_a_per_sqrt_s, 0, 10);
+        read_ekf_keys(r, jc.ekf);
         if (const json* h = r.member("health_filter")) {
             ObjectReader rh(*h, r.child("health_filter"), origin);
             core::JointEstimator::Config::HealthFilter& hf = jc.health;
@@ -158,18 +181,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
             rh.number("polarisation_slow_time_s", hf.polarisation_slow_time_s, 0, kBig);
             rh.number("polarisation_slow_share", hf.polarisation_slow_share, 0, 1);
             rh.boolean("polarisation_follows_resistance", hf.polarisation_follows_resistance);
-            rh.number("voltage_sigma_v", hf.ekf.voltage_sigma_v, 1e-6, 100);
-            rh.number("soc_sigma0", hf.ekf.soc_sigma0, 0, 1);
-            rh.number("capacity_sigma0_fraction", hf.ekf.capacity_sigma0_fraction, 0, 10);
-            rh.number("polarisation_initial_ohm", hf.ekf.polarisation_initial_ohm, 0, 10);
-            rh.number("polarisation_sigma0_ohm", hf.ekf.polarisation_sigma0_ohm, 0, 10);
-            rh.number("soc_process_per_sqrt_s", hf.ekf.soc_process_per_sqrt_s, 0, 1);
-            rh.number("capacity_process_fraction_per_sqrt_s", hf.ekf.capacity_process_fraction_per_sqrt_s, 0, 1);
-            rh.number("polarisation_process_ohm_per_sqrt_s", hf.ekf.polarisation_process_ohm_per_sqrt_s, 0, 1);
-            rh.number("gate_sigmas", hf.ekf.gate_sigmas, 1, 1000);
-            rh.number("ocv_soc_sigma", hf.ekf.ocv_soc_sigma, 0, 1);
-            rh.number("offset_sigma0_a", hf.ekf.offset_sigma0_a, 0, 100);
-            rh.number("offset_process_a_per_sqrt_s", hf.ekf.offset_process_a_per_sqrt_s, 0, 10);
+            read_ekf_keys(rh, hf.ekf);
         }
         r.number("offset_fault_a", jc.offset_fault_a, 0, kBig);
         r.number("offset_learn_max_current_a", jc.offset_learn_max_current_a, 0, kBig);
@@ -312,18 +324,6 @@ json config_to_json(const LoadedConfig& c) {
             {"polarisation_time_s", jc.polarisation_time_s},
             {"polarisation_slow_time_s", jc.polarisation_slow_time_s},
             {"polarisation_slow_share", jc.polarisation_slow_share},
-            {"voltage_sigma_v", jc.ekf.voltage_sigma_v},
-            {"soc_sigma0", jc.ekf.soc_sigma0},
-            {"capacity_sigma0_fraction", jc.ekf.capacity_sigma0_fraction},
-            {"polarisation_initial_ohm", jc.ekf.polarisation_initial_ohm},
-            {"polarisation_sigma0_ohm", jc.ekf.polarisation_sigma0_ohm},
-            {"soc_process_per_sqrt_s", jc.ekf.soc_process_per_sqrt_s},
-            {"capacity_process_fraction_per_sqrt_s", jc.ekf.capacity_process_fraction_per_sqrt_s},
-            {"polarisation_process_ohm_per_sqrt_s", jc.ekf.polarisation_process_ohm_per_sqrt_s},
-            {"gate_sigmas", jc.ekf.gate_sigmas},
-            {"ocv_soc_sigma", jc.ekf.ocv_soc_sigma},
-            {"offset_sigma0_a", jc.ekf.offset_sigma0_a},
-            {"offset_process_a_per_sqrt_s", jc.ekf.offset_process_a_per_sqrt_s},
             {"offset_fault_a", jc.offset_fault_a},
             {"offset_learn_max_current_a", jc.offset_learn_max_current_a},
             {"rest_capacity_min_rest_s", jc.rest_capacity_min_rest_s},
@@ -358,26 +358,15 @@ json config_to_json(const LoadedConfig& c) {
             {"cell_step_noise_floor_v", m.cell_analysis.step.noise_floor_v},
             {"cell_step_max_wait_samples", m.cell_analysis.step.max_wait_samples},
         };
+        jj.update(ekf_keys_json(jc.ekf));
         const core::JointEstimator::Config::HealthFilter& hf = jc.health;
-        jj["health_filter"] = {
-            {"enabled", hf.enabled},
-            {"polarisation_time_s", hf.polarisation_time_s},
-            {"polarisation_slow_time_s", hf.polarisation_slow_time_s},
-            {"polarisation_slow_share", hf.polarisation_slow_share},
-            {"polarisation_follows_resistance", hf.polarisation_follows_resistance},
-            {"voltage_sigma_v", hf.ekf.voltage_sigma_v},
-            {"soc_sigma0", hf.ekf.soc_sigma0},
-            {"capacity_sigma0_fraction", hf.ekf.capacity_sigma0_fraction},
-            {"polarisation_initial_ohm", hf.ekf.polarisation_initial_ohm},
-            {"polarisation_sigma0_ohm", hf.ekf.polarisation_sigma0_ohm},
-            {"soc_process_per_sqrt_s", hf.ekf.soc_process_per_sqrt_s},
-            {"capacity_process_fraction_per_sqrt_s", hf.ekf.capacity_process_fraction_per_sqrt_s},
-            {"polarisation_process_ohm_per_sqrt_s", hf.ekf.polarisation_process_ohm_per_sqrt_s},
-            {"gate_sigmas", hf.ekf.gate_sigmas},
-            {"ocv_soc_sigma", hf.ekf.ocv_soc_sigma},
-            {"offset_sigma0_a", hf.ekf.offset_sigma0_a},
-            {"offset_process_a_per_sqrt_s", hf.ekf.offset_process_a_per_sqrt_s},
-        };
+        json h = ekf_keys_json(hf.ekf);
+        h["enabled"] = hf.enabled;
+        h["polarisation_time_s"] = hf.polarisation_time_s;
+        h["polarisation_slow_time_s"] = hf.polarisation_slow_time_s;
+        h["polarisation_slow_share"] = hf.polarisation_slow_share;
+        h["polarisation_follows_resistance"] = hf.polarisation_follows_resistance;
+        jj["health_filter"] = h;
         if (jc.ocv.points >= 2) {
             json t = json::array();
             for (int k = 0; k < jc.ocv.points; ++k) t.push_back(jc.ocv.cell_voltage_v[k]);
