@@ -13,7 +13,13 @@ targets. Standard library only.
 
 --around FILE samples log-normally (sigma 0.4) around the settings in FILE (a JSON object
 of keys), crossing them with a grid of polarisation shapes; without it the keys are drawn
-log-uniformly from the ranges below. The first line is always the committed settings.
+log-uniformly from the ranges below. --settings FILE scores those settings once (e.g. a line
+of an earlier search, on the held-out suite with --suite scenarios-holdout). The first line
+is always the committed settings. The eighth session's searches (docs/estimator.md):
+
+    python3 scripts/joint-search.py --no-health-filter --samples 250 --seed 1 --out one.jsonl
+    python3 scripts/joint-search.py --no-health-filter --around best.json --samples 240 --seed 2 --out near.jsonl
+    python3 scripts/joint-search.py --samples 70 --seed 7 --out tracking.jsonl
 """
 import argparse
 import itertools
@@ -50,28 +56,29 @@ def log_uniform(rng, lo, hi):
 
 
 def sample_random(rng):
-    p = {k: log_uniform(rng, lo, hi) for k, (lo, hi) in RANGES.items()}
-    p["polarisation_time_s"] = rng.choice([2, 3, 4, 5, 5, 7])
-    share = rng.choice([0, 0, 0, 0.2, 0.3, 0.45, 0.6])
+    p = {"polarisation_time_s": rng.choice([2, 3, 4, 5, 5, 7])}
+    share = rng.choice([0, 0, 0.2, 0.3, 0.45, 0.6])
     if share > 0:
         p["polarisation_slow_share"] = share
         p["polarisation_slow_time_s"] = rng.choice([20, 30, 40, 60])
+    for k, (lo, hi) in RANGES.items():
+        p[k] = log_uniform(rng, lo, hi)
     p["polarisation_follows_resistance"] = rng.random() < 0.3
     return p
 
 
-def sample_around(rng, centre, k):
-    fast, slow, share = SHAPES[k % len(SHAPES)]
+def sample_around(rng, centre, k, shapes):
+    fast, slow, share = shapes[k % len(shapes)]
     p = dict(centre)
     p.update(polarisation_time_s=fast, polarisation_slow_time_s=slow, polarisation_slow_share=share)
-    if k >= len(SHAPES):  # after one pass over the shapes with the centre's noise keys
+    if k >= len(shapes):  # after one pass over the shapes with the centre's noise keys
         for key in RANGES:
             if key in centre:
                 p[key] = centre[key] * math.exp(rng.gauss(0.0, 0.4))
     return p
 
 
-def score(battsim, suite, settings, health):
+def score(battsim, suite, settings, health, health_off):
     with tempfile.TemporaryDirectory() as tmp:
         configs = os.path.join(tmp, "configs")
         shutil.copytree(os.path.join(ROOT, "configs"), configs)
@@ -80,6 +87,8 @@ def score(battsim, suite, settings, health):
             with open(path) as f:
                 c = json.load(f)
             joint = c.setdefault("joint", {})
+            if health_off:
+                joint.setdefault("health_filter", {})["enabled"] = False
             (joint.setdefault("health_filter", {}) if health else joint).update(settings)
             with open(path, "w") as f:
                 json.dump(c, f)
@@ -87,6 +96,7 @@ def score(battsim, suite, settings, health):
         r = subprocess.run([battsim, "score", "-j2", "--columns", "oracle,joint", "--json", "-o", out,
                             os.path.join(configs, suite)], capture_output=True, text=True)
         if r.returncode != 0:
+            print(f"joint-search: battsim score failed for {json.dumps(settings)}:\n{r.stderr}", file=sys.stderr)
             return None
         with open(out) as f:
             d = json.load(f)
@@ -120,15 +130,28 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--around", help="JSON file of settings to sample around")
     ap.add_argument("--health", action="store_true", help="set the keys in joint.health_filter")
+    ap.add_argument("--no-health-filter", action="store_true", help="switch the health filter off (one filter, as before it)")
+    ap.add_argument("--settings", help="JSON file of settings: score these once (after the committed ones) and stop")
     ap.add_argument("--out", required=True, help="JSON lines, appended")
     a = ap.parse_args()
     rng = random.Random(a.seed)
     centre = json.load(open(a.around)) if a.around else None
+    shapes = list(SHAPES)
+    if centre:
+        rng.shuffle(shapes)
+    if a.settings:
+        fixed = json.load(open(a.settings))
+        a.samples = 1
     with open(a.out, "a") as out:
         rows = []
         for k in range(-1, a.samples):
-            p = {} if k < 0 else (sample_around(rng, centre, k) if centre else sample_random(rng))
-            m = score(a.battsim, a.suite, p, a.health)
+            if k < 0:
+                p = {}
+            elif a.settings:
+                p = fixed
+            else:
+                p = sample_around(rng, centre, k, shapes) if centre else sample_random(rng)
+            m = score(a.battsim, a.suite, p, a.health, a.no_health_filter)
             out.write(json.dumps({"settings": p, "figures": m}) + "\n")
             out.flush()
             if m:

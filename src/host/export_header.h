@@ -19,6 +19,25 @@
 namespace battsim {
 namespace host {
 
+// The capacity EKF's fields under `prefix` (the tracking and the health filter share them).
+template <typename Ekf, typename F>
+void visit_ekf_config(const std::string& prefix, Ekf& e, F& f) {
+    f(prefix + "voltage_sigma_v", e.voltage_sigma_v);
+    f(prefix + "soc_sigma0", e.soc_sigma0);
+    f(prefix + "capacity_sigma0_fraction", e.capacity_sigma0_fraction);
+    f(prefix + "polarisation_initial_ohm", e.polarisation_initial_ohm);
+    f(prefix + "polarisation_sigma0_ohm", e.polarisation_sigma0_ohm);
+    f(prefix + "soc_process_per_sqrt_s", e.soc_process_per_sqrt_s);
+    f(prefix + "capacity_process_fraction_per_sqrt_s", e.capacity_process_fraction_per_sqrt_s);
+    f(prefix + "polarisation_process_ohm_per_sqrt_s", e.polarisation_process_ohm_per_sqrt_s);
+    f(prefix + "gate_sigmas", e.gate_sigmas);
+    f(prefix + "ocv_soc_sigma", e.ocv_soc_sigma);
+    f(prefix + "offset_sigma0_a", e.offset_sigma0_a);
+    f(prefix + "offset_process_a_per_sqrt_s", e.offset_process_a_per_sqrt_s);
+    f(prefix + "min_capacity_fraction", e.min_capacity_fraction);
+    f(prefix + "max_capacity_fraction", e.max_capacity_fraction);
+}
+
 // Calls f(path, member) for every field of a MonitorConfig (const or not). Array
 // elements come one by one ("joint.ocv.cell_voltage_v[3]").
 template <typename Config, typename F>
@@ -101,35 +120,9 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.hover_resistance.min_excitation_a2", c.joint.hover_resistance.min_excitation_a2);
     f("joint.hover_resistance.initial_resistance_ohm", c.joint.hover_resistance.initial_resistance_ohm);
     f("joint.hover_resistance.trend_sigma_per_s", c.joint.hover_resistance.trend_sigma_per_s);
-    f("joint.ekf.voltage_sigma_v", c.joint.ekf.voltage_sigma_v);
-    f("joint.ekf.soc_sigma0", c.joint.ekf.soc_sigma0);
-    f("joint.ekf.capacity_sigma0_fraction", c.joint.ekf.capacity_sigma0_fraction);
-    f("joint.ekf.polarisation_initial_ohm", c.joint.ekf.polarisation_initial_ohm);
-    f("joint.ekf.polarisation_sigma0_ohm", c.joint.ekf.polarisation_sigma0_ohm);
-    f("joint.ekf.soc_process_per_sqrt_s", c.joint.ekf.soc_process_per_sqrt_s);
-    f("joint.ekf.capacity_process_fraction_per_sqrt_s", c.joint.ekf.capacity_process_fraction_per_sqrt_s);
-    f("joint.ekf.polarisation_process_ohm_per_sqrt_s", c.joint.ekf.polarisation_process_ohm_per_sqrt_s);
-    f("joint.ekf.gate_sigmas", c.joint.ekf.gate_sigmas);
-    f("joint.ekf.ocv_soc_sigma", c.joint.ekf.ocv_soc_sigma);
-    f("joint.ekf.offset_sigma0_a", c.joint.ekf.offset_sigma0_a);
-    f("joint.ekf.offset_process_a_per_sqrt_s", c.joint.ekf.offset_process_a_per_sqrt_s);
-    f("joint.ekf.min_capacity_fraction", c.joint.ekf.min_capacity_fraction);
-    f("joint.ekf.max_capacity_fraction", c.joint.ekf.max_capacity_fraction);
+    visit_ekf_config("joint.ekf.", c.joint.ekf, f);
     f("joint.health.enabled", c.joint.health.enabled);
-    f("joint.health.ekf.voltage_sigma_v", c.joint.health.ekf.voltage_sigma_v);
-    f("joint.health.ekf.soc_sigma0", c.joint.health.ekf.soc_sigma0);
-    f("joint.health.ekf.capacity_sigma0_fraction", c.joint.health.ekf.capacity_sigma0_fraction);
-    f("joint.health.ekf.polarisation_initial_ohm", c.joint.health.ekf.polarisation_initial_ohm);
-    f("joint.health.ekf.polarisation_sigma0_ohm", c.joint.health.ekf.polarisation_sigma0_ohm);
-    f("joint.health.ekf.soc_process_per_sqrt_s", c.joint.health.ekf.soc_process_per_sqrt_s);
-    f("joint.health.ekf.capacity_process_fraction_per_sqrt_s", c.joint.health.ekf.capacity_process_fraction_per_sqrt_s);
-    f("joint.health.ekf.polarisation_process_ohm_per_sqrt_s", c.joint.health.ekf.polarisation_process_ohm_per_sqrt_s);
-    f("joint.health.ekf.gate_sigmas", c.joint.health.ekf.gate_sigmas);
-    f("joint.health.ekf.ocv_soc_sigma", c.joint.health.ekf.ocv_soc_sigma);
-    f("joint.health.ekf.offset_sigma0_a", c.joint.health.ekf.offset_sigma0_a);
-    f("joint.health.ekf.offset_process_a_per_sqrt_s", c.joint.health.ekf.offset_process_a_per_sqrt_s);
-    f("joint.health.ekf.min_capacity_fraction", c.joint.health.ekf.min_capacity_fraction);
-    f("joint.health.ekf.max_capacity_fraction", c.joint.health.ekf.max_capacity_fraction);
+    visit_ekf_config("joint.health.ekf.", c.joint.health.ekf, f);
     f("joint.health.polarisation_time_s", c.joint.health.polarisation_time_s);
     f("joint.health.polarisation_slow_time_s", c.joint.health.polarisation_slow_time_s);
     f("joint.health.polarisation_slow_share", c.joint.health.polarisation_slow_share);

@@ -11,7 +11,14 @@ TEST_CASE("Config JSON round-trips", "[config]") {
     c.monitor.warnings.cell_outlier_score = 0.7f;
     c.monitor.cell_analysis.step.steady_band_fraction = 0.2f;
     c.monitor.cell_analysis.step.max_wait_samples = 20;
+    c.monitor.joint.health.enabled = false;
+    c.monitor.joint.health.ekf.voltage_sigma_v = 0.031f;
+    c.monitor.joint.health.polarisation_slow_share = 0.35f;
     LoadedConfig back = config_from_json(config_to_json(c), "test");
+    CHECK_FALSE(back.monitor.joint.health.enabled);
+    CHECK(back.monitor.joint.health.ekf.voltage_sigma_v == 0.031f);
+    CHECK(back.monitor.joint.health.polarisation_slow_share == 0.35f);
+    CHECK(back.monitor.joint.ekf.voltage_sigma_v == c.monitor.joint.ekf.voltage_sigma_v);  // the two filters' keys apart
     CHECK(back.monitor.cell_analysis.step.steady_band_fraction == 0.2f);
     CHECK(back.monitor.cell_analysis.step.max_wait_samples == 20);
     CHECK(back.monitor.battery.capacity_ah == 2.2f);
@@ -39,6 +46,14 @@ TEST_CASE("Config errors name the key", "[config]") {
     j = config_to_json(default_config());
     j["joint"]["cell_step_band_fraction"] = 2;
     CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("$.joint.cell_step_band_fraction") &&
+                                                           Catch::Contains("out of range"));
+
+    j = config_to_json(default_config());
+    j["joint"]["health_filter"]["enable"] = true;
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("$.joint.health_filter.enable: unknown key"));
+    j = config_to_json(default_config());
+    j["joint"]["health_filter"]["polarisation_slow_share"] = 1.5;
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("$.joint.health_filter.polarisation_slow_share") &&
                                                            Catch::Contains("out of range"));
 
     j = config_to_json(default_config());

@@ -127,9 +127,8 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     // The polarisation state is held at the ohmic resistance when learning began; from
     // then on the polarisation the voltage sees moves in proportion with R0.
     if (learn && !(polarisation_ref_ohm_ > 0.0f)) polarisation_ref_ohm_ = r0;
-    polarisation_scale_ = config_.polarisation_follows_resistance && polarisation_ref_ohm_ > 0.0f
-                              ? r0 / polarisation_ref_ohm_
-                              : 1.0f;
+    const float follow = polarisation_ref_ohm_ > 0.0f ? r0 / polarisation_ref_ohm_ : 1.0f;
+    polarisation_scale_ = config_.polarisation_follows_resistance ? follow : 1.0f;
     const float r0_var_v2 = (r_sigma * true_a) * (r_sigma * true_a);
     const bool learn_offset = (ground && !taken_off_) || (flying && config_.learn_offset_in_flight);
     ekf_.correct(compensated_v, ip, r0_var_v2, ocv_, learn, learn_offset, polarisation_scale_);
@@ -138,9 +137,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         float hip = health_current_.update(current_a, dt_s);
         if (w > 0.0f) hip = (1.0f - w) * hip + w * health_slow_current_.update(current_a, dt_s);
         health_ekf_.predict(current_a, dt_s, ground, config_.ground_soc_process_scale);
-        health_scale_ = config_.health.polarisation_follows_resistance && polarisation_ref_ohm_ > 0.0f
-                            ? r0 / polarisation_ref_ohm_
-                            : 1.0f;
+        health_scale_ = config_.health.polarisation_follows_resistance ? follow : 1.0f;
         health_ekf_.correct(compensated_v, hip, r0_var_v2, ocv_, learn, learn_offset, health_scale_);
     } else {
         health_scale_ = polarisation_scale_;
