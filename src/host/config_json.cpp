@@ -181,6 +181,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
             rh.number("polarisation_slow_time_s", hf.polarisation_slow_time_s, 0, kBig);
             rh.number("polarisation_slow_share", hf.polarisation_slow_share, 0, 1);
             rh.boolean("polarisation_follows_resistance", hf.polarisation_follows_resistance);
+            rh.boolean("first_resistance_soc_correction", hf.first_resistance_soc_correction);
             read_ekf_keys(rh, hf.ekf);
         }
         r.number("offset_fault_a", jc.offset_fault_a, 0, kBig);
@@ -192,6 +193,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("resistance_settle_s", jc.resistance_settle_s, 0, kBig);
         r.boolean("learn_offset_in_flight", jc.learn_offset_in_flight);
         r.boolean("polarisation_follows_resistance", jc.polarisation_follows_resistance);
+        r.boolean("first_resistance_soc_correction", jc.first_resistance_soc_correction);
         r.number("solver_steps", jc.solver_steps, 2, 1000);
         r.number("solver_steps_per_update", jc.solver_steps_per_update, 1, 1000);
         r.number("short_flight_fraction", jc.short_flight_fraction, 0, 1);
@@ -333,6 +335,7 @@ json config_to_json(const LoadedConfig& c) {
             {"resistance_settle_s", jc.resistance_settle_s},
             {"learn_offset_in_flight", jc.learn_offset_in_flight},
             {"polarisation_follows_resistance", jc.polarisation_follows_resistance},
+            {"first_resistance_soc_correction", jc.first_resistance_soc_correction},
             {"solver_steps", jc.solver_steps},
             {"solver_steps_per_update", jc.solver_steps_per_update},
             {"short_flight_fraction", jc.short_flight_fraction},
@@ -366,6 +369,7 @@ json config_to_json(const LoadedConfig& c) {
         h["polarisation_slow_time_s"] = hf.polarisation_slow_time_s;
         h["polarisation_slow_share"] = hf.polarisation_slow_share;
         h["polarisation_follows_resistance"] = hf.polarisation_follows_resistance;
+        h["first_resistance_soc_correction"] = hf.first_resistance_soc_correction;
         jj["health_filter"] = h;
         if (jc.ocv.points >= 2) {
             json t = json::array();

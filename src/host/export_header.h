@@ -127,6 +127,7 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.health.polarisation_slow_time_s", c.joint.health.polarisation_slow_time_s);
     f("joint.health.polarisation_slow_share", c.joint.health.polarisation_slow_share);
     f("joint.health.polarisation_follows_resistance", c.joint.health.polarisation_follows_resistance);
+    f("joint.health.first_resistance_soc_correction", c.joint.health.first_resistance_soc_correction);
     f("joint.ocv.points", c.joint.ocv.points);
     for (int i = 0; i < core::kOcvTableMaxPoints; ++i) {
         f("joint.ocv.cell_voltage_v[" + std::to_string(i) + "]", c.joint.ocv.cell_voltage_v[i]);
@@ -147,6 +148,7 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.offset_fault_a", c.joint.offset_fault_a);
     f("joint.learn_offset_in_flight", c.joint.learn_offset_in_flight);
     f("joint.polarisation_follows_resistance", c.joint.polarisation_follows_resistance);
+    f("joint.first_resistance_soc_correction", c.joint.first_resistance_soc_correction);
     f("joint.offset_learn_max_current_a", c.joint.offset_learn_max_current_a);
     f("joint.rest_capacity_min_rest_s", c.joint.rest_capacity_min_rest_s);
     f("joint.rest_capacity_max_current_a", c.joint.rest_capacity_max_current_a);

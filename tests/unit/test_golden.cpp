@@ -7,8 +7,23 @@
 
 #include "host/replay.h"
 #include "host/report/json_compare.h"
+#include "host/score/estimator.h"
+#include "host/score/scoreboard.h"
+#include "host/sim/scenario.h"
 
 using namespace battsim::host;
+
+namespace {
+std::string golden_diff(const std::string& golden_path, const nlohmann::json& actual, CompareOptions co) {
+    std::ifstream in(golden_path);
+    if (!in.good()) return "  cannot read " + golden_path + "\n";
+    const nlohmann::json golden = nlohmann::json::parse(in);
+    co.relative_tolerance = 1e-5;  // 6-significant-digit rounding may flip a last digit
+    std::string report;
+    for (const auto& d : compare_json(golden, actual, co)) report += "  " + d.path + ": golden " + d.expected + ", now " + d.actual + "\n";
+    return report;
+}
+}  // namespace
 
 TEST_CASE("Golden summaries of the predictive-bms flights", "[golden][data]") {
     const std::string data = BATTSIM_DATA_DIR;
@@ -32,6 +47,41 @@ TEST_CASE("Golden summaries of the predictive-bms flights", "[golden][data]") {
             INFO(set << " flight " << flight << " changed:\n" << report);
             CHECK(diffs.empty());
         }
+    }
+}
+
+TEST_CASE("Golden summaries of the predictive-bms flights, joint estimator", "[golden][data]") {
+    ReplayOptions opt;
+    opt.config = load_config_file(std::string(BATTSIM_SOURCE_DIR) + "/configs/sim-4s.json");
+    opt.config.monitor.estimator = battsim::core::EstimatorKind::Joint;
+    for (const char* flight : {"29", "30", "32", "34"}) {
+        const std::string golden = std::string(BATTSIM_SOURCE_DIR) + "/tests/golden/predictive-bms-joint/" + flight + ".json";
+        const nlohmann::json actual = replay_log(std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/" + flight + ".csv", opt);
+        CompareOptions co;
+        co.ignore = {"/input/path", "/battsim_version"};
+        const std::string report = golden_diff(golden, actual, co);
+        INFO("joint, flight " << flight << " changed:\n" << report);
+        CHECK(report.empty());
+    }
+}
+
+// The scoreboard as change indication: every estimator's numbers on both simulated suites.
+// A change is either a bug or an intended change of the numbers (scripts/update-goldens.sh;
+// say in the commit what moved and why).
+TEST_CASE("Golden scoreboards of the simulated suites", "[golden]") {
+    for (const char* suite : {"scenarios", "scenarios-holdout"}) {
+        const std::string dir = std::string(BATTSIM_SOURCE_DIR) + "/configs/" + suite;
+        std::vector<sim::Scenario> scenarios;
+        for (const std::string& f : sim::find_scenario_files({dir})) scenarios.push_back(sim::load_scenario(f));
+        score::ScoreOptions so;
+        so.jobs = 2;
+        const nlohmann::json actual = score::to_json(score::score_scenarios(scenarios, score::standard_columns(), so));
+        CompareOptions co;
+        co.ignore = {"/battsim_version"};
+        const std::string report =
+            golden_diff(std::string(BATTSIM_SOURCE_DIR) + "/tests/golden/score/" + suite + ".json", actual, co);
+        INFO(suite << " changed:\n" << report);
+        CHECK(report.empty());
     }
 }
 

@@ -95,6 +95,7 @@ void CapacityEkf::correct(float y_v, float ip_a, float extra_var_v2, const OcvCu
     const float predicted = ocv_v - x_[2] * ip_true;
     const float nu = y_v - predicted;
     status_.innovation_v = nu;
+    status_.soc_gain_per_v = 0.0f;
 
     float ph[kN];  // P·Hᵀ
     for (int r = 0; r < kN; ++r) ph[r] = p_[r][0] * hx[0] + p_[r][2] * hx[2];
@@ -111,6 +112,7 @@ void CapacityEkf::correct(float y_v, float ip_a, float extra_var_v2, const OcvCu
     if (!learn_parameters) k[1] = k[2] = 0.0f;  // the Joseph update below stays valid for any gain
     if (!learn_offset) k[3] = 0.0f;
     for (int r = 0; r < kN; ++r) x_[r] += k[r] * nu;
+    status_.soc_gain_per_v = k[0];
 
     // Joseph form: P ← (I − K H) P (I − K H)ᵀ + K R Kᵀ keeps P symmetric and positive.
     // With A = I − K H: A P = P − K (H P), and (A P) Aᵀ = A P − (A P H) Kᵀ.
@@ -129,6 +131,11 @@ void CapacityEkf::correct(float y_v, float ip_a, float extra_var_v2, const OcvCu
     x_[0] = clampf(x_[0], -0.05f, 1.05f);
     x_[1] = clampf(x_[1], config_.min_capacity_fraction * rated_ah_, config_.max_capacity_fraction * rated_ah_);
     x_[2] = clampf(x_[2], 0.0f, 1.0f);
+    publish();
+}
+
+void CapacityEkf::shift_soc(float dsoc) {
+    x_[0] = clampf(x_[0] + dsoc, -0.05f, 1.05f);
     publish();
 }
 

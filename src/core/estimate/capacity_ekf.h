@@ -46,6 +46,7 @@ public:
         float sigma_offset_a = 0.0f;
         float innovation_v = 0.0f;
         float ocv_slope_v_per_soc = 0.0f;  // dOCV/dSOC at the last correction's prior SOC
+        float soc_gain_per_v = 0.0f;       // the last correction's state-of-charge gain (0: none made)
         uint32_t rejected = 0;
     };
 
@@ -70,6 +71,8 @@ public:
     // resistance over the rated one), so the polarisation follows the pack as it warms.
     void correct(float y_v, float ip_a, float extra_var_v2, const OcvCurve& ocv,
                  bool learn_parameters = true, bool learn_offset = true, float polarisation_scale = 1.0f);
+    // Moves the state of charge alone (a correction worked out outside the filter).
+    void shift_soc(float dsoc);
     const Status& status() const { return status_; }
 
 private:

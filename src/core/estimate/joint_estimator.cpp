@@ -35,6 +35,7 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     short_count_ = 0;
     was_flying_ = false;
     polarisation_scale_ = health_scale_ = 1.0f;
+    soc_per_ohm_ = health_soc_per_ohm_ = 0.0f;
     polarisation_ref_ohm_ = 0.0f;
     start_soc_ = 1.0f;
     charge_total_ah_ = rest_s_ = 0.0f;
@@ -126,12 +127,21 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     const bool learn = flying && !ground && (resistance_.status().valid || settled);
     // The polarisation state is held at the ohmic resistance when learning began; from
     // then on the polarisation the voltage sees moves in proportion with R0.
-    if (learn && !(polarisation_ref_ohm_ > 0.0f)) polarisation_ref_ohm_ = r0;
+    if (learn && !(polarisation_ref_ohm_ > 0.0f)) {
+        polarisation_ref_ohm_ = r0;
+        // Learning starts on the first measured R0 (or the prior, settled): the state of
+        // charge takes what R0 would have moved it by from take-off.
+        const float dr_ohm = r0 - rated_.internal_resistance_ohm;
+        if (config_.first_resistance_soc_correction) ekf_.shift_soc(soc_per_ohm_ * dr_ohm);
+        if (config_.health.first_resistance_soc_correction) health_ekf_.shift_soc(health_soc_per_ohm_ * dr_ohm);
+    }
+    const bool before_learning = flying && !ground && !learn;
     const float follow = polarisation_ref_ohm_ > 0.0f ? r0 / polarisation_ref_ohm_ : 1.0f;
     polarisation_scale_ = config_.polarisation_follows_resistance ? follow : 1.0f;
     const float r0_var_v2 = (r_sigma * true_a) * (r_sigma * true_a);
     const bool learn_offset = (ground && !taken_off_) || (flying && config_.learn_offset_in_flight);
     ekf_.correct(compensated_v, ip, r0_var_v2, ocv_, learn, learn_offset, polarisation_scale_);
+    if (before_learning) soc_per_ohm_ = soc_per_ohm(ekf_.status(), soc_per_ohm_, true_a);
     if (config_.health.enabled) {
         const float w = config_.health.polarisation_slow_share;
         float hip = health_current_.update(current_a, dt_s);
@@ -139,6 +149,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         health_ekf_.predict(current_a, dt_s, ground, config_.ground_soc_process_scale);
         health_scale_ = config_.health.polarisation_follows_resistance ? follow : 1.0f;
         health_ekf_.correct(compensated_v, hip, r0_var_v2, ocv_, learn, learn_offset, health_scale_);
+        if (before_learning) health_soc_per_ohm_ = soc_per_ohm(health_ekf_.status(), health_soc_per_ohm_, true_a);
     } else {
         health_scale_ = polarisation_scale_;
     }

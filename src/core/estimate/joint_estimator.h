@@ -64,6 +64,7 @@ public:
             float polarisation_slow_time_s = 30.0f;
             float polarisation_slow_share = 0.2f;
             bool polarisation_follows_resistance = true;
+            bool first_resistance_soc_correction = true;  // see the key of that name below
         };
         HealthFilter health;
         OcvTable ocv;                       // optional; else the model's no-load curve
@@ -93,6 +94,13 @@ public:
         // began): both fall as the pack warms in flight (the same Arrhenius behaviour), and a
         // fixed Rp would read that recovery of the voltage as charge the pack still holds.
         bool polarisation_follows_resistance = false;  // off: on the simulated suite it cost a false warning (docs/estimator.md)
+        // Until R0 is measured the filters compensate with the configured value, and an
+        // aged or cold pack's extra sag is read as charge drawn. When the first measured R0
+        // arrives, the state of charge is moved by what that R0 would have changed from
+        // take-off (to first order, through the filter's own gains). On the health filter
+        // it lowers the capacity error on both suites and moves nothing else; on the
+        // tracking filter it trades remaining time for remaining energy (docs/estimator.md).
+        bool first_resistance_soc_correction = false;
         // Capacity from two rests: the charge counted since the first resting voltage over
         // the fall in SOC the OCV curve reads between it and a rest after landing. The
         // filter cannot use the landing rest (it learns capacity only in flight, where the
@@ -149,6 +157,13 @@ private:
     float other_cells_ah(float mean_cell_ah) const;
     float weakest_cell_ah(float mean_cell_ah) const;
     void finish_solve();
+    // What a filter's state of charge has moved per ohm of the resistance it compensated
+    // with before learning: s ← (1 − k·h)·s + k·I per correction (k its SOC gain, h the
+    // OCV slope; y = V + R0·I moves by I per ohm).
+    static float soc_per_ohm(const CapacityEkf::Status& s, float sensitivity, float current_a) {
+        const float k = s.soc_gain_per_v;
+        return (1.0f - k * s.ocv_slope_v_per_soc) * sensitivity + k * current_a;
+    }
 
     Config config_;
     Status status_;
@@ -180,6 +195,8 @@ private:
     float polarisation_scale_ = 1.0f;   // R0 now / R0 when learning began
     float health_scale_ = 1.0f;         // ... as the health filter's polarisation sees it
     float polarisation_ref_ohm_ = 0.0f;  // R0 when capacity and polarisation learning began (0: not yet)
+    float soc_per_ohm_ = 0.0f;           // the tracking filter's SOC per ohm of prior R0 (before learning)
+    float health_soc_per_ohm_ = 0.0f;    // ... the health filter's
     float start_soc_ = 1.0f;             // from the first resting voltage
     float charge_total_ah_ = 0.0f;       // offset-corrected, since start
     float rest_s_ = 0.0f;                // on the ground below the rest current, since
