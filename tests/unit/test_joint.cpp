@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "core/estimate/capacity_ekf.h"
 #include "core/estimate/difference_resistance.h"
@@ -180,6 +181,7 @@ struct FlightResult {
     JointEstimator::Status at20;
     JointEstimator::Status end;
     float true_total_s = 0;
+    float true_energy_after20_wh = 0;  // delivered from 20 % of the flight to the cutoff
     bool warned = false;
     uint8_t cause = 0;
 };
@@ -218,17 +220,23 @@ FlightResult fly(const Flight& f) {
         p.ocv.configure(lipo_table(), 4, plant_rated);
         return p;
     };
-    // First pass: the true flight time.
+    // First pass: the true flight time, and the energy delivered up to each step.
     Plant truth = make_plant();
     float t = 0.0f, i = 20.0f;
+    std::vector<double> energy_wh;
+    double e_wh = 0.0;
     while (t < 2000.0f) {
         const float v = truth.step(i, dt);
         if (v < 13.3f) break;
+        e_wh += static_cast<double>(v) * i * dt / 3600.0;
+        energy_wh.push_back(e_wh);
         i = demand(t) / v;
         t += dt;
     }
     FlightResult out;
     out.true_total_s = t;
+    const size_t at20 = static_cast<size_t>(0.2 * static_cast<double>(energy_wh.size()));
+    out.true_energy_after20_wh = static_cast<float>(e_wh - energy_wh[at20]);
     // Second pass: the estimator rides along.
     Plant p = make_plant();
     JointEstimator e = table_estimator(rated, f.health, f.first_resistance_correction);
@@ -274,11 +282,16 @@ TEST_CASE("Joint estimator on injected packs: capacity, resistance, warnings by 
     CHECK(warmer_tracking.at20.remaining_time_s > 0.0f);
     CHECK(healthy.at20.resistance_ohm == Approx(0.025f).epsilon(0.06));
     CHECK_FALSE(healthy.warned);
-    // Remaining time at 20 %, as a share of the true flight.
+    // Remaining time at 20 %, as a share of the true flight; remaining energy (the health
+    // filter's, at the mean power) against what the plant delivers from there to the cutoff.
     CHECK(std::fabs(healthy.at20.remaining_time_s - 0.8f * healthy.true_total_s) < 0.06f * healthy.true_total_s);
+    INFO("energy after 20 %: estimated " << healthy.at20.remaining_energy_wh << " Wh, true " << healthy.true_energy_after20_wh);
+    CHECK(healthy.at20.remaining_energy_wh == Approx(healthy.true_energy_after20_wh).epsilon(0.05));
 
     const FlightResult weak = fly({0.7f, 1.0f});
     CHECK(weak.at20.capacity_ah == Approx(1.05f).epsilon(0.10));  // at 20 %: still converging; accuracy is scored by `battsim score`
+    INFO("weak pack, energy after 20 %: estimated " << weak.at20.remaining_energy_wh << " Wh, true " << weak.true_energy_after20_wh);
+    CHECK(weak.at20.remaining_energy_wh == Approx(weak.true_energy_after20_wh).epsilon(0.05));
     CHECK(weak.warned);
     CHECK((weak.cause & JointEstimator::kCauseCapacity) != 0);
     CHECK((weak.cause & JointEstimator::kCauseResistance) == 0);

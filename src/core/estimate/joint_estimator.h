@@ -125,7 +125,7 @@ public:
         float polarisation_current_a = 0.0f;  // the low-passed current the polarisation sees
         float mean_power_w = 0.0f;         // since take-off
         float remaining_time_s = 0.0f;
-        float remaining_energy_wh = 0.0f;
+        float remaining_energy_wh = 0.0f;  // the health filter's, to the cutoff at the mean power
         float total_time_s = 0.0f;         // estimated flight time from take-off
         float expected_time_s = 0.0f;      // a healthy pack's, from the same take-off charge
         bool time_valid = false;
@@ -185,9 +185,8 @@ private:
     float flying_energy_j_ = 0.0f;
     float charge_since_takeoff_ah_ = 0.0f;
     float solve_started_s_ = 0.0f;     // flight time when the remaining solve under way began
-    float solve_energy_wh_ = 0.0f;     // ... and the flight's energy then
     float end_s_ = 0.0f;               // the published solve: flight time at the cutoff
-    float total_wh_ = 0.0f;            // ... and the flight's energy to it
+    float total_wh_ = 0.0f;            // the health filter's: energy from take-off to the cutoff
     bool was_flying_ = false;
     int short_count_ = 0;
     float weakest_deficit_ = 0.0f;
