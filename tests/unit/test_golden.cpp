@@ -25,43 +25,31 @@ std::string golden_diff(const std::string& golden_path, const nlohmann::json& ac
 }
 }  // namespace
 
+// The reference estimator with both parameter sets, and the joint estimator on the
+// simulator's table config.
 TEST_CASE("Golden summaries of the predictive-bms flights", "[golden][data]") {
-    const std::string data = BATTSIM_DATA_DIR;
-    for (const char* set : {"modified", "original"}) {
+    struct Set {
+        const char* config;
+        const char* golden_dir;
+        bool joint;
+    };
+    const Set sets[] = {{"reference-modified", "predictive-bms-modified", false},
+                        {"reference-original", "predictive-bms-original", false},
+                        {"sim-4s", "predictive-bms-joint", true}};
+    for (const Set& set : sets) {
         ReplayOptions opt;
-        opt.config = load_config_file(std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-" + set + ".json");
+        opt.config = load_config_file(std::string(BATTSIM_SOURCE_DIR) + "/configs/" + set.config + ".json");
+        if (set.joint) opt.config.monitor.estimator = battsim::core::EstimatorKind::Joint;
         for (const char* flight : {"29", "30", "32", "34"}) {
-            const std::string golden_path =
-                std::string(BATTSIM_SOURCE_DIR) + "/tests/golden/predictive-bms-" + set + "/" + flight + ".json";
-            std::ifstream in(golden_path);
-            REQUIRE(in.good());
-            const nlohmann::json golden = nlohmann::json::parse(in);
             const nlohmann::json actual =
-                replay_log(data + "/predictive-bms/flights/" + flight + ".csv", opt);
+                replay_log(std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/" + flight + ".csv", opt);
             CompareOptions co;
-            co.relative_tolerance = 1e-5;  // 6-significant-digit rounding may flip a last digit
             co.ignore = {"/input/path", "/battsim_version"};
-            const auto diffs = compare_json(golden, actual, co);
-            std::string report;
-            for (const auto& d : diffs) report += "  " + d.path + ": golden " + d.expected + ", now " + d.actual + "\n";
-            INFO(set << " flight " << flight << " changed:\n" << report);
-            CHECK(diffs.empty());
+            const std::string report = golden_diff(
+                std::string(BATTSIM_SOURCE_DIR) + "/tests/golden/" + set.golden_dir + "/" + flight + ".json", actual, co);
+            INFO(set.golden_dir << ", flight " << flight << " changed:\n" << report);
+            CHECK(report.empty());
         }
-    }
-}
-
-TEST_CASE("Golden summaries of the predictive-bms flights, joint estimator", "[golden][data]") {
-    ReplayOptions opt;
-    opt.config = load_config_file(std::string(BATTSIM_SOURCE_DIR) + "/configs/sim-4s.json");
-    opt.config.monitor.estimator = battsim::core::EstimatorKind::Joint;
-    for (const char* flight : {"29", "30", "32", "34"}) {
-        const std::string golden = std::string(BATTSIM_SOURCE_DIR) + "/tests/golden/predictive-bms-joint/" + flight + ".json";
-        const nlohmann::json actual = replay_log(std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/" + flight + ".csv", opt);
-        CompareOptions co;
-        co.ignore = {"/input/path", "/battsim_version"};
-        const std::string report = golden_diff(golden, actual, co);
-        INFO("joint, flight " << flight << " changed:\n" << report);
-        CHECK(report.empty());
     }
 }
 

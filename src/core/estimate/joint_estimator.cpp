@@ -268,9 +268,8 @@ void JointEstimator::finish_solve() {
     }
     // The energy from the health filter's solve from take-off: the remaining energy is that
     // less what has flowed since. Energy is mostly capacity × state of charge, which the
-    // health filter reads better early; the remaining time stays with the tracking filter.
-    // (From the tracking filter's remaining solve: energy at 20 % 5.1 / 4.3 % median on the
-    // tuning / held-out suite; from this one 3.4 / 3.3 %, nothing else moving.)
+    // health filter reads better early; the remaining time stays with the tracking filter
+    // (measured both ways: docs/estimator.md, ninth session).
     if (solve_ == kSolveTotal) total_wh_ = r.energy_wh;
     solve_ = static_cast<uint8_t>((solve_ + 1) % kSolveCount);
     if (solve_ != kSolveRemaining) return;
