@@ -182,6 +182,8 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
             rh.number("polarisation_slow_share", hf.polarisation_slow_share, 0, 1);
             rh.boolean("polarisation_follows_resistance", hf.polarisation_follows_resistance);
             rh.boolean("first_resistance_soc_correction", hf.first_resistance_soc_correction);
+            rh.boolean("solves_from_takeoff_soc", hf.solves_from_takeoff_soc);
+            rh.number("takeoff_soc_min_ground_s", hf.takeoff_soc_min_ground_s, 0, kBig);
             read_ekf_keys(rh, hf.ekf);
         }
         r.number("offset_fault_a", jc.offset_fault_a, 0, kBig);
@@ -370,6 +372,8 @@ json config_to_json(const LoadedConfig& c) {
         h["polarisation_slow_share"] = hf.polarisation_slow_share;
         h["polarisation_follows_resistance"] = hf.polarisation_follows_resistance;
         h["first_resistance_soc_correction"] = hf.first_resistance_soc_correction;
+        h["solves_from_takeoff_soc"] = hf.solves_from_takeoff_soc;
+        h["takeoff_soc_min_ground_s"] = hf.takeoff_soc_min_ground_s;
         jj["health_filter"] = h;
         if (jc.ocv.points >= 2) {
             json t = json::array();

@@ -128,6 +128,8 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.health.polarisation_slow_share", c.joint.health.polarisation_slow_share);
     f("joint.health.polarisation_follows_resistance", c.joint.health.polarisation_follows_resistance);
     f("joint.health.first_resistance_soc_correction", c.joint.health.first_resistance_soc_correction);
+    f("joint.health.solves_from_takeoff_soc", c.joint.health.solves_from_takeoff_soc);
+    f("joint.health.takeoff_soc_min_ground_s", c.joint.health.takeoff_soc_min_ground_s);
     f("joint.ocv.points", c.joint.ocv.points);
     for (int i = 0; i < core::kOcvTableMaxPoints; ++i) {
         f("joint.ocv.cell_voltage_v[" + std::to_string(i) + "]", c.joint.ocv.cell_voltage_v[i]);

@@ -38,7 +38,9 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     soc_per_ohm_ = health_soc_per_ohm_ = 0.0f;
     polarisation_ref_ohm_ = 0.0f;
     start_soc_ = 1.0f;
-    charge_total_ah_ = rest_s_ = 0.0f;
+    takeoff_soc_ = 1.0f;
+    takeoff_soc_valid_ = false;
+    charge_total_ah_ = rest_s_ = ground_s_ = 0.0f;
     has_flown_ = false;
     taken_off_ = false;
     rest_reads_ = 0;
@@ -74,6 +76,9 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = solve_started_s_ = 0.0f;
         end_s_ = total_wh_ = 0.0f;
         short_count_ = 0;
+        // ground_s_ still holds the time on the ground that ended here (cleared below).
+        takeoff_soc_ = health().soc;
+        takeoff_soc_valid_ = config_.health.solves_from_takeoff_soc && ground_s_ >= config_.health.takeoff_soc_min_ground_s;
     }
     was_flying_ = flying;
     status_.flying = flying;
@@ -162,11 +167,12 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     charge_total_ah_ += true_a * dt_s / 3600.0f;
     if (flying) {
         has_flown_ = has_flown_ || flying_s_ > config_.min_flight_s;
-        rest_s_ = 0.0f;
+        rest_s_ = ground_s_ = 0.0f;
     } else {
         // A step in the voltage is no rest (a logger's power-off sample reads 1 V low).
         const bool steady = fabsf(voltage_v - last_voltage_v_) <= 0.05f;
         rest_s_ = fabsf(true_a) <= config_.rest_capacity_max_current_a && steady ? rest_s_ + dt_s : 0.0f;
+        ground_s_ += dt_s;
     }
     last_voltage_v_ = voltage_v;
     // Read about once a second (an inversion of the curve: bisection).
@@ -240,8 +246,10 @@ void JointEstimator::start_solve() {
     const float r_total = status_.effective_resistance_ohm + es.polarisation_ohm * scale;
     // A healthy pack: rated resistance, and the polarisation the state holds at it.
     const float r_rated = rated_.internal_resistance_ohm + es.polarisation_ohm;
-    // The charge at take-off as the present estimate sees it.
-    const float soc_takeoff = clampf(es.soc + charge_since_takeoff_ah_ / es.capacity_ah, 0.0f, 1.0f);
+    // The charge at take-off: as the filter read it then, at rest, or as the present
+    // estimate sees it.
+    const float soc_takeoff = takeoff_soc_valid_ ? takeoff_soc_
+                                                 : clampf(es.soc + charge_since_takeoff_ah_ / es.capacity_ah, 0.0f, 1.0f);
     if (solve_ == kSolveRemaining) {
         solve_power_w_ = status_.mean_power_w;
         solve_started_s_ = flying_s_;

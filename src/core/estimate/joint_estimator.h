@@ -65,6 +65,15 @@ public:
             float polarisation_slow_share = 0.2f;
             bool polarisation_follows_resistance = true;
             bool first_resistance_soc_correction = true;  // see the key of that name below
+            // The verdict's solves and the remaining energy start from the state of charge
+            // this filter held at take-off, read off the resting pack, rather than from the
+            // present one carried back by the charge since: in flight the present one also
+            // carries the polarisation and R0 errors, which only the SOC at rest is free of
+            // (on a healthy hover it sat 0.008 below the truth by mid-flight). Only after
+            // `takeoff_soc_min_ground_s` on the ground before the take-off (not when the
+            // monitor started in the air).
+            bool solves_from_takeoff_soc = true;
+            float takeoff_soc_min_ground_s = 5.0f;
         };
         HealthFilter health;
         OcvTable ocv;                       // optional; else the model's no-load curve
@@ -169,6 +178,8 @@ private:
     Status status_;
     TremblayParams rated_;
     OcvCurve ocv_;
+    float takeoff_soc_ = 1.0f;         // the health filter's, at the last take-off
+    bool takeoff_soc_valid_ = false;   // ... after a rest, and wanted
     DifferenceResistanceEstimator resistance_;
     DifferenceResistanceEstimator hover_resistance_;
     CapacityEkf ekf_;
@@ -198,6 +209,7 @@ private:
     float health_soc_per_ohm_ = 0.0f;    // ... the health filter's
     float start_soc_ = 1.0f;             // from the first resting voltage
     float charge_total_ah_ = 0.0f;       // offset-corrected, since start
+    float ground_s_ = 0.0f;              // on the ground (not flying), since
     float rest_s_ = 0.0f;                // on the ground below the rest current, since
     bool has_flown_ = false;
     bool taken_off_ = false;  // the offset is learnt only before this
