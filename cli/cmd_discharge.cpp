@@ -16,6 +16,7 @@ struct DischargeArgs {
     std::string log, table, curve, summary, plot, config_out;
     double min_v = 0, max_v = 0, reaction_s = 0, alpha = 0;
     int decimate = 1;
+    int ocv_points = 21;
     bool json = false;
     InputArgs input;
 };
@@ -32,7 +33,12 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--curve", a->curve, "Write the smoothed, decimated curve with its gradient (CSV)");
     sub.add_option("--summary", a->summary, "Write the summary JSON (with the table) here");
     sub.add_option("--plot", a->plot, "Plot the curve and its gradient with the zone ends (.png or .svg)");
-    sub.add_option("--config-out", a->config_out, "Write a starting config with the Tremblay points read off the curve");
+    sub.add_option("--config-out", a->config_out,
+                   "Write a starting config with the Tremblay points read off the curve and the joint estimator's OCV table");
+    sub.add_option("--ocv-points", a->ocv_points,
+                   "Points of the joint estimator's OCV table (per cell, SOC 0..1, I*R added back with the config's "
+                   "resistance); 0 = none")
+        ->capture_default_str();
     sub.add_flag("--json", a->json, "Print the summary JSON (with the table) on standard output");
     add_input_options(sub, a->input);
     return [a]() -> int {
@@ -57,14 +63,28 @@ std::function<int()> setup(CLI::App& sub) {
             return kExitUsage;
         }
         for (const auto& note : result.info.notes) std::cerr << "battsim discharge: note: " << note << "\n";
-        const nlohmann::json summary = host::discharge::discharge_to_json(result, true);
+        nlohmann::json summary = host::discharge::discharge_to_json(result, true);
+        host::discharge::OcvTableRead ocv;
+        const bool with_ocv = a->ocv_points != 0;
+        if (with_ocv) {
+            try {
+                ocv = host::discharge::ocv_table_from_discharge(result, config.monitor.cells_in_series,
+                                                                config.monitor.battery.internal_resistance_ohm, a->ocv_points);
+            } catch (const std::invalid_argument& e) {
+                std::cerr << "battsim discharge: " << e.what() << "\n";
+                return kExitUsage;
+            }
+            for (const auto& note : ocv.notes) std::cerr << "battsim discharge: note: " << note << "\n";
+            summary["ocv_table"] = host::discharge::ocv_table_to_json(ocv);
+        }
         try {
             if (!a->table.empty()) host::write_file_atomic(a->table, host::discharge::table_csv(result));
             if (!a->curve.empty()) host::write_file_atomic(a->curve, host::discharge::curve_csv(result));
             if (!a->summary.empty()) host::write_file_atomic(a->summary, summary.dump(2) + "\n");
             if (!a->plot.empty()) host::discharge::plot_discharge(result, a->plot);
             if (!a->config_out.empty()) {
-                const host::LoadedConfig out = host::discharge::start_config_from_discharge(result, config);
+                const host::LoadedConfig out =
+                    host::discharge::start_config_from_discharge(result, config, with_ocv ? &ocv : nullptr);
                 host::write_file_atomic(a->config_out, host::config_to_json(out).dump(2) + "\n");
             }
         } catch (const std::invalid_argument& e) {
@@ -82,6 +102,11 @@ std::function<int()> setup(CLI::App& sub) {
                   << opt.min_voltage_v << " V, " << summary["duration_s"] << " s\n";
         std::cout << "  " << summary["capacity_mah"] << " mAh, " << summary["energy_mwh"] << " mWh at a mean "
                   << summary["mean_current_a"] << " A; " << summary["first_voltage_v"] << " -> " << summary["last_voltage_v"] << " V\n";
+        if (with_ocv) {
+            std::cout << "  OCV table (" << ocv.cell_voltage_v.size() << " points per cell, SOC 0 -> 1): "
+                      << summary["ocv_table"]["cell_voltage_v"].front() << " ... " << summary["ocv_table"]["cell_voltage_v"].back()
+                      << " V\n";
+        }
         if (result.zones.found) {
             std::cout << "  exponential zone ends at " << summary["zones"]["exponential_end"]["capacity_ah"] << " Ah, "
                       << summary["zones"]["exponential_end"]["voltage_v"] << " V; nominal zone ends at "

@@ -7,6 +7,9 @@
 
 #include "core/model/tremblay.h"
 #include "host/discharge/discharge.h"
+#include "host/sim/ocv.h"
+#include "host/sim/simulate.h"
+#include "sim_scenarios.h"
 #include "test_files.h"
 
 using namespace battsim::host;
@@ -179,4 +182,128 @@ TEST_CASE("battsim discharge writes its outputs and exits with the documented co
     CHECK(WEXITSTATUS(std::system((bin + " discharge " + log + " --plot x.pdf > /dev/null 2>&1").c_str())) == 2);
     // Without --negative-discharge the current is negative: an input error that says so.
     CHECK(WEXITSTATUS(std::system((bin + " discharge " + log + " --min-voltage 2.5 --max-voltage 4.2 > /dev/null 2>&1").c_str())) == 3);
+}
+
+TEST_CASE("OCV table from a discharge: by hand", "[discharge][ocv]") {
+    // A 2S pack discharged at 0.5 A over 1 Ah, its pack voltage falling 4.2 → 3.2 V linearly
+    // in charge: with R = 0.1 Ω the cells' rest voltage at SOC s is (4.2 − (1 − s) + 0.05) / 2.
+    DischargeResult r;
+    r.capacity_mah = 1000;
+    r.mean_current_a = 0.5;
+    for (int k = 0; k <= 100; ++k) {
+        CurvePoint p;
+        p.consumed_mah = 10.0 * k;
+        p.voltage_v = 4.2 - 0.001 * p.consumed_mah;
+        p.current_a = 0.5;
+        r.curve.push_back(p);
+    }
+    const OcvTableRead t = ocv_table_from_discharge(r, 2, 0.1, 5);
+    REQUIRE(t.cell_voltage_v.size() == 5);
+    const double expected[5] = {1.625, 1.75, 1.875, 2.0, 2.125};
+    for (int k = 0; k < 5; ++k) CHECK(t.cell_voltage_v[k] == Approx(expected[k]).margin(1e-12));
+    CHECK(t.capacity_ah == 1.0);
+    CHECK(t.mean_c_rate == 0.5);
+    REQUIRE(t.notes.size() == 1);  // C/2 is too fast for a rest curve
+    CHECK(t.notes[0].find("0.5C") != std::string::npos);
+    // Between curve points the voltage is interpolated: 7 points put SOC 1/6 at 833.3 mAh.
+    const OcvTableRead t7 = ocv_table_from_discharge(r, 2, 0.1, 7);
+    CHECK(t7.cell_voltage_v[1] == Approx((4.2 - 1000.0 * 5.0 / 6.0 * 0.001 + 0.05) / 2).margin(1e-12));
+
+    // A dip on a flat stretch is lifted so the table keeps rising.
+    for (CurvePoint& p : r.curve) p.voltage_v = p.consumed_mah < 500 ? 4.0 : 3.0;
+    r.curve[40].voltage_v = 3.9;  // 400 mAh: SOC 0.6 reads lower than SOC 0.4's 4.0 would allow
+    r.mean_current_a = 0.1;
+    const OcvTableRead flat = ocv_table_from_discharge(r, 1, 0.0, 6);
+    for (size_t k = 1; k < flat.cell_voltage_v.size(); ++k) CHECK(flat.cell_voltage_v[k] > flat.cell_voltage_v[k - 1]);
+    CHECK_FALSE(flat.notes.empty());
+
+    CHECK_THROWS_AS(ocv_table_from_discharge(r, 1, 0.0, 1), std::invalid_argument);
+    CHECK_THROWS_AS(ocv_table_from_discharge(r, 1, 0.0, 22), std::invalid_argument);
+    CHECK_THROWS_AS(ocv_table_from_discharge(r, 0, 0.0, 21), std::invalid_argument);
+    CHECK_THROWS_AS(ocv_table_from_discharge(r, 1, -0.1, 21), std::invalid_argument);
+}
+
+TEST_CASE("OCV table from a simulated C/5 discharge recovers the plant's rest curve", "[discharge][ocv][truth]") {
+    // The simulator's healthy 4S pack hovering at 4.6 W (about 0.3 A, C/5) to its cutoff,
+    // sampled once a second, with the voltage sensor's gain error set to zero: what is left
+    // between the table and the plant's own curve is the polarisation's sag (I·Rp, under a
+    // millivolt per cell here), the cells' spread and the reading's quantisation.
+    using namespace battsim::host::sim;
+    const Scenario sc = simtest::code_scenario(R"({
+      "schema": "battsim.scenario", "version": 1, "name": "c5", "seed": 4001, "monitor_config": "embedded",
+      "pack": {"cells": 4, "capacity_ah": 1.55},
+      "profile": {"kind": "hover", "idle_before_s": 30, "armed_s": 0, "flight_s": 36000, "idle_after_s": 10,
+                  "mean_power_w": 4.6, "gust_sd": 0, "takeoff_boost_s": 0},
+      "sensor": {"period_ms": 1000, "tap_period_ms": 1000, "unit": {"bus_gain_error": 0}},
+      "log": {"format": "csv"}
+    })", "{}");
+    const SimulationResult sim = simulate(sc);
+    const std::string dir = testsupport::scratch_dir("discharge-ocv");
+    write_simulation(sim, dir + "/c5.csv", dir + "/c5.truth.json");
+    DischargeOptions o = options(13.3, 16.8);
+    const DischargeResult r = process_discharge(dir + "/c5.csv", o);
+    const OcvTableRead t = ocv_table_from_discharge(r, 4, 0.02, 21);  // 0.02 Ω: the sim-4s config's
+    CHECK(t.notes.empty());
+    CHECK(t.mean_c_rate == Approx(0.2).margin(0.02));
+    // From 25 % up within a millivolt (measured: 0.7). Lower down the cells' spread shows:
+    // normalised to what the pack delivered, which its weakest cell sets, the mean cell
+    // there is a little fuller than the table's SOC says (+3.8 / +2.1 / +1.6 mV at 10 / 15 / 20 %).
+    const OcvCurve& plant = OcvCurve::generic_lipo();
+    double worst_mv = 0;
+    for (int k = 2; k <= 20; ++k) {  // 10 … 100 %
+        const double err_mv = 1000.0 * (t.cell_voltage_v[k] - plant.voltage_v(0.05 * k));
+        INFO("SOC " << 0.05 * k << ": table " << t.cell_voltage_v[k] << " V, plant " << plant.voltage_v(0.05 * k) << " V");
+        CHECK(std::fabs(err_mv) < (k >= 5 ? 1.0 : 5.0));
+        if (k >= 5) worst_mv = std::max(worst_mv, std::fabs(err_mv));
+    }
+    // Normalised to the charge delivered, the bottom is the cutoff's rest voltage, not an
+    // extrapolated tail: the configs' tables, normalised to the rated 1.55 Ah, read 3.25 V there.
+    CHECK(t.cell_voltage_v[0] > 3.3);
+    CHECK(t.capacity_ah == Approx(1.55).epsilon(0.02));
+    std::printf("simulated C/5 OCV table: worst %.2f mV from the plant's over 25–100 %%\n", worst_mv);
+}
+
+TEST_CASE("battsim discharge reads the joint estimator's OCV table off the Samsung 30Q discharges", "[discharge][ocv][cli][data]") {
+    const std::string bin = BATTSIM_BINARY;
+    const std::string dir = testsupport::scratch_dir("discharge-ocv-cli");
+    const std::string data = std::string(BATTSIM_DATA_DIR) + "/samsung-30q/";
+    const std::string cfg = std::string(BATTSIM_SOURCE_DIR) + "/configs/fitted/samsung-30q.json";  // 1S, R = 0.032 Ω
+    auto read = [&](const std::string& rate, const std::string& extra) {
+        const std::string cmd = bin + " discharge " + data + "Q30_S001_" + rate + ".csv --negative-discharge -c " + cfg +
+                                " --min-voltage 2.5 --max-voltage 4.2 --json " + extra + " > " + dir + "/" + rate +
+                                ".json 2> " + dir + "/" + rate + ".err";
+        REQUIRE(std::system(cmd.c_str()) == 0);
+        std::ifstream js(dir + "/" + rate + ".json");
+        return nlohmann::json::parse(js)["ocv_table"];
+    };
+    const nlohmann::json c10 = read("C10", "--config-out " + dir + "/cell.json");
+    REQUIRE(c10["cell_voltage_v"].size() == 21);
+    CHECK(c10["notes"].empty());
+    CHECK(c10["capacity_ah"].get<double>() == Approx(2.969).margin(0.002));  // the data README's 2.969 Ah to 2.5 V
+    CHECK(c10["cell_voltage_v"][20].get<double>() == Approx(4.1416).margin(0.001));  // the first sample, 4.1419 V at 0.3 A
+    for (size_t k = 1; k < 21; ++k) CHECK(c10["cell_voltage_v"][k].get<double>() > c10["cell_voltage_v"][k - 1].get<double>());
+    // The written config carries the table and loads back: a replay with it runs.
+    std::ifstream cj(dir + "/cell.json");
+    const nlohmann::json written = nlohmann::json::parse(cj);
+    REQUIRE(written["joint"]["ocv_cell_voltage_v"].size() == 21);
+    for (size_t k = 0; k < 21; ++k)  // the summary rounds to 0.1 mV
+        CHECK(written["joint"]["ocv_cell_voltage_v"][k].get<double>() == Approx(c10["cell_voltage_v"][k].get<double>()).margin(6e-5));
+    CHECK(std::system((bin + " replay " + data + "Q30_S001_2C.csv --negative-discharge -c " + dir +
+                       "/cell.json --estimator joint --json > /dev/null 2>&1").c_str()) == 0);
+    // Read off the 1C discharge the same way, the middle of the curve sits lower by the
+    // polarisation the I·R term does not take back (measured 35–50 mV from 30 to 70 %),
+    // and the command says the discharge was too fast.
+    const nlohmann::json c1 = read("1C", "");
+    for (int k = 6; k <= 14; ++k) {
+        const double below_mv = 1000.0 * (c10["cell_voltage_v"][k].get<double>() - c1["cell_voltage_v"][k].get<double>());
+        INFO("SOC " << 0.05 * k << ": 1C table " << below_mv << " mV below the C/10 one");
+        CHECK(below_mv > 20.0);
+        CHECK(below_mv < 70.0);
+    }
+    REQUIRE(c1["notes"].size() == 1);
+    std::ifstream err(dir + "/1C.err");
+    const std::string err_text((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
+    CHECK(err_text.find("faster than C/4") != std::string::npos);
+    CHECK(WEXITSTATUS(std::system((bin + " discharge " + data + "Q30_S001_C10.csv --negative-discharge -c " + cfg +
+                                   " --min-voltage 2.5 --ocv-points 30 > /dev/null 2>&1").c_str())) == 2);
 }

@@ -334,13 +334,93 @@ core::TremblayParams params_from_discharge(const DischargeResult& r, const core:
     return p;
 }
 
-LoadedConfig start_config_from_discharge(const DischargeResult& r, const LoadedConfig& base) {
+OcvTableRead ocv_table_from_discharge(const DischargeResult& r, int cells, double resistance_ohm, int points) {
+    if (points < 2 || points > core::kOcvTableMaxPoints)
+        throw std::invalid_argument("OCV table points must be 2.." + std::to_string(core::kOcvTableMaxPoints) + ", got " +
+                                    std::to_string(points));
+    if (cells < 1) throw std::invalid_argument("OCV table: cells in series must be at least 1");
+    if (!(resistance_ohm >= 0)) throw std::invalid_argument("OCV table: the resistance must be 0 or more");
+    const std::vector<CurvePoint>& c = r.curve;
+    const double q_total_ah = r.capacity_mah * 1e-3;
+    if (c.size() < 2 || !(q_total_ah > 0))
+        throw std::invalid_argument("OCV table: the discharge curve has fewer than 2 points or no charge");
+    OcvTableRead t;
+    t.cells = cells;
+    t.capacity_ah = q_total_ah;
+    t.sag_resistance_ohm = resistance_ohm;
+    t.mean_c_rate = r.mean_current_a / q_total_ah;
+    // The curve is in order of charge drawn; interpolate voltage and current at each
+    // table point's charge (clamped to the curve's ends).
+    size_t i = c.size() - 1;  // the segment (c[i − 1], c[i]] holding the charge; moves down
+    for (int k = 0; k < points; ++k) {
+        const double soc = static_cast<double>(k) / (points - 1);
+        const double q_mah = (1.0 - soc) * r.capacity_mah;
+        double v = 0, a = 0;
+        if (q_mah <= c.front().consumed_mah) {
+            v = c.front().voltage_v;
+            a = c.front().current_a;
+        } else if (q_mah >= c.back().consumed_mah) {
+            v = c.back().voltage_v;
+            a = c.back().current_a;
+        } else {
+            // Points go from SOC 0 (the end of the curve) upwards, so the charge only falls;
+            // c.front() is below it, so this stops at i ≥ 1.
+            while (i > 1 && c[i - 1].consumed_mah >= q_mah) --i;
+            const CurvePoint& lo = c[i - 1];
+            const CurvePoint& hi = c[i];
+            const double span = hi.consumed_mah - lo.consumed_mah;
+            const double f = span > 0 ? (q_mah - lo.consumed_mah) / span : 0.0;
+            v = lo.voltage_v + f * (hi.voltage_v - lo.voltage_v);
+            a = lo.current_a + f * (hi.current_a - lo.current_a);
+        }
+        t.cell_voltage_v.push_back((v + a * resistance_ohm) / cells);
+    }
+    // The estimator inverts the table: keep it rising (a flat stretch read with noise can dip
+    // by a fraction of a millivolt).
+    int lifted = 0;
+    for (size_t k = 1; k < t.cell_voltage_v.size(); ++k) {
+        if (t.cell_voltage_v[k] <= t.cell_voltage_v[k - 1]) {
+            t.cell_voltage_v[k] = t.cell_voltage_v[k - 1] + 1e-4;
+            ++lifted;
+        }
+    }
+    if (lifted > 0)
+        t.notes.push_back(std::to_string(lifted) + " OCV table point(s) lifted to keep the table rising (noise on a flat stretch)");
+    if (t.mean_c_rate > 0.25) {
+        char rate[32];
+        std::snprintf(rate, sizeof rate, "%.2gC", t.mean_c_rate);
+        t.notes.push_back(std::string("the discharge ran at ") + rate +
+                          ": faster than C/4 its polarisation sags the table below the rest voltage by more than the I·R "
+                          "correction takes back; read the table off a C/10 to C/5 discharge");
+    }
+    return t;
+}
+
+nlohmann::json ocv_table_to_json(const OcvTableRead& t) {
+    nlohmann::json v = nlohmann::json::array();
+    for (double x : t.cell_voltage_v) v.push_back(round_sig(x, 5));
+    return {{"cells_in_series", t.cells},
+            {"capacity_ah", round_sig(t.capacity_ah, 5)},
+            {"sag_resistance_ohm", round_sig(t.sag_resistance_ohm, 5)},
+            {"mean_c_rate_per_h", round_sig(t.mean_c_rate, 4)},
+            {"cell_voltage_v", v},
+            {"notes", t.notes}};
+}
+
+LoadedConfig start_config_from_discharge(const DischargeResult& r, const LoadedConfig& base, const OcvTableRead* ocv) {
     LoadedConfig out = base;
     out.monitor.battery = params_from_discharge(r, base.monitor.battery);
+    if (ocv) {
+        core::OcvTable& table = out.monitor.joint.ocv;
+        table = core::OcvTable{};
+        table.points = static_cast<int>(ocv->cell_voltage_v.size());
+        for (int k = 0; k < table.points; ++k) table.cell_voltage_v[k] = static_cast<float>(ocv->cell_voltage_v[k]);
+    }
     const size_t slash = r.path.find_last_of('/');
     out.name = "discharge-" + (slash == std::string::npos ? r.path : r.path.substr(slash + 1));
     out.description = "Tremblay points read off the discharge " + r.path + " by battsim discharge " BATTSIM_VERSION
                              " (start values for battsim fit; the resistance is the base config's)";
+    if (ocv) out.description += "; the joint estimator's OCV table read off the same discharge, I*R added back";
     return out;
 }
 

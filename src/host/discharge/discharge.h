@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/model/ocv.h"
 #include "core/model/tremblay.h"
 #include "host/config_json.h"
 #include "host/io/sample_reader.h"
@@ -84,8 +85,31 @@ void plot_discharge(const DischargeResult& r, const std::string& path);
 // the mean current; the resistance is kept from `keep` (a single constant-current curve
 // cannot separate it from E0). Throws std::invalid_argument if no zones were found.
 core::TremblayParams params_from_discharge(const DischargeResult& r, const core::TremblayParams& keep);
+// The joint estimator's OCV table (`joint.ocv_cell_voltage_v`) read off a slow discharge:
+// per cell, evenly spaced in state of charge from the minimum voltage (SOC 0, all the charge
+// the discharge delivered) to the first kept sample (SOC 1), with the ohmic sag I·R added
+// back (R: the pack's internal resistance). Normalised to the delivered charge, not to a
+// rated capacity: a table normalised to more charge than the pack gave ends in an
+// extrapolated tail (the simulator's C/5 tables: 3.25 V at 0 % where the cutoff was 3.3).
+// What is left is the polarisation's sag, I·Rp (under 1 mV per cell at C/10 on a LiPo) and
+// the voltage sensor's own error; the monitor's figures move with millivolts here
+// (scripts/ocv-sensitivity.py).
+struct OcvTableRead {
+    int cells = 1;
+    double capacity_ah = 0;         // the charge the table spans (the discharge's, to its minimum)
+    double sag_resistance_ohm = 0;  // R used for the I·R correction
+    double mean_c_rate = 0;         // mean current / capacity, per hour
+    std::vector<double> cell_voltage_v;  // SOC 0 … 1, ascending
+    std::vector<std::string> notes;      // e.g. the discharge was too fast for a rest curve
+};
+// Throws std::invalid_argument for points outside 2..core::kOcvTableMaxPoints, cells < 1,
+// a negative resistance, or a curve too short to read.
+OcvTableRead ocv_table_from_discharge(const DischargeResult& r, int cells, double resistance_ohm, int points);
+nlohmann::json ocv_table_to_json(const OcvTableRead& t);
+
 // `base` with params_from_discharge() written in, named after the log: a start for `battsim fit`.
-LoadedConfig start_config_from_discharge(const DischargeResult& r, const LoadedConfig& base);
+// With `ocv` (may be null) the joint estimator's table as well.
+LoadedConfig start_config_from_discharge(const DischargeResult& r, const LoadedConfig& base, const OcvTableRead* ocv = nullptr);
 
 }  // namespace discharge
 }  // namespace host
