@@ -179,7 +179,7 @@ private:
     TremblayParams rated_;
     OcvCurve ocv_;
     float takeoff_soc_ = 1.0f;         // the health filter's, at the last take-off
-    bool takeoff_soc_valid_ = false;   // ... after a rest, and wanted
+    bool takeoff_soc_valid_ = false;   // wanted, and the take-off came after takeoff_soc_min_ground_s on the ground
     DifferenceResistanceEstimator resistance_;
     DifferenceResistanceEstimator hover_resistance_;
     CapacityEkf ekf_;
