@@ -78,10 +78,29 @@ def sample_around(rng, centre, k, shapes):
     return p
 
 
-def score(battsim, suite, settings, health, health_off):
+def reseed(suite_dir, k):
+    """The suite's scenarios with other seeds (k > 0): the same packs, loads and faults with
+    other gusts, cell spreads and sensor errors. A validation set for choosing among a
+    search's best settings without touching the held-out suite."""
+    for name in sorted(os.listdir(suite_dir)):
+        if not name.endswith(".json"):
+            continue
+        path = os.path.join(suite_dir, name)
+        with open(path) as f:
+            sc = json.load(f)
+        if sc.get("schema") != "battsim.scenario":
+            continue
+        sc["seed"] = sc.get("seed", 1) + 7919 * k
+        with open(path, "w") as f:
+            json.dump(sc, f)
+
+
+def score(battsim, suite, settings, health, health_off, reseed_k=0):
     with tempfile.TemporaryDirectory() as tmp:
         configs = os.path.join(tmp, "configs")
         shutil.copytree(os.path.join(ROOT, "configs"), configs)
+        if reseed_k:
+            reseed(os.path.join(configs, suite), reseed_k)
         for name in MONITOR_CONFIGS:
             path = os.path.join(configs, name)
             with open(path) as f:
@@ -122,6 +141,31 @@ def beats(a, b):  # a at least as good as b on every figure, better on one
     return all(x <= y for x, y in pairs) and any(x < y for x, y in pairs)
 
 
+def validate(a):
+    """Chooses among a search's best settings on reseeded copies of the suite: a setting whose
+    figures hold on other seeds is one that did not merely fit the tuning suite's noise."""
+    rows = [json.loads(line) for line in open(a.validate) if line.strip()]
+    rows = [r for r in rows if r["figures"] and r["settings"]]
+    rows.sort(key=lambda r: (-r["figures"]["early_warnings"], r["figures"]["false_warnings"],
+                             r["figures"]["above_oracle_20"]))
+    candidates = [{}] + [r["settings"] for r in rows[:a.top]]
+    ks = [int(k) for k in a.reseeds.split(",")]
+    results = []
+    for n, p in enumerate(candidates):
+        per = [score(a.battsim, a.suite, p, a.health, a.no_health_filter, k) for k in ks]
+        per = [m for m in per if m]
+        if not per:
+            continue
+        mean = {k: statistics.mean(m[k] for m in per) for k in per[0]}
+        results.append((p, mean))
+        with open(a.out, "a") as out:
+            out.write(json.dumps({"settings": p, "reseeds": ks, "mean": mean, "per_seed": per}) + "\n")
+        print(f"{n + 1}/{len(candidates)}", file=sys.stderr)
+    results.sort(key=lambda r: (-r[1]["early_warnings"], r[1]["false_warnings"], r[1]["above_oracle_20"]))
+    for p, m in results:
+        print(json.dumps({"mean": {k: round(v, 2) for k, v in m.items()}, "settings": p}))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--battsim", default=os.path.join(ROOT, "build", "battsim"))
@@ -133,7 +177,16 @@ def main():
     ap.add_argument("--no-health-filter", action="store_true", help="switch the health filter off (one filter, as before it)")
     ap.add_argument("--settings", help="JSON file of settings: score these once (after the committed ones) and stop")
     ap.add_argument("--out", required=True, help="JSON lines, appended")
+    ap.add_argument("--reseed", type=int, default=0,
+                    help="score the suite's scenarios with their seeds moved (K = 1, 2, ...): a validation set")
+    ap.add_argument("--validate", help="a search's JSON lines: score its --top best (most warnings, fewest false, "
+                    "smallest gap) and the committed settings on --reseeds, print the means, and stop")
+    ap.add_argument("--top", type=int, default=12)
+    ap.add_argument("--reseeds", default="1,2,3", help="the seed moves --validate scores on")
     a = ap.parse_args()
+    if a.validate:
+        validate(a)
+        return
     rng = random.Random(a.seed)
     centre = json.load(open(a.around)) if a.around else None
     shapes = list(SHAPES)
@@ -151,7 +204,7 @@ def main():
                 p = fixed
             else:
                 p = sample_around(rng, centre, k, shapes) if centre else sample_random(rng)
-            m = score(a.battsim, a.suite, p, a.health, a.no_health_filter)
+            m = score(a.battsim, a.suite, p, a.health, a.no_health_filter, a.reseed)
             out.write(json.dumps({"settings": p, "figures": m}) + "\n")
             out.flush()
             if m:

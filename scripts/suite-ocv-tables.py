@@ -3,6 +3,7 @@
 would: a C/5 discharge of the config's healthy pack, simulated with the reference sensors
 (`battsim simulate`, the voltage sensor's gain error set to zero), read by `battsim discharge --ocv-points 21` (normalised to the charge
 delivered, I·R added back with the config's resistance). Writes the table into the configs.
+Applied since the eleventh session (seed 5005); the defaults were retuned on these tables.
 
     python3 scripts/suite-ocv-tables.py [--battsim build/battsim] [--seed 5005] [--dry-run]
 """

@@ -20,6 +20,23 @@ public:
     // The health filter's noise settings (a random search on the simulated tuning suite,
     // checked on the held-out one; docs/estimator.md): it trusts the early voltage more
     // (tighter capacity prior, less SOC process noise) and the OCV table less pointwise.
+    // The tracking filter's noise settings: a random search on the tuning suite with OCV
+    // tables read off a simulated C/5 discharge (scripts/suite-ocv-tables.py), chosen among
+    // the best on reseeded copies of that suite (scripts/joint-search.py --validate), then
+    // checked on the held-out one (docs/estimator.md, eleventh session).
+    static constexpr CapacityEkf::Config tracking_ekf_defaults() {
+        CapacityEkf::Config c{};
+        c.voltage_sigma_v = 0.014f;
+        c.soc_sigma0 = 0.016f;
+        c.capacity_sigma0_fraction = 0.1f;
+        c.polarisation_initial_ohm = 0.0053f;
+        c.polarisation_sigma0_ohm = 0.022f;
+        c.soc_process_per_sqrt_s = 7.7e-5f;
+        c.capacity_process_fraction_per_sqrt_s = 1.6e-5f;
+        c.polarisation_process_ohm_per_sqrt_s = 2.6e-4f;
+        c.ocv_soc_sigma = 0.02f;
+        return c;
+    }
     static constexpr CapacityEkf::Config health_ekf_defaults() {
         CapacityEkf::Config c{};
         c.voltage_sigma_v = 0.04f;
@@ -46,7 +63,7 @@ public:
         // the filter took the rising compensated voltage for charge. A 0.3 s lag read the
         // take-off step 5–9 % high (fast polarisation).
         DifferenceResistanceEstimator::Config hover_resistance{0.13f, 60.0f, 0.2f, 10.0f, 0.02f};
-        CapacityEkf::Config ekf;
+        CapacityEkf::Config ekf = tracking_ekf_defaults();
         // A second filter on the same compensated voltage, tuned for the pack's health
         // rather than for tracking: the capacity it reports, and the flight-time solves the
         // short-flight verdict compares, come from it; the state of charge, remaining time
@@ -78,13 +95,13 @@ public:
         HealthFilter health;
         OcvTable ocv;                       // optional; else the model's no-load curve
         float resistance_prior_fraction = 0.5f;  // σ of the configured resistance, as a fraction
-        float polarisation_time_s = 5.0f;   // i_p time constant: fast enough that i_p follows the throttle and cannot mimic the SOC trend
+        float polarisation_time_s = 3.0f;   // i_p time constant: fast enough that i_p follows the throttle and cannot mimic the SOC trend
         // A second, slow part of the polarisation sharing the one resistance state: i_p is
         // (1 − share)·(fast low-pass) + share·(slow low-pass). One state keeps the filter
         // well conditioned (two free, nearly collinear branches diverged in float); the
         // shape comes from a fit of the pack (battsim fit's RC branches). 0 = off.
-        float polarisation_slow_time_s = 0.0f;
-        float polarisation_slow_share = 0.0f;
+        float polarisation_slow_time_s = 30.0f;
+        float polarisation_slow_share = 0.4f;
         float min_voltage_v = 13.3f;        // loaded cutoff
         int solver_steps = 32;
         int solver_steps_per_update = 4;  // keeps an update near 2,000 instructions
