@@ -30,7 +30,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("-o,--output", a->output, "Write the table (or JSON) to this file instead of standard output");
     sub.add_option("-j,--jobs", a->jobs, "Flights scored in parallel (default: the machine's cores); the output does not depend on it");
     sub.add_option("--logs", a->logs_dir, "Read each flight's log from DIR/NAME.csv (written by `battsim simulate --out-dir`) instead of simulating it in memory");
-    sub.add_option("--columns", a->columns, "Estimator columns to run, comma-separated (default: all)");
+    sub.add_option("--columns", a->columns, "Estimator columns to run, comma-separated (default: all but the diagnostic solve-truth)");
     return [a]() -> int {
         std::vector<std::string> paths = a->paths;
         if (paths.empty()) paths.push_back("configs/scenarios");
@@ -42,7 +42,9 @@ std::function<int()> setup(CLI::App& sub) {
             return kExitConfigError;
         }
         std::vector<host::score::EstimatorColumn> columns;
-        const auto all = host::score::standard_columns();
+        auto all = host::score::standard_columns();
+        const size_t standard_count = all.size();
+        for (auto& d : host::score::diagnostic_columns()) all.push_back(std::move(d));
         std::vector<std::string> wanted;
         for (size_t b = 0; b <= a->columns.size() && !a->columns.empty();) {
             const size_t e = std::min(a->columns.find(',', b), a->columns.size());
@@ -50,7 +52,7 @@ std::function<int()> setup(CLI::App& sub) {
             b = e + 1;
         }
         if (wanted.empty()) {
-            columns = all;
+            columns.assign(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(standard_count));
         } else {
             for (const std::string& name : wanted) {
                 bool found = false;

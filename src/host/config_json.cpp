@@ -197,6 +197,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.boolean("polarisation_follows_resistance", jc.polarisation_follows_resistance);
         r.boolean("first_resistance_soc_correction", jc.first_resistance_soc_correction);
         r.number("solver_steps", jc.solver_steps, 2, 1000);
+        r.number("cutoff_delay_s", jc.cutoff_delay_s, 0, 600);
         r.number("solver_steps_per_update", jc.solver_steps_per_update, 1, 1000);
         r.number("short_flight_fraction", jc.short_flight_fraction, 0, 1);
         r.number("cause_fraction", jc.cause_fraction, 0, 1);
@@ -339,6 +340,7 @@ json config_to_json(const LoadedConfig& c) {
             {"polarisation_follows_resistance", jc.polarisation_follows_resistance},
             {"first_resistance_soc_correction", jc.first_resistance_soc_correction},
             {"solver_steps", jc.solver_steps},
+            {"cutoff_delay_s", jc.cutoff_delay_s},
             {"solver_steps_per_update", jc.solver_steps_per_update},
             {"short_flight_fraction", jc.short_flight_fraction},
             {"cause_fraction", jc.cause_fraction},

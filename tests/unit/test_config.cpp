@@ -18,6 +18,7 @@ TEST_CASE("Config JSON round-trips", "[config]") {
     c.monitor.joint.first_resistance_soc_correction = true;          // default false
     c.monitor.joint.health.solves_from_takeoff_soc = false;          // default true
     c.monitor.joint.health.takeoff_soc_min_ground_s = 12.5f;
+    c.monitor.joint.cutoff_delay_s = 7.5f;  // default 0
     LoadedConfig back = config_from_json(config_to_json(c), "test");
     CHECK_FALSE(back.monitor.joint.health.enabled);
     CHECK(back.monitor.joint.health.ekf.voltage_sigma_v == 0.031f);
@@ -26,6 +27,7 @@ TEST_CASE("Config JSON round-trips", "[config]") {
     CHECK(back.monitor.joint.first_resistance_soc_correction);
     CHECK_FALSE(back.monitor.joint.health.solves_from_takeoff_soc);
     CHECK(back.monitor.joint.health.takeoff_soc_min_ground_s == 12.5f);
+    CHECK(back.monitor.joint.cutoff_delay_s == 7.5f);
     CHECK(back.monitor.joint.ekf.voltage_sigma_v == c.monitor.joint.ekf.voltage_sigma_v);  // the two filters' keys apart
     CHECK(back.monitor.cell_analysis.step.steady_band_fraction == 0.2f);
     CHECK(back.monitor.cell_analysis.step.max_wait_samples == 20);

@@ -155,6 +155,22 @@ TEST_CASE("Power-time solver against closed forms", "[joint]") {
     CHECK(s.result().cutoff);
     CHECK(s.result().charge_ah == Approx(1.0f).epsilon(1e-3));
     CHECK(s.result().time_s == Approx(3600.0 * 2.0 / 100.0 * 0.5 * (16.8 + 14.4) / 2.0).epsilon(2e-3));
+    const PowerTimeSolver::Result no_delay = s.result();
+    // A 5 s failsafe delay: the same crossing, then 5 s more at 100 W (0.1389 Wh) and at
+    // the crossing's current, 100 W / 14.4 V = 6.94 A (9.65 mAh); kept across starts.
+    s.set_cutoff_delay_s(5.0f);
+    s.start(1.0f, 2.0f, 0.0f, 100.0f, 14.4f, 100);
+    while (!s.advance(c, 100)) {
+    }
+    CHECK(s.result().time_s == Approx(no_delay.time_s + 5.0f).epsilon(1e-6));
+    CHECK(s.result().energy_wh == Approx(no_delay.energy_wh + 100.0 * 5.0 / 3600.0).epsilon(1e-5));
+    CHECK(s.result().charge_ah == Approx(no_delay.charge_ah + 100.0 / 14.4 * 5.0 / 3600.0).epsilon(2e-4));
+    // No crossing, no delay: the flat pack above ran out of charge, not voltage.
+    s.start(1.0f, 1.0f, 0.05f, 400.0f, 13.0f, 50);
+    c.configure(flat, 4, TremblayParams{});
+    while (!s.advance(c, 50)) {
+    }
+    CHECK(s.result().time_s == Approx(3600.0 / i).epsilon(1e-4));
 }
 
 TEST_CASE("Capacity EKF recovers an injected capacity from the OCV", "[joint][truth]") {

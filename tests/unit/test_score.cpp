@@ -200,3 +200,33 @@ TEST_CASE("Scoreboard: reading the logs from files gives the same result as in m
     missing.logs_dir = dir + "/nowhere";
     CHECK_THROWS_AS(score_scenarios(suite, cols, missing), InputError);
 }
+
+TEST_CASE("Diagnostic column: the flight-time solve fed the true pack, with and without the cutoff delay", "[score]") {
+    // A suite flight with its own config (an OCV table read off the simulated pack, the
+    // 5 s delay of the drone's filtered cutoff): the solve with every true parameter reads
+    // the energy left at 20 % of the flight within 2 %, and stopping at the crossing reads
+    // it low by about the delay's energy (5 s of a ~22 Wh flight's remaining ~17 Wh at
+    // ~380 W: 3 %).
+    const sim::Scenario s =
+        sim::load_scenario(std::string(BATTSIM_SOURCE_DIR) + "/configs/scenarios/4s-racing-healthy-a.json");
+    REQUIRE(s.config.monitor.joint.cutoff_delay_s == 5.0f);
+    REQUIRE(s.cutoff_filter_s == 5.0);
+    const std::vector<EstimatorColumn> cols = {solve_truth_column()};
+    const ScoreResult with = score_scenarios({s}, cols, ScoreOptions{});
+    REQUIRE(with.flights.size() == 1);
+    const ColumnFlight& w = with.flights[0].columns[0];
+    REQUIRE(w.has_energy20);
+    CHECK(std::fabs(w.energy_err20) < 2.0);
+    CHECK(w.has_rt[1]);
+
+    sim::Scenario s0 = s;
+    s0.config.monitor.joint.cutoff_delay_s = 0.0f;
+    const ScoreResult without = score_scenarios({s0}, cols, ScoreOptions{});
+    const ColumnFlight& n = without.flights[0].columns[0];
+    REQUIRE(n.has_energy20);
+    CHECK(n.energy_err20 < w.energy_err20 - 2.0);
+    // It is a diagnostic: not among the standard columns.
+    for (const EstimatorColumn& c : standard_columns()) CHECK(c.name != "solve-truth");
+    REQUIRE(diagnostic_columns().size() == 1);
+    CHECK(diagnostic_columns()[0].name == "solve-truth");
+}

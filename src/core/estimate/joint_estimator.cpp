@@ -10,6 +10,7 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     rated_ = rated;
     cells_ = cells_in_series > 0 ? cells_in_series : 1;
     ocv_.configure(config.ocv, cells_in_series, rated);
+    solver_.set_cutoff_delay_s(config.cutoff_delay_s);
     DifferenceResistanceEstimator::Config rc = config.resistance;
     rc.initial_resistance_ohm = rated.internal_resistance_ohm;
     resistance_.configure(rc);

@@ -74,7 +74,14 @@ bool PowerTimeSolver::advance(const OcvCurve& ocv, int max_steps) {
         prev_v_ = v;
         prev_i_ = i_a;
         ++step_;
-        if (stop) result_.cutoff = true;
+        if (stop) {
+            // Past the crossing the voltage is below the minimum, and a delay of seconds
+            // moves little charge: the power (and the current at the crossing) held.
+            result_.cutoff = true;
+            result_.time_s += cutoff_delay_s_;
+            result_.energy_wh += power_w_ * cutoff_delay_s_ / 3600.0f;
+            result_.charge_ah += (feasible ? i_a : prev_i_) * cutoff_delay_s_ / 3600.0f;
+        }
         if (stop || step_ >= steps_) done_ = true;
     }
     return done_;

@@ -25,6 +25,9 @@ public:
     // reaches the cutoff as the weak cell collapses, not when the average cell is empty.
     void start(float soc_from, float capacity_ah, float resistance_ohm, float power_w, float min_voltage_v,
                int steps, float weak_cell_share = 0.0f, float weak_cell_ratio = 1.0f);
+    // Time the flight goes on at the power after the loaded voltage reaches the minimum
+    // (a failsafe's filter or hold time; 0 = the crossing ends it). Kept across starts.
+    void set_cutoff_delay_s(float delay_s) { cutoff_delay_s_ = delay_s > 0.0f ? delay_s : 0.0f; }
     // Runs up to `max_steps` steps; returns true when the result is complete.
     bool advance(const OcvCurve& ocv, int max_steps);
     bool done() const { return done_; }
@@ -34,6 +37,7 @@ private:
     float loaded_voltage(const OcvCurve& ocv, float soc, float& current_a, bool& feasible) const;
     float soc_from_ = 0.0f, capacity_ah_ = 0.0f, resistance_ohm_ = 0.0f, power_w_ = 0.0f, min_v_ = 0.0f;
     float weak_share_ = 0.0f, weak_ratio_ = 1.0f;
+    float cutoff_delay_s_ = 0.0f;
     int steps_ = 0, step_ = 0;
     float prev_v_ = 0.0f, prev_i_ = 0.0f;
     bool done_ = true;

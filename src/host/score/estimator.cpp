@@ -4,6 +4,8 @@
 #include <memory>
 
 #include "core/estimate/coulomb_baseline.h"
+#include "core/estimate/power_time_solver.h"
+#include "core/model/ocv.h"
 #include "host/sim/plant.h"
 
 namespace battsim {
@@ -19,6 +21,8 @@ std::vector<EstimatorColumn> standard_columns() {
                        [](core::MonitorConfig& c) { c.estimator = core::EstimatorKind::Joint; }),
     };
 }
+
+std::vector<EstimatorColumn> diagnostic_columns() { return {solve_truth_column()}; }
 
 EstimatorColumn monitor_column(std::string name, std::string description,
                                std::function<void(core::MonitorConfig&)> tweak) {
@@ -162,6 +166,71 @@ EstimatorColumn oracle_column() {
                     e.warnings = bits;
                     e.outlier_cell = static_cast<int8_t>(t.weak_cell);
                 }
+            }
+            out.push_back(e);
+        }
+        return out;
+    };
+    return col;
+}
+
+EstimatorColumn solve_truth_column() {
+    EstimatorColumn col;
+    col.name = "solve-truth";
+    col.description =
+        "the joint estimator's flight-time solve fed the true pack: what the model lacks, apart from what the estimates miss";
+    col.run = [](const FlightInput& in) {
+        const sim::SimulationResult& r = *in.truth;
+        const sim::Truth& t = r.truth;
+        const sim::PlantParams& pp = t.plant;
+        const core::MonitorConfig& mc = in.config->monitor;
+        core::OcvCurve ocv;
+        ocv.configure(mc.joint.ocv, mc.cells_in_series, mc.battery);
+        core::PowerTimeSolver solver;
+        solver.set_cutoff_delay_s(mc.joint.cutoff_delay_s);
+        sim::Plant plant;
+        plant.configure(pp, 1.0, r.scenario.ambient_c);
+        std::vector<Estimate> out;
+        out.reserve(in.samples->size());
+        bool have_run = false;
+        double run_time_s = 0.0, run_remaining_s = 0.0, run_energy_wh = 0.0, run_power_w = 0.0;
+        size_t k = 0;
+        for (const core::Sample& smp : *in.samples) {
+            Estimate e;
+            e.time_s = static_cast<double>(smp.time_us) * 1e-6;
+            const int64_t ms = static_cast<int64_t>(smp.time_us / 1000);
+            while (k < r.snapshots.size() && r.snapshots[k].time_ms < ms) ++k;
+            const bool at_snapshot = k < r.snapshots.size() && r.snapshots[k].time_ms == ms;
+            const double flown_s = at_snapshot ? r.snapshots[k].time_s - t.takeoff_s : 0.0;
+            if (at_snapshot && r.snapshots[k].in_flight && flown_s >= 1.0) {
+                const sim::RowSnapshot& snap = r.snapshots[k];
+                if (!have_run || snap.time_s - run_time_s >= 0.25) {  // as often as the oracle
+                    plant.set_state(snap.state);
+                    // The solve's one-cell picture of the pack: the mean cell's charge and
+                    // capacity, every resistance the plant has now (R0 and both RC branches
+                    // at steady state), and the flight's mean power so far.
+                    double soc = 0.0, capacity_ah = 0.0, rc_ohm = 0.0;
+                    for (int c = 0; c < pp.cells; ++c) {
+                        soc += snap.state.soc[c];
+                        capacity_ah += pp.cell[c].capacity_ah;
+                        rc_ohm += pp.cell[c].r1_ohm + pp.cell[c].r2_ohm;
+                    }
+                    const double resistance_ohm = plant.pack_r0_ohm() + rc_ohm * plant.temperature_factor();
+                    run_power_w = snap.flight_energy_wh * 3600.0 / flown_s;
+                    solver.start(static_cast<float>(soc / pp.cells), static_cast<float>(capacity_ah / pp.cells),
+                                 static_cast<float>(resistance_ohm), static_cast<float>(run_power_w),
+                                 mc.flight_time.min_flight_voltage_v, 64);
+                    solver.advance(ocv, 64);
+                    have_run = true;
+                    run_time_s = snap.time_s;
+                    run_remaining_s = solver.result().time_s;
+                    run_energy_wh = solver.result().energy_wh;
+                }
+                const double aged_s = snap.time_s - run_time_s;
+                e.has_remaining_time = true;
+                e.remaining_time_s = std::max(0.0, run_remaining_s - aged_s);
+                e.has_remaining_energy = true;
+                e.remaining_energy_wh = std::max(0.0, run_energy_wh - run_power_w * aged_s / 3600.0);
             }
             out.push_back(e);
         }

@@ -58,8 +58,15 @@ EstimatorColumn baseline_column();
 // The floor for remaining-time error that no estimator can beat.
 EstimatorColumn oracle_column();
 
+// The joint estimator's flight-time solve (core::PowerTimeSolver on the config's OCV
+// curve, minimum voltage and cutoff delay) fed the true pack every quarter second: its
+// error is the model's own, apart from the estimates' (docs/estimator.md, twelfth session).
+EstimatorColumn solve_truth_column();
+
 // The scoreboard's columns, in order.
 std::vector<EstimatorColumn> standard_columns();
+// Columns run only when named (`battsim score --columns`): diagnostics, not estimators.
+std::vector<EstimatorColumn> diagnostic_columns();
 
 }  // namespace score
 }  // namespace host
