@@ -17,22 +17,18 @@ import subprocess
 import sys
 import tempfile
 
+from config_edit import edit_joint_sections
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def shift_tables(config_dir, shift_v):
-    for name in sorted(os.listdir(config_dir)):
-        path = os.path.join(config_dir, name)
-        if not name.endswith(".json") or not os.path.isfile(path):
-            continue
-        with open(path) as f:
-            cfg = json.load(f)
-        table = cfg.get("joint", {}).get("ocv_cell_voltage_v")
-        if not table:
-            continue
-        cfg["joint"]["ocv_cell_voltage_v"] = [round(v + shift_v, 6) for v in table]
-        with open(path, "w") as f:
-            json.dump(cfg, f, indent=2)
+    def shift(joint):
+        table = joint.get("ocv_cell_voltage_v")
+        if table:
+            joint["ocv_cell_voltage_v"] = [round(v + shift_v, 6) for v in table]
+        return bool(table)
+    edit_joint_sections(config_dir, shift)
 
 
 def summarise(report):

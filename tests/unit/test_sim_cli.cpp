@@ -88,6 +88,15 @@ TEST_CASE("battsim score prints a table or JSON and checks its arguments", "[cli
     CHECK(j["flights"].size() == 2);
     CHECK(j["flights"][0]["name"] == "a");
     CHECK(j["flights"][1]["short_flight"] == true);
+    // The diagnostic column runs only when named, and then beside the others.
+    CHECK_FALSE(j["flights"][0]["estimators"].contains("solve-truth"));
+    const auto diag = run("score " + q(d.at("a.json")) + " --json --columns oracle,solve-truth");
+    INFO(diag.err);
+    REQUIRE(diag.exit_code == 0);
+    const nlohmann::json dj = nlohmann::json::parse(diag.out);
+    REQUIRE(dj["flights"][0]["estimators"].contains("solve-truth"));
+    CHECK(dj["flights"][0]["estimators"]["solve-truth"]["remaining_energy_error_20_pct"].is_number());
+    CHECK_FALSE(dj["flights"][0]["estimators"].contains("joint"));
     const auto table = run("score " + q(d.path) + " --columns reference,oracle -o " + q(d.at("score.txt")));
     REQUIRE(table.exit_code == 0);
     const std::string text = clitest::read_file(d.at("score.txt"));

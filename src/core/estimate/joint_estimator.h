@@ -99,9 +99,11 @@ public:
         // A second, slow part of the polarisation sharing the one resistance state: i_p is
         // (1 − share)·(fast low-pass) + share·(slow low-pass). One state keeps the filter
         // well conditioned (two free, nearly collinear branches diverged in float); the
-        // shape comes from a fit of the pack (battsim fit's RC branches). 0 = off.
+        // shape comes from a fit of the pack (battsim fit's RC branches). 0 = off. The
+        // share is 0.3 since the solves carry the cutoff delay (0.4 had made up for the
+        // missing delay; chosen on reseeded suites: docs/estimator.md, twelfth session).
         float polarisation_slow_time_s = 30.0f;
-        float polarisation_slow_share = 0.4f;
+        float polarisation_slow_share = 0.3f;
         float min_voltage_v = 13.3f;        // loaded cutoff
         // How long the loaded voltage may stay below min_voltage_v before the flight is
         // over: a failsafe judges a filtered voltage (a first-order filter crosses its

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <utility>
 
 #include "core/estimate/coulomb_baseline.h"
 #include "core/estimate/power_time_solver.h"
@@ -11,6 +12,42 @@
 namespace battsim {
 namespace host {
 namespace score {
+
+namespace {
+// The truth's snapshot at this sample's millisecond, if any; k walks forward with the samples.
+const sim::RowSnapshot* snapshot_at(const sim::SimulationResult& r, const core::Sample& smp, size_t& k) {
+    const int64_t ms = static_cast<int64_t>(smp.time_us / 1000);
+    while (k < r.snapshots.size() && r.snapshots[k].time_ms < ms) ++k;
+    return k < r.snapshots.size() && r.snapshots[k].time_ms == ms ? &r.snapshots[k] : nullptr;
+}
+
+// A forward run every quarter second; between runs the same answer aged by the time passed
+// (at a constant demand it falls 1 s per s). Shared by the columns that run to the cutoff.
+class AgedForwardRuns {
+public:
+    // run() -> {time_s, energy_wh}, called only when a new run is due.
+    template <class Run>
+    void fill(double now_s, double power_w, Run run, Estimate& e) {
+        if (!have_ || now_s - run_time_s_ >= 0.25) {
+            const std::pair<double, double> r = run();
+            have_ = true;
+            run_time_s_ = now_s;
+            remaining_s_ = r.first;
+            energy_wh_ = r.second;
+            power_w_ = power_w;
+        }
+        const double aged_s = now_s - run_time_s_;
+        e.has_remaining_time = true;
+        e.remaining_time_s = std::max(0.0, remaining_s_ - aged_s);
+        e.has_remaining_energy = true;
+        e.remaining_energy_wh = std::max(0.0, energy_wh_ - power_w_ * aged_s / 3600.0);
+    }
+
+private:
+    bool have_ = false;
+    double run_time_s_ = 0.0, remaining_s_ = 0.0, energy_wh_ = 0.0, power_w_ = 0.0;
+};
+}  // namespace
 
 std::vector<EstimatorColumn> standard_columns() {
     return {
@@ -123,16 +160,13 @@ EstimatorColumn oracle_column() {
         if (t.sensor_faulty) bits |= 1u << core::kWarnSensorFault;
         sim::Plant plant;
         plant.configure(t.plant, 1.0, s.ambient_c);
-        bool have_run = false;
-        double run_time_s = 0.0, run_remaining_s = 0.0, run_energy_wh = 0.0, run_power_w = 0.0;
+        AgedForwardRuns runs;
         size_t k = 0;
         for (const core::Sample& smp : *in.samples) {
             Estimate e;
             e.time_s = static_cast<double>(smp.time_us) * 1e-6;
-            const int64_t ms = static_cast<int64_t>(smp.time_us / 1000);
-            while (k < r.snapshots.size() && r.snapshots[k].time_ms < ms) ++k;
-            if (k < r.snapshots.size() && r.snapshots[k].time_ms == ms) {
-                const sim::RowSnapshot& snap = r.snapshots[k];
+            if (const sim::RowSnapshot* at = snapshot_at(r, smp, k)) {
+                const sim::RowSnapshot& snap = *at;
                 plant.set_state(snap.state);
                 e.has_capacity = true;
                 e.capacity_ah = t.pack_capacity_ah;
@@ -143,24 +177,13 @@ EstimatorColumn oracle_column() {
                 const double flown_s = snap.time_s - t.takeoff_s;
                 if (snap.in_flight && flown_s >= 1.0) {
                     const double power = snap.flight_energy_wh * 3600.0 / flown_s;
-                    // A forward run every quarter second; between runs the same answer
-                    // aged by the time passed (at a constant demand it falls 1 s per s).
-                    if (!have_run || snap.time_s - run_time_s >= 0.25) {
+                    runs.fill(snap.time_s, power, [&] {
                         const sim::ForwardResult f =
                             sim::fly_to_cutoff(t.plant, snap.state, snap.cutoff_filter_v, power,
                                                s.cutoff_v_per_cell * s.pack.cells, s.cutoff_filter_s, 0.5,
                                                s.max_continuation_s + s.profile.flight_s);
-                        have_run = true;
-                        run_time_s = snap.time_s;
-                        run_remaining_s = f.time_s;
-                        run_energy_wh = f.energy_wh;
-                        run_power_w = power;
-                    }
-                    const double aged_s = snap.time_s - run_time_s;
-                    e.has_remaining_time = true;
-                    e.remaining_time_s = std::max(0.0, run_remaining_s - aged_s);
-                    e.has_remaining_energy = true;
-                    e.remaining_energy_wh = std::max(0.0, run_energy_wh - run_power_w * aged_s / 3600.0);
+                        return std::make_pair(f.time_s, f.energy_wh);
+                    }, e);
                 }
                 if (e.time_s >= t.takeoff_s) {
                     e.warnings = bits;
@@ -192,19 +215,17 @@ EstimatorColumn solve_truth_column() {
         plant.configure(pp, 1.0, r.scenario.ambient_c);
         std::vector<Estimate> out;
         out.reserve(in.samples->size());
-        bool have_run = false;
-        double run_time_s = 0.0, run_remaining_s = 0.0, run_energy_wh = 0.0, run_power_w = 0.0;
+        AgedForwardRuns runs;  // as often as the oracle
         size_t k = 0;
         for (const core::Sample& smp : *in.samples) {
             Estimate e;
             e.time_s = static_cast<double>(smp.time_us) * 1e-6;
-            const int64_t ms = static_cast<int64_t>(smp.time_us / 1000);
-            while (k < r.snapshots.size() && r.snapshots[k].time_ms < ms) ++k;
-            const bool at_snapshot = k < r.snapshots.size() && r.snapshots[k].time_ms == ms;
-            const double flown_s = at_snapshot ? r.snapshots[k].time_s - t.takeoff_s : 0.0;
-            if (at_snapshot && r.snapshots[k].in_flight && flown_s >= 1.0) {
-                const sim::RowSnapshot& snap = r.snapshots[k];
-                if (!have_run || snap.time_s - run_time_s >= 0.25) {  // as often as the oracle
+            const sim::RowSnapshot* at = snapshot_at(r, smp, k);
+            const double flown_s = at ? at->time_s - t.takeoff_s : 0.0;
+            if (at && at->in_flight && flown_s >= 1.0) {
+                const sim::RowSnapshot& snap = *at;
+                const double power_w = snap.flight_energy_wh * 3600.0 / flown_s;
+                runs.fill(snap.time_s, power_w, [&] {
                     plant.set_state(snap.state);
                     // The solve's one-cell picture of the pack: the mean cell's charge and
                     // capacity, every resistance the plant has now (R0 and both RC branches
@@ -216,21 +237,13 @@ EstimatorColumn solve_truth_column() {
                         rc_ohm += pp.cell[c].r1_ohm + pp.cell[c].r2_ohm;
                     }
                     const double resistance_ohm = plant.pack_r0_ohm() + rc_ohm * plant.temperature_factor();
-                    run_power_w = snap.flight_energy_wh * 3600.0 / flown_s;
                     solver.start(static_cast<float>(soc / pp.cells), static_cast<float>(capacity_ah / pp.cells),
-                                 static_cast<float>(resistance_ohm), static_cast<float>(run_power_w),
+                                 static_cast<float>(resistance_ohm), static_cast<float>(power_w),
                                  mc.flight_time.min_flight_voltage_v, 64);
                     solver.advance(ocv, 64);
-                    have_run = true;
-                    run_time_s = snap.time_s;
-                    run_remaining_s = solver.result().time_s;
-                    run_energy_wh = solver.result().energy_wh;
-                }
-                const double aged_s = snap.time_s - run_time_s;
-                e.has_remaining_time = true;
-                e.remaining_time_s = std::max(0.0, run_remaining_s - aged_s);
-                e.has_remaining_energy = true;
-                e.remaining_energy_wh = std::max(0.0, run_energy_wh - run_power_w * aged_s / 3600.0);
+                    return std::make_pair(static_cast<double>(solver.result().time_s),
+                                          static_cast<double>(solver.result().energy_wh));
+                }, e);
             }
             out.push_back(e);
         }
