@@ -16,3 +16,27 @@ def edit_joint_sections(config_dir, edit):
             continue
         with open(path, "w") as f:
             json.dump(cfg, f, indent=2)
+
+
+def score_edited(battsim, root, edit, suites, columns, jobs=2):
+    """Copies root/configs to a temporary directory, applies edit as edit_joint_sections does,
+    and yields (suite, report) for `battsim score --json` on each suite of the copy. Raises
+    RuntimeError with battsim's message when a score fails."""
+    import shutil
+    import subprocess
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        configs = os.path.join(tmp, "configs")
+        shutil.copytree(os.path.join(root, "configs"), configs)
+        edit_joint_sections(configs, edit)
+        for suite in suites:
+            out = os.path.join(tmp, suite + ".json")
+            try:
+                r = subprocess.run([battsim, "score", "-j", str(jobs), "--columns", columns, "--json", "-o", out,
+                                    os.path.join(configs, suite)], capture_output=True, text=True)
+            except OSError as e:
+                raise RuntimeError(f"cannot run {battsim} ({e.strerror}); build first or pass --battsim") from e
+            if r.returncode != 0:
+                raise RuntimeError(f"battsim score failed on {suite}:\n{r.stderr}")
+            with open(out) as f:
+                yield suite, json.load(f)

@@ -12,25 +12,14 @@ joint estimator, and prints one row per delay and suite. Standard library only.
   python3 scripts/cutoff-delay.py [--battsim build/battsim] [--delays 0 2.5 5 7.5] [-j 2]
 """
 import argparse
-import json
 import os
-import shutil
 import statistics
-import subprocess
 import sys
-import tempfile
 
-from config_edit import edit_joint_sections
+from config_edit import score_edited
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SUITES = ["scenarios", "scenarios-holdout"]
-
-
-def set_delay(config_dir, delay_s):
-    def put(joint):
-        joint["cutoff_delay_s"] = delay_s
-        return True
-    edit_joint_sections(config_dir, put)
 
 
 def summarise(report):
@@ -64,23 +53,19 @@ def main():
           "joint energy at 20 %, median \\|err\\| / signed | joint gap, median / largest | warnings, false |")
     print("|---|---|---|---|---|---|---|")
     for delay in a.delays:
-        with tempfile.TemporaryDirectory() as tmp:
-            configs = os.path.join(tmp, "configs")
-            shutil.copytree(os.path.join(ROOT, "configs"), configs)
-            set_delay(configs, delay)
-            for suite in SUITES:
-                out = os.path.join(tmp, suite + ".json")
-                r = subprocess.run([a.battsim, "score", "-j", str(a.jobs), "--columns", "oracle,solve-truth,joint",
-                                    "--json", "-o", out, os.path.join(configs, suite)], capture_output=True, text=True)
-                if r.returncode != 0:
-                    print(f"cutoff-delay: battsim score failed on {suite} at {delay} s:\n{r.stderr}", file=sys.stderr)
-                    return 1
-                with open(out) as f:
-                    m = summarise(json.load(f))
+        def put(joint):
+            joint["cutoff_delay_s"] = delay
+            return True
+        try:
+            for suite, report in score_edited(a.battsim, ROOT, put, SUITES, "oracle,solve-truth,joint", a.jobs):
+                m = summarise(report)
                 t, j = m["solve-truth"], m["joint"]
                 print(f"| {delay:g} | {suite} | {t['energy_abs']:.2f} / {t['energy_signed']:+.2f} | {t['gap']:+.2f} | "
                       f"{j['energy_abs']:.2f} / {j['energy_signed']:+.2f} | {j['gap']:.2f} / {j['gap_largest']:.1f} | "
                       f"{j['warnings'][0]}/{j['warnings'][1]}, {j['false']} |", flush=True)
+        except RuntimeError as e:
+            print(f"cutoff-delay: at {delay:g} s: {e}", file=sys.stderr)
+            return 1
     return 0
 
 

@@ -9,26 +9,13 @@ suites against it and prints one row per shift and suite. The simulated logs do 
   python3 scripts/ocv-sensitivity.py [--battsim build/battsim] [--shifts-mv -5 -2 0 2 5]
 """
 import argparse
-import json
 import os
-import shutil
 import statistics
-import subprocess
 import sys
-import tempfile
 
-from config_edit import edit_joint_sections
+from config_edit import score_edited
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def shift_tables(config_dir, shift_v):
-    def shift(joint):
-        table = joint.get("ocv_cell_voltage_v")
-        if table:
-            joint["ocv_cell_voltage_v"] = [round(v + shift_v, 6) for v in table]
-        return bool(table)
-    edit_joint_sections(config_dir, shift)
 
 
 def summarise(report):
@@ -67,20 +54,19 @@ def main():
           "energy at 20 %, median / worst | capacity at 20 % | warnings in time | false warnings |")
     print("|---|---|---|---|---|---|---|---|")
     for shift_mv in args.shifts_mv:
-        with tempfile.TemporaryDirectory() as tmp:
-            configs = os.path.join(tmp, "configs")
-            shutil.copytree(os.path.join(ROOT, "configs"), configs)
-            shift_tables(configs, shift_mv / 1000.0)
-            for suite in args.suites:
-                out = subprocess.run([args.battsim, "score", "-j2", "--json", "--columns", "joint,oracle",
-                                      os.path.join(configs, suite)], capture_output=True, text=True)
-                if out.returncode != 0:
-                    sys.exit(f"ocv-sensitivity: battsim score failed on {suite} at {shift_mv:+g} mV:\n{out.stderr}")
-                r = summarise(json.loads(out.stdout))
+        def shift(joint, shift_v=shift_mv / 1000.0):
+            table = joint.get("ocv_cell_voltage_v")
+            if table:
+                joint["ocv_cell_voltage_v"] = [round(v + shift_v, 6) for v in table]
+            return bool(table)
+        try:
+            for suite, report in score_edited(args.battsim, ROOT, shift, args.suites, "joint,oracle"):
+                r = summarise(report)
                 print(f"| {shift_mv:+g} | {suite} | {r['gap'][0]:.2f} / {r['gap'][1]:.1f} | {r['time20']:.2f}, {r['time50']:.2f} | "
                       f"{r['energy20'][0]:.2f} / {r['energy20'][1]:.1f} | {r['capacity20']:.2f} | "
-                      f"{r['warnings'][0]}/{r['warnings'][1]} | {r['false']} |")
-
+                      f"{r['warnings'][0]}/{r['warnings'][1]} | {r['false']} |", flush=True)
+        except RuntimeError as e:
+            sys.exit(f"ocv-sensitivity: at {shift_mv:+g} mV: {e}")
 
 if __name__ == "__main__":
     main()
