@@ -165,6 +165,22 @@ TEST_CASE("Power-time solver against closed forms", "[joint]") {
     CHECK(s.result().time_s == Approx(no_delay.time_s + 5.0f).epsilon(1e-6));
     CHECK(s.result().energy_wh == Approx(no_delay.energy_wh + 100.0 * 5.0 / 3600.0).epsilon(1e-5));
     CHECK(s.result().charge_ah == Approx(no_delay.charge_ah + 100.0 / 14.4 * 5.0 / 3600.0).epsilon(2e-4));
+    // Where the power can no longer be met (R 0.5 ohm, 100 W: below E = 14.14 V), the flight
+    // goes on at the last current that met it: 4 steps over the same linear curve put E at
+    // 14.4 V (I = (14.4 − √(14.4² − 200))/1 = 11.69 A) and then 13.2 V (infeasible).
+    s.set_cutoff_delay_s(0.0f);
+    s.start(1.0f, 2.0f, 0.5f, 100.0f, 1.0f, 4);
+    while (!s.advance(c, 4)) {
+    }
+    const PowerTimeSolver::Result collapse = s.result();
+    CHECK(collapse.cutoff);
+    s.set_cutoff_delay_s(5.0f);
+    s.start(1.0f, 2.0f, 0.5f, 100.0f, 1.0f, 4);
+    while (!s.advance(c, 4)) {
+    }
+    const double i_last = 14.4 - std::sqrt(14.4 * 14.4 - 200.0);
+    CHECK(s.result().charge_ah - collapse.charge_ah == Approx(i_last * 5.0 / 3600.0).epsilon(1e-3));
+    CHECK(s.result().time_s == Approx(collapse.time_s + 5.0f).epsilon(1e-6));
     // No crossing, no delay: the flat pack above ran out of charge, not voltage.
     s.start(1.0f, 1.0f, 0.05f, 400.0f, 13.0f, 50);
     c.configure(flat, 4, TremblayParams{});

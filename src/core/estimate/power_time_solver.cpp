@@ -64,7 +64,8 @@ bool PowerTimeSolver::advance(const OcvCurve& ocv, int max_steps) {
             stop = true;
         }
         const float dq_ah = dsoc * capacity_ah_ * fraction;
-        const float i_mean = 0.5f * (prev_i_ + (feasible ? i_a : prev_i_));
+        const float i_end = feasible ? i_a : prev_i_;  // where the power can no longer be met, the last current it was
+        const float i_mean = 0.5f * (prev_i_ + i_end);
         if (i_mean > 0.0f) {
             const float dt_s = dq_ah * 3600.0f / i_mean;
             result_.time_s += dt_s;
@@ -80,7 +81,7 @@ bool PowerTimeSolver::advance(const OcvCurve& ocv, int max_steps) {
             result_.cutoff = true;
             result_.time_s += cutoff_delay_s_;
             result_.energy_wh += power_w_ * cutoff_delay_s_ / 3600.0f;
-            result_.charge_ah += (feasible ? i_a : prev_i_) * cutoff_delay_s_ / 3600.0f;
+            result_.charge_ah += i_end * cutoff_delay_s_ / 3600.0f;
         }
         if (stop || step_ >= steps_) done_ = true;
     }
