@@ -11,10 +11,10 @@ data=${BATTSIM_DATA_DIR:-$root/../shared/data}
 # As in scripts/test.sh: an explicit BATTSIM_DATA_DIR wins over a cached one.
 set -- ${BATTSIM_DATA_DIR:+"-DBATTSIM_DATA_DIR=$BATTSIM_DATA_DIR"}
 CC=clang CXX=clang++ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBATTSIM_FUZZ=ON "$@" >/dev/null
-cmake --build "$build" -j"$(nproc)" --target fuzz_reader fuzz_monitor
+cmake --build "$build" -j"$(nproc)" --target fuzz_reader fuzz_monitor fuzz_documents
 
 corpus="$build/corpus"
-mkdir -p "$corpus/reader" "$corpus/monitor" "$build/crashes"
+mkdir -p "$corpus/reader" "$corpus/monitor" "$corpus/documents" "$build/crashes"
 # Seeds: small real logs of every format (not copied into the repository), when the shared
 # data is there; the committed seeds and regressions always.
 if [ ! -d "$data" ]; then
@@ -27,8 +27,17 @@ if [ -f "$data/predictive-bms/flights/30.csv" ]; then head -c 4000 "$data/predic
 if [ -f "$data/ardupilot/log171.bin" ]; then head -c 20000 "$data/ardupilot/log171.bin" > "$corpus/reader/df.bin"; fi
 if [ -d "$root/tests/fuzz/regressions" ]; then cp "$root"/tests/fuzz/regressions/* "$corpus/reader/" 2>/dev/null || true; fi
 
+# Documents: the first byte picks the reader (0 config, 1 scenario, 2 manifest, 3 table).
+seed_doc() { { printf "$1"; cat "$2"; } > "$corpus/documents/$3"; }
+seed_doc '\000' "$root/configs/sim-4s.json" config.json
+seed_doc '\000' "$root/configs/reference-modified.json" config-ref.json
+seed_doc '\001' "$root/configs/scenarios/3s-hover-healthy.json" scenario.json
+seed_doc '\002' "$root/configs/manifests/predictive-bms.json" manifest.json
+printf '\003{"schema": "battsim.batch", "version": 1, "inputs": {"count": 1, "digest": "d"}, "shard": null, "rows": []}' \
+  > "$corpus/documents/table.json"
+
 status=0
-for h in reader monitor; do
+for h in reader monitor documents; do
   echo "fuzz: $h for ${seconds}s"
   if ! "$build/tests/fuzz_$h" "$corpus/$h" -max_total_time="$seconds" -max_len=65536 -timeout=10 \
         -artifact_prefix="$build/crashes/$h-" -print_final_stats=1 2>"$build/fuzz_$h.log"; then

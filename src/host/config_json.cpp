@@ -253,15 +253,24 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
 }
 
 LoadedConfig load_config_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw ConfigError(path + ": cannot open config file");
+    std::string text;
+    const TextRead r = read_text_file(path, text);
+    if (r != TextRead::Ok) throw ConfigError(path + ": " + text_read_message(r, "config file"));
+    if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+        throw ConfigError(path + ": file is empty; expected a \"" + std::string(kSchema) + "\" JSON object");
     json j;
     try {
-        j = json::parse(in);
+        j = json::parse(text);
     } catch (const json::parse_error& e) {
-        throw ConfigError(path + ": not valid JSON (" + std::string(e.what()) + ")");
+        const JsonSyntaxError se = json_syntax_error(text, e);
+        throw ConfigError(path + ":" + std::to_string(se.line) + ":" + std::to_string(se.column) +
+                          ": not valid JSON: " + se.what);
     }
-    return config_from_json(j, path);
+    try {
+        return config_from_json(j, path);
+    } catch (const ConfigError& e) {
+        throw located(e, JsonLocator(text));
+    }
 }
 
 json config_to_json(const LoadedConfig& c) {

@@ -1,7 +1,8 @@
 // The strict JSON object reader behind every config section: each member read is
 // remembered, so that leftovers are reported as unknown keys when the reader goes out of
 // scope (a typo never silently falls back to a default), and every number must be finite
-// and in range. Messages name the file and the JSON path: "cfg.json: $.battery.x: ...".
+// and in range. Messages name the file and the JSON path, "cfg.json: $.battery.x: ...";
+// load_config_file() adds the line and column, "cfg.json:7:20: $.battery.x: ...".
 #pragma once
 #include <cmath>
 #include <exception>
@@ -12,12 +13,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include "host/io/json_text.h"
+
 namespace battsim {
 namespace host {
 
-class ConfigError : public std::runtime_error {
+class ConfigError : public JsonValueError {
 public:
-    using std::runtime_error::runtime_error;
+    using JsonValueError::JsonValueError;
 };
 
 class ConfigObjectReader {
@@ -32,7 +35,7 @@ public:
     ~ConfigObjectReader() noexcept(false) {
         if (std::uncaught_exceptions() > 0) return;
         for (auto it = j_.begin(); it != j_.end(); ++it) {
-            if (!used_.count(it.key())) fail(path_ + "." + it.key(), "unknown key");
+            if (!used_.count(it.key())) fail(path_ + "." + it.key(), "unknown key", true);
         }
     }
     // A missing member keeps `out` (the default).
@@ -71,8 +74,8 @@ public:
     }
     std::string child(const char* key) const { return path_ + "." + key; }
     const std::string& origin() const { return origin_; }
-    [[noreturn]] void fail(const std::string& where, const std::string& what) const {
-        throw ConfigError(origin_ + ": " + where + ": " + what);
+    [[noreturn]] void fail(const std::string& where, const std::string& what, bool at_key = false) const {
+        throw ConfigError(origin_, where, what, at_key);
     }
 
 private:

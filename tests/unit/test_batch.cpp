@@ -175,6 +175,8 @@ TEST_CASE("JSON manifest errors name the line, column and what was expected", "[
     CHECK(err("{\"schema\": \"battsim.manifest\", \"logs\": [{\"path\": \"${BATTSIM_TEST_NOT_SET_EVER}/a\"}]}")
               .find("BATTSIM_TEST_NOT_SET_EVER is not set") != std::string::npos);
     CHECK(input_error([&] { load_manifest(t.path("nope.json")); }) == t.path("nope.json") + ": cannot open manifest");
+    // A stray closer used to stall the position scanner (an endless loop before the message).
+    CHECK(err("[}") == p + ":1:2: not valid JSON: syntax error while parsing value - unexpected '}'; expected '[', '{', or a literal");
 }
 
 TEST_CASE("CSV manifest: header, comments, quoting and errors with line and field", "[batch]") {
@@ -428,7 +430,8 @@ TEST_CASE("merge rebuilds the single run's table and refuses incomplete or forei
 
     const std::string notjson = t.write("x.json", "{\"schema\": \"battsim.batch\",\n \"rows\": [}");
     CHECK(input_error([&] { read_table_file(notjson); }) ==
-          notjson + ":2:11: not valid JSON; expected a table written by `battsim batch --format json`");
+          notjson + ":2:11: not valid JSON (syntax error while parsing value - unexpected '}'; expected '[', '{', or a literal); "
+                    "expected a table written by `battsim batch --format json`");
     const std::string summary = t.write("y.json", "{\"schema\": \"battsim.summary\"}");
     CHECK(input_error([&] { read_table_file(summary); }) ==
           summary + ": expected a JSON table with \"schema\": \"battsim.batch\" (from `battsim batch --format json`)");

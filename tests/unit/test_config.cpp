@@ -1,6 +1,8 @@
 #include <catch2/catch.hpp>
 
 #include "host/config_json.h"
+#include "host/io/json_text.h"
+#include "test_files.h"
 
 using namespace battsim::host;
 using nlohmann::json;
@@ -71,4 +73,63 @@ TEST_CASE("Config errors name the key", "[config]") {
     CHECK_THROWS_AS(config_from_json(j, "x.json"), ConfigError);
 
     CHECK_THROWS_WITH(load_config_file("/nonexistent/c.json"), Catch::Contains("cannot open"));
+}
+
+TEST_CASE("Config files: errors give the line and column of the key or value", "[config]") {
+    const testsupport::TempDir temp("config");
+    const auto error_of = [](const std::string& path) -> std::string {
+        try {
+            load_config_file(path);
+        } catch (const ConfigError& e) {
+            return e.what();
+        }
+        return "";
+    };
+    // Line 3 is `  "joint": {"cutoff_delay_s": -3}`: the value starts at column 31.
+    const std::string range =
+        temp.write("range.json", "{\n  \"schema\": \"battsim.config\", \"version\": 1,\n  \"joint\": {\"cutoff_delay_s\": -3}\n}\n");
+    CHECK(error_of(range) == range + ":3:31: $.joint.cutoff_delay_s: value -3 out of range [0, 600]");
+    // An unknown key is pointed at by its name (column 13), not its value.
+    const std::string typo =
+        temp.write("typo.json", "{\n  \"schema\": \"battsim.config\", \"version\": 1,\n  \"joint\": {\"cutoff_delay\": 5}\n}\n");
+    CHECK(error_of(typo) == typo + ":3:13: $.joint.cutoff_delay: unknown key");
+    const std::string syntax = temp.write("syntax.json", "{\n  \"schema\": \"battsim.config\",\n}\n");
+    CHECK(error_of(syntax) == syntax + ":3:1: not valid JSON: syntax error while parsing object key - unexpected '}'; expected string literal");
+    CHECK(error_of(temp.write("empty.json", " \n")).find("file is empty") != std::string::npos);
+    CHECK(error_of(temp.path()) == temp.path() + ": cannot open config file: it is a directory");
+    std::string text;
+    CHECK(read_text_file(range, text, 16) == TextRead::TooLarge);  // a cap, not the memory, ends a runaway read
+    CHECK(read_text_file(range, text) == TextRead::Ok);
+    CHECK(text.size() == 82);
+    CHECK(error_of(temp.path("absent.json")) == temp.path("absent.json") + ": cannot open config file");
+    // Values checked while parsed whole keep only the path (no text to locate in).
+    json j = config_to_json(default_config());
+    j["joint"]["cutoff_delay_s"] = -3;
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"), "x.json: $.joint.cutoff_delay_s: value -3 out of range [0, 600]");
+}
+
+TEST_CASE("JsonLocator: paths to positions, and text that does not parse cannot stall it", "[config]") {
+    const std::string text = "{\"a\": [1, {\"b\": true}],\n \"c\": \"x\\\"y\", \"d\": {}}";
+    const JsonLocator loc(text);
+    CHECK(loc.location("$") == std::make_pair(1L, 1L));
+    CHECK(loc.location("$.a") == std::make_pair(1L, 7L));
+    CHECK(loc.location("$.a[1]") == std::make_pair(1L, 11L));
+    CHECK(loc.location("$.a[1].b") == std::make_pair(1L, 17L));
+    CHECK(loc.key_location("$.a[1].b") == std::make_pair(1L, 12L));
+    CHECK(loc.location("$.c") == std::make_pair(2L, 7L));
+    CHECK(loc.location("$.d") == std::make_pair(2L, 20L));  // after the escaped quote
+    CHECK(loc.location("$.d.missing") == std::make_pair(2L, 20L));  // a missing member: its object
+    CHECK(loc.key_location("$.a[0]") == loc.location("$.a[0]"));  // no key: the value
+
+    for (const std::string bad : {"[}", "{]", "{\"a\" 1 2 :}", "]]]]", "{\"a\": [", "\"open", ":::"}) {
+        const JsonLocator l(bad);  // returns
+        CHECK(l.offset("$") == 0);
+    }
+    // Nesting far beyond the walked depth costs neither stack nor paths; the deep value is
+    // located at its deepest walked ancestor.
+    const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+    const JsonLocator d(deep);
+    std::string path = "$";
+    for (int i = 0; i < 40; ++i) path += "[0]";
+    CHECK(d.offset(path) == 32);
 }

@@ -341,14 +341,15 @@ TEST_CASE("Scenario files: the suite loads, covers what it must, and bad files a
     };
     CHECK(error_of(write("ok.json", head + "}")).empty());
     const std::string typo = write("typo.json", head + R"(, "pack": {"capcity_ah": 1.5}})");
-    CHECK(error_of(typo) == typo + ": $.pack.capcity_ah: unknown key");
+    CHECK(error_of(typo) == typo + ":1:" + std::to_string(head.size() + 12) + ": $.pack.capcity_ah: unknown key");
     const std::string syntax = write("syntax.json", head + ",\n  \"seed\": 1,,\n}");
     INFO(error_of(syntax));
     CHECK(error_of(syntax) == syntax + ":2:13: not valid JSON: syntax error while parsing object key - unexpected ','; expected string literal");
     const std::string range = write("range.json", head + R"(, "pack": {"capacity_ah": -1}})");
-    CHECK(error_of(range).find(range + ": $.pack.capacity_ah: expected a number in [") == 0);
+    CHECK(error_of(range).find(range + ":1:" + std::to_string(head.size() + 27) + ": $.pack.capacity_ah: expected a number in [") == 0);
     const std::string cells6 = write("cells.json", head + R"(, "pack": {"cells": 6}})");
-    CHECK(error_of(cells6) == cells6 + ": $.monitor_config: the config is for 4 cells, the pack has 6");
+    CHECK(error_of(cells6) == cells6 + ":1:" + std::to_string(head.size() - cfg.size() - 1) +
+                                   ": $.monitor_config: the config is for 4 cells, the pack has 6");
     const std::string raw6 = write("raw6.json", R"({"schema": "battsim.scenario", "version": 1, "name": "x", "monitor_config": ")" +
                                                     std::string(BATTSIM_SOURCE_DIR) +
                                                     R"(/configs/generic-6s.json", "pack": {"cells": 6}, "log": {"format": "raw"}})");
@@ -356,7 +357,7 @@ TEST_CASE("Scenario files: the suite loads, covers what it must, and bad files a
     const std::string weakc = write("weak.json", head + R"(, "pack": {"weak_cells": [{"cell": 5}]}})");
     CHECK(error_of(weakc).find("$.pack.weak_cells[0].cell: expected a whole number in [1, 4]") != std::string::npos);
     const std::string nocfg = write("nocfg.json", R"({"schema": "battsim.scenario", "version": 1, "name": "x", "monitor_config": "missing.json"})");
-    CHECK(error_of(nocfg).find(nocfg + ": $.monitor_config: " + tmp + "/missing.json: cannot open config file") == 0);
+    CHECK(error_of(nocfg).find(nocfg + ":1:77: $.monitor_config: " + tmp + "/missing.json: cannot open config file") == 0);
     CHECK(error_of(write("empty.json", "")).find("file is empty") != std::string::npos);
     CHECK(error_of(tmp + "/absent.json") == tmp + "/absent.json: cannot open scenario file");
     CHECK_THROWS_AS(find_scenario_files({tmp + "/nothing"}), ScenarioError);

@@ -66,7 +66,7 @@ TEST_CASE("battsim simulate: usage and scenario errors", "[cli][sim]") {
     clitest::write_file(d.at("bad.txt"), R"({"schema": "battsim.scenario", "version": 1, "name": "bad", "monitor_config": "x.json", "sede": 3})");
     const auto bad = run("simulate " + q(d.at("bad.txt")) + " -o " + q(d.at("x.csv")));
     CHECK(bad.exit_code == 4);
-    CHECK(bad.err.find(d.at("bad.txt") + ": $.sede: unknown key") != std::string::npos);
+    CHECK(bad.err.find(d.at("bad.txt") + ":1:89: $.sede: unknown key") != std::string::npos);
     const auto unwritable = run("simulate " + q(d.at("a.json")) + " -o " + q(d.at("no/such/dir/x.csv")));
     CHECK(unwritable.exit_code == 5);
 

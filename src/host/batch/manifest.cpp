@@ -1,7 +1,6 @@
 #include "host/batch/manifest.h"
 
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -10,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "host/batch/inputs.h"
+#include "host/io/json_text.h"
 #include "host/io/line_reader.h"
 
 namespace battsim {
@@ -115,14 +115,10 @@ const char* to_string(core::EstimatorKind kind) {
 namespace {
 
 std::string read_text(const std::string& path) {
-    std::error_code ec;
-    if (fs::is_directory(path, ec)) throw InputError(path, 0, 0, "cannot open manifest: it is a directory");
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path, 0, 0, "cannot open manifest");
-    std::ostringstream s;
-    s << in.rdbuf();
-    if (in.bad()) throw InputError(path, 0, 0, "cannot read manifest");
-    return s.str();
+    std::string text;
+    const TextRead r = read_text_file(path, text);
+    if (r != TextRead::Ok) throw InputError(path, 0, 0, text_read_message(r, "manifest"));
+    return text;
 }
 
 // Relative paths in a manifest are relative to the manifest's own directory, so a
@@ -138,94 +134,15 @@ std::string manifest_dir(const std::string& path) {
 }
 
 
-// Where each value of an (already validated) JSON text starts, keyed by the same
-// "$.a.b[3]" paths the messages use. nlohmann::json keeps no positions, so this small
-// scanner walks the text once more.
-class JsonLocator {
-public:
-    explicit JsonLocator(const std::string& text) : t_(text) {
-        skip_ws();
-        value("$");
-    }
-    size_t offset(const std::string& path) const {
-        auto it = offsets_.find(path);
-        return it == offsets_.end() ? 0 : it->second;
-    }
-    // Where the key of member `path` starts (its value's start if unknown).
-    size_t key_offset(const std::string& path) const {
-        auto it = keys_.find(path);
-        return it == keys_.end() ? offset(path) : it->second;
-    }
-
-private:
-    void skip_ws() {
-        while (p_ < t_.size() && (t_[p_] == ' ' || t_[p_] == '\t' || t_[p_] == '\n' || t_[p_] == '\r')) ++p_;
-    }
-    std::string string_token() {
-        std::string s;
-        if (p_ >= t_.size() || t_[p_] != '"') return s;
-        ++p_;
-        while (p_ < t_.size() && t_[p_] != '"') {
-            if (t_[p_] == '\\' && p_ + 1 < t_.size()) ++p_;  // keys with escapes: close enough to locate
-            s += t_[p_++];
-        }
-        ++p_;
-        return s;
-    }
-    void value(const std::string& path) {
-        skip_ws();
-        if (p_ >= t_.size()) return;
-        offsets_[path] = p_;
-        const char c = t_[p_];
-        if (c == '{' || c == '[') {
-            const char close = c == '{' ? '}' : ']';
-            ++p_;
-            size_t index = 0;
-            while (true) {
-                skip_ws();
-                if (p_ >= t_.size()) return;
-                if (t_[p_] == close) {
-                    ++p_;
-                    return;
-                }
-                if (t_[p_] == ',') {
-                    ++p_;
-                    continue;
-                }
-                if (c == '{') {
-                    const size_t key_at = p_;
-                    const std::string key = string_token();
-                    keys_[path + "." + key] = key_at;
-                    skip_ws();
-                    if (p_ < t_.size() && t_[p_] == ':') ++p_;
-                    value(path + "." + key);
-                } else {
-                    value(path + "[" + std::to_string(index++) + "]");
-                }
-            }
-        }
-        if (c == '"') {
-            string_token();
-            return;
-        }
-        while (p_ < t_.size() && std::string(",]} \t\r\n").find(t_[p_]) == std::string::npos) ++p_;
-    }
-
-    const std::string& t_;
-    size_t p_ = 0;
-    std::map<std::string, size_t> offsets_;
-    std::map<std::string, size_t> keys_;
-};
-
 class JsonManifestParser {
 public:
     JsonManifestParser(const std::string& text, const std::string& path) : text_(text), path_(path), loc_(text) {}
 
     [[noreturn]] void fail(const std::string& where, const std::string& what) const {
-        const auto lc = line_column(text_, loc_.offset(where));
+        const auto lc = loc_.location(where);
         throw InputError(path_, lc.first, lc.second, where + ": " + what);
     }
-    std::pair<long, long> location(const std::string& where) const { return line_column(text_, loc_.offset(where)); }
+    std::pair<long, long> location(const std::string& where) const { return loc_.location(where); }
 
     // Fails on keys outside `allowed`, so a typo never silently falls back to a default.
     void check_keys(const json& obj, const std::string& where, const std::set<std::string>& allowed) const {
@@ -235,7 +152,7 @@ public:
                 std::string list;
                 for (const std::string& k : allowed) list += (list.empty() ? "" : ", ") + k;
                 const std::string w = where + "." + it.key();
-                const auto lc = line_column(text_, loc_.key_offset(w));
+                const auto lc = loc_.key_location(w);
                 throw InputError(path_, lc.first, lc.second, w + ": unknown key; expected one of " + list);
             }
         }
@@ -337,11 +254,8 @@ public:
         try {
             j = json::parse(text_);
         } catch (const json::parse_error& e) {
-            const auto lc = line_column(text_, e.byte > 0 ? e.byte - 1 : 0);
-            std::string what = e.what();
-            const size_t colon = what.rfind(": ");
-            if (colon != std::string::npos) what = what.substr(colon + 2);
-            throw InputError(path_, lc.first, lc.second, "not valid JSON: " + what);
+            const JsonSyntaxError se = json_syntax_error(text_, e);
+            throw InputError(path_, se.line, se.column, "not valid JSON: " + se.what);
         }
         check_keys(j, "$", {"schema", "version", "description", "base_dir", "defaults", "logs"});
         if (!j.contains("schema")) fail("$", "expected \"schema\": \"" + std::string(kManifestSchema) + "\"");

@@ -2,13 +2,12 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 
-#include "host/io/line_reader.h"
+#include "host/io/json_text.h"
 #include "host/io/sample_reader.h"
 #include "host/report/summary.h"
 
@@ -258,19 +257,17 @@ std::string render_packs(const json& table, TableFormat format) {
 }
 
 json read_table_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path, 0, 0, "cannot open batch table");
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    const std::string text = ss.str();
+    std::string text;
+    const TextRead r = read_text_file(path, text);
+    if (r != TextRead::Ok) throw InputError(path, 0, 0, text_read_message(r, "batch table"));
     if (text.empty()) throw InputError(path, 0, 0, "file is empty; expected a table written by `battsim batch --format json`");
     json t;
     try {
         t = json::parse(text);
     } catch (const json::parse_error& e) {
-        const auto lc = line_column(text, e.byte > 0 ? e.byte - 1 : 0);
-        throw InputError(path, lc.first, lc.second,
-                         "not valid JSON; expected a table written by `battsim batch --format json`");
+        const JsonSyntaxError se = json_syntax_error(text, e);
+        throw InputError(path, se.line, se.column,
+                         "not valid JSON (" + se.what + "); expected a table written by `battsim batch --format json`");
     }
     auto fail = [&path](const std::string& what) { throw InputError(path, 0, 0, what); };
     try {

@@ -29,8 +29,8 @@ public:
     Reader(const json& j, std::string path, const std::string& origin) : j_(j), path_(std::move(path)), origin_(origin) {
         if (!j.is_object()) fail(path_, "expected an object");
     }
-    [[noreturn]] void fail(const std::string& where, const std::string& what) const {
-        throw ScenarioError(origin_ + ": " + where + ": " + what);
+    [[noreturn]] void fail(const std::string& where, const std::string& what, bool at_key = false) const {
+        throw ScenarioError(origin_, where, what, at_key);
     }
     std::string at(const char* key) const { return path_ + "." + key; }
     const json* find(const char* key) {
@@ -79,7 +79,7 @@ public:
     }
     void finish() const {
         for (auto it = j_.begin(); it != j_.end(); ++it) {
-            if (!used_.count(it.key())) fail(path_ + "." + it.key(), "unknown key");
+            if (!used_.count(it.key())) fail(path_ + "." + it.key(), "unknown key", true);
         }
     }
     static std::string type_name(const json& v) { return std::string(v.type_name()); }
@@ -351,20 +351,25 @@ Scenario scenario_from_json(const json& j, const std::string& origin, const std:
         s.config = config_json ? config_from_json(*config_json, origin + " (embedded monitor config)")
                                : load_config_file(s.monitor_config_path);
     } catch (const ConfigError& e) {
-        throw ScenarioError(origin + ": $.monitor_config: " + e.what());
+        // An embedded config's paths are paths in this scenario; a config file's message
+        // already names its own file, line and column.
+        if (config_json && e.has_path())
+            throw ScenarioError(origin, "$.monitor_config" + e.where().substr(1), e.detail(), e.at_key());
+        throw ScenarioError(origin, "$.monitor_config", e.what());
     }
     if (s.config.monitor.cells_in_series != s.pack.cells) {
-        throw ScenarioError(origin + ": $.monitor_config: the config is for " +
-                            std::to_string(s.config.monitor.cells_in_series) + " cells, the pack has " +
-                            std::to_string(s.pack.cells));
+        throw ScenarioError(origin, "$.monitor_config",
+                            "the config is for " + std::to_string(s.config.monitor.cells_in_series) +
+                                " cells, the pack has " + std::to_string(s.pack.cells));
     }
     if (!cutoff_given) {
         // The truth runs to the cutoff the monitor is asked about: a fixed one graded every
         // column against a flight of another length than the one it predicts.
         const double v = static_cast<double>(s.config.monitor.flight_time.min_flight_voltage_v) / s.pack.cells;
         if (!(v >= 2.0 && v <= 4.5)) {
-            throw ScenarioError(origin + ": $.monitor_config: its min_flight_voltage_v gives " + std::to_string(v) +
-                                " V per cell as the truth's cutoff, outside 2..4.5; set $.truth.cutoff_v_per_cell");
+            throw ScenarioError(origin, "$.monitor_config",
+                                "its min_flight_voltage_v gives " + std::to_string(v) +
+                                    " V per cell as the truth's cutoff, outside 2..4.5; set $.truth.cutoff_v_per_cell");
         }
         s.cutoff_v_per_cell = v;
     }
@@ -373,36 +378,24 @@ Scenario scenario_from_json(const json& j, const std::string& origin, const std:
 }
 
 Scenario load_scenario(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw ScenarioError(path + ": cannot open scenario file");
-    std::stringstream buf;
-    buf << in.rdbuf();
-    const std::string text = buf.str();
+    std::string text;
+    const TextRead r = read_text_file(path, text);
+    if (r != TextRead::Ok) throw ScenarioError(path + ": " + text_read_message(r, "scenario file"));
     if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw ScenarioError(path + ": file is empty, expected a scenario JSON object");
     json j;
     try {
         j = json::parse(text);
     } catch (const json::parse_error& e) {
-        // Turn the byte offset into a line and column for the message.
-        const size_t at = e.byte > 0 ? e.byte - 1 : 0;
-        long line = 1, col = 1;
-        for (size_t i = 0; i < at && i < text.size(); ++i) {
-            if (text[i] == '\n') {
-                ++line;
-                col = 1;
-            } else {
-                ++col;
-            }
-        }
-        // Keep the parser's own words, without its position (given in front already).
-        std::string what = e.what();
-        const size_t col_at = what.find(", column ");
-        const size_t colon = col_at == std::string::npos ? std::string::npos : what.find(": ", col_at);
-        if (colon != std::string::npos) what = what.substr(colon + 2);
-        throw ScenarioError(path + ":" + std::to_string(line) + ":" + std::to_string(col) + ": not valid JSON: " + what);
+        const JsonSyntaxError se = json_syntax_error(text, e);
+        throw ScenarioError(path + ":" + std::to_string(se.line) + ":" + std::to_string(se.column) +
+                            ": not valid JSON: " + se.what);
     }
     const std::string base = fs::path(path).parent_path().string();
-    return scenario_from_json(j, path, base);
+    try {
+        return scenario_from_json(j, path, base);
+    } catch (const ScenarioError& e) {
+        throw located(e, JsonLocator(text));
+    }
 }
 
 json scenario_to_json(const Scenario& s) {

@@ -20,11 +20,11 @@ namespace battsim {
 namespace host {
 namespace sim {
 
-// Bad scenario file or value: the message names the file and the JSON path (and the line
-// and column for a syntax error).
-class ScenarioError : public std::runtime_error {
+// Bad scenario file or value: the message names the file, the line and column (when read
+// from a file) and the JSON path.
+class ScenarioError : public JsonValueError {
 public:
-    using std::runtime_error::runtime_error;
+    using JsonValueError::JsonValueError;
 };
 
 struct WeakCell {

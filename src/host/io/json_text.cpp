@@ -1,0 +1,173 @@
+#include "host/io/json_text.h"
+
+#include <filesystem>
+#include <fstream>
+
+#include "host/io/line_reader.h"
+
+namespace battsim {
+namespace host {
+
+JsonLocator::JsonLocator(const std::string& text) : t_(text) {
+    skip_ws();
+    value("$", 0);
+}
+
+std::size_t JsonLocator::offset(const std::string& path) const {
+    // A path not in the text (a missing member, or below kMaxDepth) is located at its
+    // nearest ancestor that is.
+    std::string p = path;
+    while (!p.empty()) {
+        auto it = offsets_.find(p);
+        if (it != offsets_.end()) return it->second;
+        const std::size_t cut = p.find_last_of(".[");
+        if (cut == std::string::npos || cut == 0) break;
+        p.erase(cut);
+    }
+    return 0;
+}
+
+std::size_t JsonLocator::key_offset(const std::string& path) const {
+    auto it = keys_.find(path);
+    return it == keys_.end() ? offset(path) : it->second;
+}
+
+std::pair<long, long> JsonLocator::location(const std::string& path) const { return line_column(t_, offset(path)); }
+
+std::pair<long, long> JsonLocator::key_location(const std::string& path) const {
+    return line_column(t_, key_offset(path));
+}
+
+void JsonLocator::skip_ws() {
+    while (p_ < t_.size() && (t_[p_] == ' ' || t_[p_] == '\t' || t_[p_] == '\n' || t_[p_] == '\r')) ++p_;
+}
+
+std::string JsonLocator::string_token() {
+    std::string s;
+    if (p_ >= t_.size() || t_[p_] != '"') return s;
+    ++p_;
+    while (p_ < t_.size() && t_[p_] != '"') {
+        if (t_[p_] == '\\' && p_ + 1 < t_.size()) ++p_;  // keys with escapes: close enough to locate
+        s += t_[p_++];
+    }
+    ++p_;
+    return s;
+}
+
+// Every step consumes at least one byte, so text that failed to parse cannot stall the
+// walk; below kMaxDepth a value is skipped without recursion or paths, so a deeply nested
+// file costs neither stack nor memory.
+void JsonLocator::value(const std::string& path, int depth) {
+    skip_ws();
+    if (p_ >= t_.size()) return;
+    offsets_[path] = p_;
+    const char c = t_[p_];
+    if (depth >= kMaxDepth && (c == '{' || c == '[')) {
+        skip_nested();
+        return;
+    }
+    if (c == '{' || c == '[') {
+        const char close = c == '{' ? '}' : ']';
+        ++p_;
+        std::size_t index = 0;
+        while (true) {
+            skip_ws();
+            if (p_ >= t_.size()) return;
+            if (t_[p_] == close) {
+                ++p_;
+                return;
+            }
+            if (t_[p_] == ',') {
+                ++p_;
+                continue;
+            }
+            if (c == '{') {
+                const std::size_t key_at = p_;
+                const std::string key = string_token();
+                keys_[path + "." + key] = key_at;
+                skip_ws();
+                if (p_ < t_.size() && t_[p_] == ':') ++p_;
+                value(path + "." + key, depth + 1);
+            } else {
+                value(path + "[" + std::to_string(index++) + "]", depth + 1);
+            }
+        }
+    }
+    if (c == '"') {
+        string_token();
+        return;
+    }
+    const std::size_t start = p_;
+    while (p_ < t_.size() && std::string(",]} \t\r\n").find(t_[p_]) == std::string::npos) ++p_;
+    if (p_ == start) ++p_;  // a stray '}' or ']' in text that does not parse: always move on
+}
+
+void JsonLocator::skip_nested() {
+    long open = 0;
+    while (p_ < t_.size()) {
+        const char c = t_[p_];
+        if (c == '"') {
+            string_token();
+            continue;
+        }
+        ++p_;
+        if (c == '{' || c == '[') ++open;
+        if ((c == '}' || c == ']') && --open <= 0) return;
+    }
+}
+
+namespace {
+std::string value_error_text(const std::string& origin, const std::string& where, const std::string& detail, long line,
+                             long column) {
+    std::string s = origin;
+    if (line > 0) s += ":" + std::to_string(line) + ":" + std::to_string(column);
+    return s + ": " + where + ": " + detail;
+}
+}  // namespace
+
+JsonValueError::JsonValueError(const std::string& origin, const std::string& where, const std::string& detail,
+                               bool at_key, long line, long column)
+    : std::runtime_error(value_error_text(origin, where, detail, line, column)),
+      origin_(origin), where_(where), detail_(detail), at_key_(at_key), line_(line), column_(column) {}
+
+JsonSyntaxError json_syntax_error(const std::string& text, const nlohmann::json::parse_error& e) {
+    JsonSyntaxError out;
+    const auto lc = line_column(text, e.byte > 0 ? e.byte - 1 : 0);
+    out.line = lc.first;
+    out.column = lc.second;
+    // nlohmann's text is "[json.exception.parse_error.101] parse error at line 3, column 5:
+    // <what>"; the position is given in front already.
+    out.what = e.what();
+    const std::size_t col_at = out.what.find(", column ");
+    const std::size_t colon = col_at == std::string::npos ? out.what.rfind(": ") : out.what.find(": ", col_at);
+    if (colon != std::string::npos) out.what = out.what.substr(colon + 2);
+    return out;
+}
+
+TextRead read_text_file(const std::string& path, std::string& text, std::size_t max_bytes) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) return TextRead::IsDirectory;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return TextRead::CannotOpen;
+    text.clear();
+    char block[64 * 1024];
+    while (in) {
+        in.read(block, sizeof block);
+        text.append(block, static_cast<std::size_t>(in.gcount()));
+        if (text.size() > max_bytes) return TextRead::TooLarge;
+    }
+    return in.bad() ? TextRead::CannotOpen : TextRead::Ok;
+}
+
+std::string text_read_message(TextRead r, const std::string& what) {
+    switch (r) {
+        case TextRead::Ok: return "";
+        case TextRead::CannotOpen: return "cannot open " + what;
+        case TextRead::IsDirectory: return "cannot open " + what + ": it is a directory";
+        case TextRead::TooLarge: return what + " is larger than " + std::to_string(kMaxTextFileBytes >> 20) + " MiB";
+    }
+    return "cannot read " + what;
+}
+
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,95 @@
+// Positions in a JSON document parsed whole (configs, scenarios, manifests, tables):
+// nlohmann::json keeps no source positions, so error messages that name a "$.a.b[3]"
+// path get their line and column from a second, light walk over the text.
+#pragma once
+#include <cstddef>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include <nlohmann/json.hpp>
+
+namespace battsim {
+namespace host {
+
+// Where each value (and each member's key) of an already parsed JSON text starts, keyed
+// by the "$.a.b[3]" paths the messages use.
+class JsonLocator {
+public:
+    explicit JsonLocator(const std::string& text);
+    // Byte offset of the value at `path`; its nearest located ancestor's when the path is
+    // not in the text; 0 (the document's start) when nothing is.
+    std::size_t offset(const std::string& path) const;
+    // Byte offset of the key of member `path`; its value's offset when it has no key.
+    std::size_t key_offset(const std::string& path) const;
+    // 1-based line and column of offset() / key_offset().
+    std::pair<long, long> location(const std::string& path) const;
+    std::pair<long, long> key_location(const std::string& path) const;
+
+private:
+    void skip_ws();
+    std::string string_token();
+    void value(const std::string& path, int depth);
+    void skip_nested();
+
+    static constexpr int kMaxDepth = 32;  // deeper values are located at their ancestor
+
+    const std::string& t_;
+    std::size_t p_ = 0;
+    std::map<std::string, std::size_t> offsets_;
+    std::map<std::string, std::size_t> keys_;
+};
+
+// A bad value in a JSON document: "origin[:line:column]: $.a.b: detail". Readers that
+// see only the parsed value throw it with the path; whoever holds the text adds the line
+// and column with located().
+class JsonValueError : public std::runtime_error {
+public:
+    explicit JsonValueError(const std::string& message) : std::runtime_error(message) {}
+    // `at_key`: the error is the member's name (an unknown key), so point at the key.
+    JsonValueError(const std::string& origin, const std::string& where, const std::string& detail, bool at_key = false,
+                   long line = 0, long column = 0);
+    bool has_path() const { return !where_.empty(); }
+    const std::string& origin() const { return origin_; }
+    const std::string& where() const { return where_; }
+    const std::string& detail() const { return detail_; }
+    bool at_key() const { return at_key_; }
+    long line() const { return line_; }
+    long column() const { return column_; }
+
+private:
+    std::string origin_, where_, detail_;
+    bool at_key_ = false;
+    long line_ = 0, column_ = 0;
+};
+
+// `e` with the line and column of its path in the text `loc` walked; unchanged when it has
+// no path or already has a position.
+template <typename E>
+E located(const E& e, const JsonLocator& loc) {
+    if (!e.has_path() || e.line() > 0) return e;
+    const std::pair<long, long> lc = e.at_key() ? loc.key_location(e.where()) : loc.location(e.where());
+    return E(e.origin(), e.where(), e.detail(), e.at_key(), lc.first, lc.second);
+}
+
+// A syntax error's 1-based line and column in `text` and the parser's own words without
+// its position, e.g. "syntax error while parsing object - unexpected '}'; expected string literal".
+struct JsonSyntaxError {
+    long line = 1;
+    long column = 1;
+    std::string what;
+};
+JsonSyntaxError json_syntax_error(const std::string& text, const nlohmann::json::parse_error& e);
+
+// Reads a document (config, scenario, manifest, table) whole. Capped, so that a path to a
+// device or a runaway file gives a message instead of eating the memory.
+enum class TextRead { Ok, CannotOpen, IsDirectory, TooLarge };
+constexpr std::size_t kMaxTextFileBytes = 64u * 1024u * 1024u;
+TextRead read_text_file(const std::string& path, std::string& text, std::size_t max_bytes = kMaxTextFileBytes);
+// "cannot open config file", "cannot open config file: it is a directory", "config file is
+// larger than 64 MiB", for `what` = "config file".
+std::string text_read_message(TextRead r, const std::string& what);
+
+}  // namespace host
+}  // namespace battsim
