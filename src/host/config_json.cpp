@@ -198,6 +198,8 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.boolean("first_resistance_soc_correction", jc.first_resistance_soc_correction);
         r.number("solver_steps", jc.solver_steps, 2, 1000);
         r.number("cutoff_delay_s", jc.cutoff_delay_s, 0, 600);
+        r.number("health_time_share", jc.health_time_share, 0, 1);
+        r.number("health_time_fade_fraction", jc.health_time_fade_fraction, 0, 1);
         r.number("solver_steps_per_update", jc.solver_steps_per_update, 1, 1000);
         r.number("short_flight_fraction", jc.short_flight_fraction, 0, 1);
         r.number("cause_fraction", jc.cause_fraction, 0, 1);
@@ -350,6 +352,8 @@ json config_to_json(const LoadedConfig& c) {
             {"first_resistance_soc_correction", jc.first_resistance_soc_correction},
             {"solver_steps", jc.solver_steps},
             {"cutoff_delay_s", jc.cutoff_delay_s},
+            {"health_time_share", jc.health_time_share},
+            {"health_time_fade_fraction", jc.health_time_fade_fraction},
             {"solver_steps_per_update", jc.solver_steps_per_update},
             {"short_flight_fraction", jc.short_flight_fraction},
             {"cause_fraction", jc.cause_fraction},

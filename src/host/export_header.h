@@ -141,6 +141,8 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.min_voltage_v", c.joint.min_voltage_v);
     f("joint.solver_steps", c.joint.solver_steps);
     f("joint.cutoff_delay_s", c.joint.cutoff_delay_s);
+    f("joint.health_time_share", c.joint.health_time_share);
+    f("joint.health_time_fade_fraction", c.joint.health_time_fade_fraction);
     f("joint.solver_steps_per_update", c.joint.solver_steps_per_update);
     f("joint.short_flight_fraction", c.joint.short_flight_fraction);
     f("joint.cause_fraction", c.joint.cause_fraction);

@@ -21,6 +21,8 @@ TEST_CASE("Config JSON round-trips", "[config]") {
     c.monitor.joint.health.solves_from_takeoff_soc = false;          // default true
     c.monitor.joint.health.takeoff_soc_min_ground_s = 12.5f;
     c.monitor.joint.cutoff_delay_s = 7.5f;  // default 0
+    c.monitor.joint.health_time_share = 0.25f;           // default 0.5
+    c.monitor.joint.health_time_fade_fraction = 0.75f;  // default 0.5
     LoadedConfig back = config_from_json(config_to_json(c), "test");
     CHECK_FALSE(back.monitor.joint.health.enabled);
     CHECK(back.monitor.joint.health.ekf.voltage_sigma_v == 0.031f);
@@ -30,6 +32,8 @@ TEST_CASE("Config JSON round-trips", "[config]") {
     CHECK_FALSE(back.monitor.joint.health.solves_from_takeoff_soc);
     CHECK(back.monitor.joint.health.takeoff_soc_min_ground_s == 12.5f);
     CHECK(back.monitor.joint.cutoff_delay_s == 7.5f);
+    CHECK(back.monitor.joint.health_time_share == 0.25f);
+    CHECK(back.monitor.joint.health_time_fade_fraction == 0.75f);
     CHECK(back.monitor.joint.ekf.voltage_sigma_v == c.monitor.joint.ekf.voltage_sigma_v);  // the two filters' keys apart
     CHECK(back.monitor.cell_analysis.step.steady_band_fraction == 0.2f);
     CHECK(back.monitor.cell_analysis.step.max_wait_samples == 20);

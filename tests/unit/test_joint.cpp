@@ -26,9 +26,10 @@ using testplant::Plant;
 // (health = false: the tracking filter alone, as before the health filter; correct =
 // false: the health filter's SOC not corrected on the first measured R0).
 JointEstimator table_estimator(const TremblayParams& rated, bool health = true, bool correct = true,
-                               bool from_takeoff = true) {
+                               bool from_takeoff = true, float health_time_share = JointEstimator::Config{}.health_time_share) {
     JointEstimator::Config jc;
     jc.ocv = lipo_table();
+    jc.health_time_share = health_time_share;
     jc.health.enabled = health;
     jc.health.first_resistance_soc_correction = correct;
     jc.health.solves_from_takeoff_soc = from_takeoff;
@@ -234,6 +235,7 @@ struct Flight {
     float configured_resistance_factor = 1.0f;  // the estimator's rated R0: × 25 mΩ
     float rest_before_s = 0.0f;        // on the ground at 0.3 A before the take-off
     bool solves_from_takeoff_soc = true;
+    float health_time_share = JointEstimator::Config{}.health_time_share;
 };
 
 // Flies the plant at the demand profile until the loaded voltage reaches 13.3 V and
@@ -276,7 +278,8 @@ FlightResult fly(const Flight& f) {
     out.true_energy_after20_wh = static_cast<float>(e_wh - energy_wh[at20]);
     // Second pass: the estimator rides along.
     Plant p = make_plant();
-    JointEstimator e = table_estimator(rated, f.health, f.first_resistance_correction, f.solves_from_takeoff_soc);
+    JointEstimator e =
+        table_estimator(rated, f.health, f.first_resistance_correction, f.solves_from_takeoff_soc, f.health_time_share);
     e.start(p.ocv.voltage_v(1.0f), 0.0f);
     Lcg rng;
     float v = p.ocv.voltage_v(1.0f);
@@ -350,6 +353,32 @@ TEST_CASE("Joint estimator on injected packs: capacity, resistance, warnings by 
     if (resistive.warned) CHECK((resistive.cause & JointEstimator::kCauseResistance) != 0);
 }
 
+
+TEST_CASE("Joint estimator: early in a flight the remaining time leans on the health filter", "[joint][truth]") {
+    // A pack at 70 % of its rated capacity: at 20 % of the flight the tracking filter still
+    // holds part of the rated capacity; the health filter's solve from take-off reads the
+    // loss sooner, and half of it (fading with the charge drawn) brings the remaining time
+    // closer to what the plant flies.
+    Flight weak;
+    weak.capacity_factor = 0.7f;
+    const FlightResult blended = fly(weak);
+    weak.health_time_share = 0.0f;
+    const FlightResult tracking = fly(weak);
+    const float truth_s = 0.8f * blended.true_total_s;
+    INFO("remaining at 20 %: blended " << blended.at20.remaining_time_s << " s, tracking " << tracking.at20.remaining_time_s
+                                       << " s, true " << truth_s << " s");
+    CHECK(std::fabs(blended.at20.remaining_time_s - truth_s) < std::fabs(tracking.at20.remaining_time_s - truth_s));
+    // Between the two filters' readings: the health filter's solve from take-off less the
+    // time flown (the published total is one refresh behind the blend, hence the margin).
+    const float health_s = blended.at20.total_time_s - 0.2f * blended.true_total_s;
+    CHECK(blended.at20.remaining_time_s < tracking.at20.remaining_time_s);
+    CHECK(blended.at20.remaining_time_s > health_s - 2.0f);
+    // The lean has faded by the end (over half the rated capacity drawn): both agree there.
+    CHECK(blended.end.remaining_time_s == Approx(tracking.end.remaining_time_s).margin(0.5f));
+    // The verdict and the energy do not read the published remaining time.
+    CHECK(blended.at20.total_time_s == tracking.at20.total_time_s);
+    CHECK(blended.at20.remaining_energy_wh == tracking.at20.remaining_energy_wh);
+}
 
 TEST_CASE("Joint estimator: a hover on a pack more resistive than configured, SOC corrected on the first R0", "[joint][truth]") {
     // 1.8 × the configured resistance, hovering at 150 W: the gusts are too small for the

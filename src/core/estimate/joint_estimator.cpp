@@ -32,7 +32,7 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     status_.resistance_ohm = status_.effective_resistance_ohm = rated.internal_resistance_ohm;
     solve_ = kSolveRemaining;
     flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = solve_started_s_ = 0.0f;
-    end_s_ = total_wh_ = 0.0f;
+    end_s_ = health_end_s_ = total_wh_ = 0.0f;
     short_count_ = 0;
     was_flying_ = false;
     polarisation_scale_ = health_scale_ = 1.0f;
@@ -75,7 +75,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     if (flying && !was_flying_) {
         // A take-off: the flight's accumulators start again.
         flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = solve_started_s_ = 0.0f;
-        end_s_ = total_wh_ = 0.0f;
+        end_s_ = health_end_s_ = total_wh_ = 0.0f;
         short_count_ = 0;
         // ground_s_ still holds the time on the ground that ended here (cleared below).
         takeoff_soc_ = health().soc;
@@ -274,12 +274,20 @@ void JointEstimator::finish_solve() {
         // The result is the time left when the solve began: it runs down from then, and the
         // previous result keeps its own start until this one replaces it.
         end_s_ = solve_started_s_ + r.time_s;
+        const float fade_ah = config_.health_time_fade_fraction * rated_.capacity_ah;
+        if (health_end_s_ > 0.0f && fade_ah > 0.0f) {
+            const float w = config_.health_time_share * maxf(0.0f, 1.0f - charge_since_takeoff_ah_ / fade_ah);
+            end_s_ += w * (health_end_s_ - end_s_);
+        }
     }
     // The energy from the health filter's solve from take-off: the remaining energy is that
     // less what has flowed since. Energy is mostly capacity × state of charge, which the
     // health filter reads better early; the remaining time stays with the tracking filter
     // (measured both ways: docs/estimator.md, ninth session).
-    if (solve_ == kSolveTotal) total_wh_ = r.energy_wh;
+    if (solve_ == kSolveTotal) {
+        total_wh_ = r.energy_wh;
+        health_end_s_ = r.time_s;
+    }
     solve_ = static_cast<uint8_t>((solve_ + 1) % kSolveCount);
     if (solve_ != kSolveRemaining) return;
 

@@ -113,6 +113,13 @@ public:
         // fed the true pack they read the simulated suite's remaining energy at 20 % of
         // the flight 2.2 % low (median), with it 0.8 % high (docs/estimator.md, twelfth session).
         float cutoff_delay_s = 0.0f;
+        // Early in a flight the published remaining time leans on the health filter's solve
+        // from take-off (its flight time less the time flown), which reads a lost capacity
+        // sooner than the tracking filter; the lean fades linearly to none once
+        // health_time_fade_fraction of the rated capacity is drawn, where the tracking
+        // filter is the better (docs/estimator.md, fourteenth session). 0 = tracking only.
+        float health_time_share = 0.5f;
+        float health_time_fade_fraction = 0.5f;
         int solver_steps = 32;
         int solver_steps_per_update = 4;  // keeps an update near 2,000 instructions
         float short_flight_fraction = 0.8f;  // warn below this × a healthy pack's flight time
@@ -224,6 +231,7 @@ private:
     float charge_since_takeoff_ah_ = 0.0f;
     float solve_started_s_ = 0.0f;     // flight time when the remaining solve under way began
     float end_s_ = 0.0f;               // the published solve: flight time at the cutoff
+    float health_end_s_ = 0.0f;        // the health filter's, from this flight's total solve (0: none yet)
     float total_wh_ = 0.0f;            // the health filter's: energy from take-off to the cutoff
     bool was_flying_ = false;
     int short_count_ = 0;
