@@ -95,7 +95,7 @@ def reseed(suite_dir, k):
             json.dump(sc, f)
 
 
-def score(battsim, suite, settings, health, health_off, reseed_k=0):
+def score(battsim, suite, settings, health, health_off, reseed_k=0, keep=None):
     with tempfile.TemporaryDirectory() as tmp:
         configs = os.path.join(tmp, "configs")
         shutil.copytree(os.path.join(ROOT, "configs"), configs)
@@ -119,6 +119,8 @@ def score(battsim, suite, settings, health, health_off, reseed_k=0):
             return None
         with open(out) as f:
             d = json.load(f)
+        if keep:  # the per-flight report, for figures the summary below does not hold
+            shutil.copy(out, keep)
     s = d["summary"]
     joint = lambda k: s[k]["joint"]
     above = [abs(f["estimators"]["joint"]["remaining_time_error_pct"][1]) -
@@ -181,6 +183,7 @@ def main():
                     help="score the suite's scenarios with their seeds moved (K = 1, 2, ...): a validation set")
     ap.add_argument("--validate", help="a search's JSON lines: score its --top best (most warnings, fewest false, "
                     "smallest gap) and the committed settings on --reseeds, print the means, and stop")
+    ap.add_argument("--keep-json", help="with --settings: also write those settings' full `battsim score --json` report here")
     ap.add_argument("--top", type=int, default=12)
     ap.add_argument("--reseeds", default="1,2,3", help="the seed moves --validate scores on")
     a = ap.parse_args()
@@ -204,7 +207,8 @@ def main():
                 p = fixed
             else:
                 p = sample_around(rng, centre, k, shapes) if centre else sample_random(rng)
-            m = score(a.battsim, a.suite, p, a.health, a.no_health_filter, a.reseed)
+            keep = a.keep_json if a.settings and k >= 0 else None
+            m = score(a.battsim, a.suite, p, a.health, a.no_health_filter, a.reseed, keep)
             out.write(json.dumps({"settings": p, "figures": m}) + "\n")
             out.flush()
             if m:

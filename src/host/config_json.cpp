@@ -256,18 +256,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
 
 LoadedConfig load_config_file(const std::string& path) {
     std::string text;
-    const TextRead r = read_text_file(path, text);
-    if (r != TextRead::Ok) throw ConfigError(path + ": " + text_read_message(r, "config file"));
-    if (text.find_first_not_of(" \t\r\n") == std::string::npos)
-        throw ConfigError(path + ": file is empty; expected a \"" + std::string(kSchema) + "\" JSON object");
-    json j;
-    try {
-        j = json::parse(text);
-    } catch (const json::parse_error& e) {
-        const JsonSyntaxError se = json_syntax_error(text, e);
-        throw ConfigError(path + ":" + std::to_string(se.line) + ":" + std::to_string(se.column) +
-                          ": not valid JSON: " + se.what);
-    }
+    const json j = load_json_document<ConfigError>(path, "config file", "a \"" + std::string(kSchema) + "\" JSON object", text);
     try {
         return config_from_json(j, path);
     } catch (const ConfigError& e) {

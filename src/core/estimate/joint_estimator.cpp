@@ -282,8 +282,8 @@ void JointEstimator::finish_solve() {
     }
     // The energy from the health filter's solve from take-off: the remaining energy is that
     // less what has flowed since. Energy is mostly capacity × state of charge, which the
-    // health filter reads better early; the remaining time stays with the tracking filter
-    // (measured both ways: docs/estimator.md, ninth session).
+    // health filter reads better early; the remaining time follows the tracking filter and
+    // leans on this solve only early in a flight (docs/estimator.md, ninth and fourteenth sessions).
     if (solve_ == kSolveTotal) {
         total_wh_ = r.energy_wh;
         health_end_s_ = r.time_s;

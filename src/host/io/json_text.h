@@ -73,6 +73,13 @@ E located(const E& e, const JsonLocator& loc) {
     return E(e.origin(), e.where(), e.detail(), e.at_key(), lc.first, lc.second);
 }
 
+// Reads and parses the JSON document at `path` into `text` and the returned value; a read
+// error, an empty file or a syntax error (with its line and column) throws E(message).
+// `kind` names the document ("config file"), `expected` what an empty one should hold.
+template <typename E>
+nlohmann::json load_json_document(const std::string& path, const std::string& kind, const std::string& expected,
+                                  std::string& text);
+
 // A syntax error's 1-based line and column in `text` and the parser's own words without
 // its position, e.g. "syntax error while parsing object - unexpected '}'; expected string literal".
 struct JsonSyntaxError {
@@ -90,6 +97,20 @@ TextRead read_text_file(const std::string& path, std::string& text, std::size_t 
 // "cannot open config file", "cannot open config file: it is a directory", "config file is
 // larger than 64 MiB", for `what` = "config file".
 std::string text_read_message(TextRead r, const std::string& what);
+
+template <typename E>
+nlohmann::json load_json_document(const std::string& path, const std::string& kind, const std::string& expected,
+                                  std::string& text) {
+    const TextRead r = read_text_file(path, text);
+    if (r != TextRead::Ok) throw E(path + ": " + text_read_message(r, kind));
+    if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw E(path + ": file is empty; expected " + expected);
+    try {
+        return nlohmann::json::parse(text);
+    } catch (const nlohmann::json::parse_error& e) {
+        const JsonSyntaxError se = json_syntax_error(text, e);
+        throw E(path + ":" + std::to_string(se.line) + ":" + std::to_string(se.column) + ": not valid JSON: " + se.what);
+    }
+}
 
 }  // namespace host
 }  // namespace battsim

@@ -379,17 +379,7 @@ Scenario scenario_from_json(const json& j, const std::string& origin, const std:
 
 Scenario load_scenario(const std::string& path) {
     std::string text;
-    const TextRead r = read_text_file(path, text);
-    if (r != TextRead::Ok) throw ScenarioError(path + ": " + text_read_message(r, "scenario file"));
-    if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw ScenarioError(path + ": file is empty, expected a scenario JSON object");
-    json j;
-    try {
-        j = json::parse(text);
-    } catch (const json::parse_error& e) {
-        const JsonSyntaxError se = json_syntax_error(text, e);
-        throw ScenarioError(path + ":" + std::to_string(se.line) + ":" + std::to_string(se.column) +
-                            ": not valid JSON: " + se.what);
-    }
+    const json j = load_json_document<ScenarioError>(path, "scenario file", "a scenario JSON object", text);
     const std::string base = fs::path(path).parent_path().string();
     try {
         return scenario_from_json(j, path, base);
