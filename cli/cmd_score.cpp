@@ -21,6 +21,7 @@ struct ScoreArgs {
     int jobs = 0;
     std::string logs_dir;
     std::string columns;
+    int copies = 1;
 };
 
 std::function<int()> setup(CLI::App& sub) {
@@ -30,6 +31,10 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("-o,--output", a->output, "Write the table (or JSON) to this file instead of standard output");
     sub.add_option("-j,--jobs", a->jobs, "Flights scored in parallel (default: the machine's cores); the output does not depend on it");
     sub.add_option("--logs", a->logs_dir, "Read each flight's log from DIR/NAME.csv (written by `battsim simulate --out-dir`) instead of simulating it in memory");
+    sub.add_option("--copies", a->copies,
+                   "Fly the suite this many times: as written, then with other seeds (gusts, cell spreads, sensor "
+                   "noise; copy k adds 7919 k to each seed); figures pool every copy, with the copies' range beside them")
+        ->check(CLI::Range(1, 100));
     sub.add_option("--columns", a->columns, "Estimator columns to run, comma-separated (default: all but the diagnostic solve-truth)");
     return [a]() -> int {
         std::vector<std::string> paths = a->paths;
@@ -73,6 +78,11 @@ std::function<int()> setup(CLI::App& sub) {
         host::score::ScoreOptions opt;
         opt.jobs = a->jobs > 0 ? a->jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
         opt.logs_dir = a->logs_dir;
+        opt.copies = a->copies;
+        if (opt.copies > 1 && !opt.logs_dir.empty()) {
+            std::cerr << "battsim score: --copies simulates its flights; it cannot be used with --logs\n";
+            return kExitUsage;
+        }
         host::score::ScoreResult result;
         try {
             result = host::score::score_scenarios(scenarios, columns, opt);

@@ -200,6 +200,8 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("cutoff_delay_s", jc.cutoff_delay_s, 0, 600);
         r.number("health_time_share", jc.health_time_share, 0, 1);
         r.number("health_time_fade_fraction", jc.health_time_fade_fraction, 0, 1);
+        r.number("gap_charge_sigma_fraction", jc.gap_charge_sigma_fraction, 0, 2);
+        r.number("gap_hold_s", jc.gap_hold_s, 0, 60);
         r.number("solver_steps_per_update", jc.solver_steps_per_update, 1, 1000);
         r.number("short_flight_fraction", jc.short_flight_fraction, 0, 1);
         r.number("cause_fraction", jc.cause_fraction, 0, 1);
@@ -343,6 +345,8 @@ json config_to_json(const LoadedConfig& c) {
             {"cutoff_delay_s", jc.cutoff_delay_s},
             {"health_time_share", jc.health_time_share},
             {"health_time_fade_fraction", jc.health_time_fade_fraction},
+            {"gap_charge_sigma_fraction", jc.gap_charge_sigma_fraction},
+            {"gap_hold_s", jc.gap_hold_s},
             {"solver_steps_per_update", jc.solver_steps_per_update},
             {"short_flight_fraction", jc.short_flight_fraction},
             {"cause_fraction", jc.cause_fraction},

@@ -143,6 +143,8 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.cutoff_delay_s", c.joint.cutoff_delay_s);
     f("joint.health_time_share", c.joint.health_time_share);
     f("joint.health_time_fade_fraction", c.joint.health_time_fade_fraction);
+    f("joint.gap_charge_sigma_fraction", c.joint.gap_charge_sigma_fraction);
+    f("joint.gap_hold_s", c.joint.gap_hold_s);
     f("joint.solver_steps_per_update", c.joint.solver_steps_per_update);
     f("joint.short_flight_fraction", c.joint.short_flight_fraction);
     f("joint.cause_fraction", c.joint.cause_fraction);

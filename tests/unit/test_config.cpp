@@ -23,6 +23,8 @@ TEST_CASE("Config JSON round-trips", "[config]") {
     c.monitor.joint.cutoff_delay_s = 7.5f;  // default 0
     c.monitor.joint.health_time_share = 0.25f;           // default 0.5
     c.monitor.joint.health_time_fade_fraction = 0.75f;  // default 0.5
+    c.monitor.joint.gap_charge_sigma_fraction = 0.4f;   // default 0.25
+    c.monitor.joint.gap_hold_s = 2.5f;                  // default 5
     LoadedConfig back = config_from_json(config_to_json(c), "test");
     CHECK_FALSE(back.monitor.joint.health.enabled);
     CHECK(back.monitor.joint.health.ekf.voltage_sigma_v == 0.031f);
@@ -34,6 +36,8 @@ TEST_CASE("Config JSON round-trips", "[config]") {
     CHECK(back.monitor.joint.cutoff_delay_s == 7.5f);
     CHECK(back.monitor.joint.health_time_share == 0.25f);
     CHECK(back.monitor.joint.health_time_fade_fraction == 0.75f);
+    CHECK(back.monitor.joint.gap_charge_sigma_fraction == 0.4f);
+    CHECK(back.monitor.joint.gap_hold_s == 2.5f);
     CHECK(back.monitor.joint.ekf.voltage_sigma_v == c.monitor.joint.ekf.voltage_sigma_v);  // the two filters' keys apart
     CHECK(back.monitor.cell_analysis.step.steady_band_fraction == 0.2f);
     CHECK(back.monitor.cell_analysis.step.max_wait_samples == 20);

@@ -26,10 +26,12 @@ using testplant::Plant;
 // (health = false: the tracking filter alone, as before the health filter; correct =
 // false: the health filter's SOC not corrected on the first measured R0).
 JointEstimator table_estimator(const TremblayParams& rated, bool health = true, bool correct = true,
-                               bool from_takeoff = true, float health_time_share = JointEstimator::Config{}.health_time_share) {
+                               bool from_takeoff = true, float health_time_share = JointEstimator::Config{}.health_time_share,
+                               float max_sample_gap_s = JointEstimator::Config{}.max_sample_gap_s) {
     JointEstimator::Config jc;
     jc.ocv = lipo_table();
     jc.health_time_share = health_time_share;
+    jc.max_sample_gap_s = max_sample_gap_s;
     jc.health.enabled = health;
     jc.health.first_resistance_soc_correction = correct;
     jc.health.solves_from_takeoff_soc = from_takeoff;
@@ -378,6 +380,61 @@ TEST_CASE("Joint estimator: early in a flight the remaining time leans on the he
     // The verdict and the energy do not read the published remaining time.
     CHECK(blended.at20.total_time_s == tracking.at20.total_time_s);
     CHECK(blended.at20.remaining_energy_wh == tracking.at20.remaining_energy_wh);
+}
+
+TEST_CASE("Joint estimator: a logging gap's charge at the mean of the currents either side; learning held after it", "[joint]") {
+    // 45 s at 40 A and a steady 15.0 V (sampled every 67 ms), a 2.5 s gap, then 10 A. The
+    // gap's charge is counted at (40 + 10) / 2 = 25 A, so the flight's mean power after it is
+    // (600 W · 45.02 s + 15 V · 25 A · 2.5 s) / 47.52 s; the sample's own 10 A would give
+    // 15 V · 10 A · 2.5 s for the gap instead.
+    const auto run = [](float max_gap_s, float* capacity_after_gap, float* capacity_hold_end, float* capacity_later) {
+        TremblayParams rated;
+        rated.capacity_ah = 1.5f;
+        rated.internal_resistance_ohm = 0.025f;
+        JointEstimator e = table_estimator(rated, true, true, true, JointEstimator::Config{}.health_time_share, max_gap_s);
+        e.start(16.68f, 0.0f);
+        uint64_t t_us = 0;
+        const int n = 672;  // 45.024 s: past resistance_settle_s, so capacity is being learnt
+        for (int k = 0; k < n; ++k, t_us += 67000) e.update(t_us, 15.0f, 40.0f, 0.067f, true);
+        t_us += 2500000;
+        e.update(t_us, 15.0f, 10.0f, 2.5f, true);
+        const float mean_w = e.status().mean_power_w;
+        *capacity_after_gap = e.status().capacity_ah;
+        for (int k = 0; k < 60; ++k) e.update(t_us += 67000, 15.0f, 10.0f, 0.067f, true);  // 4.0 s
+        *capacity_hold_end = e.status().capacity_ah;
+        for (int k = 0; k < 60; ++k) e.update(t_us += 67000, 15.0f, 10.0f, 0.067f, true);  // to 8.0 s
+        *capacity_later = e.status().capacity_ah;
+        return mean_w;
+    };
+    float c_gap = 0, c_hold = 0, c_later = 0;
+    const float handled_w = run(JointEstimator::Config{}.max_sample_gap_s, &c_gap, &c_hold, &c_later);
+    const double flown_s = 672 * 0.067 + 2.5;
+    CHECK(handled_w == Approx((600.0 * 672 * 0.067 + 15.0 * 25.0 * 2.5) / flown_s).epsilon(1e-4));
+    // Within gap_hold_s (5 s) of the gap capacity is not learnt; afterwards it is again.
+    CHECK(c_hold == c_gap);
+    CHECK(c_later != c_hold);
+    float u_gap = 0, u_hold = 0, u_later = 0;
+    const float unhandled_w = run(1.0e9f, &u_gap, &u_hold, &u_later);
+    CHECK(unhandled_w == Approx((600.0 * 672 * 0.067 + 15.0 * 10.0 * 2.5) / flown_s).epsilon(1e-4));
+    CHECK(u_hold != u_gap);  // nothing held without a recognised gap
+}
+
+TEST_CASE("Capacity EKF: predict adds the given state-of-charge variance", "[joint]") {
+    // P00 ← F P Fᵀ + q² dt + extra: two predicts that differ only in the extra variance
+    // differ by exactly that in σ²(soc), and not at all in the state.
+    CapacityEkf::Config cfg;
+    CapacityEkf a, b;
+    a.configure(cfg, 1.5f);
+    b.configure(cfg, 1.5f);
+    a.start(0.8f);
+    b.start(0.8f);
+    a.predict(30.0f, 2.5f);
+    b.predict(30.0f, 2.5f, false, 1.0f, 4.0e-4f);
+    const float va = a.status().sigma_soc * a.status().sigma_soc;
+    const float vb = b.status().sigma_soc * b.status().sigma_soc;
+    CHECK(vb - va == Approx(4.0e-4f).epsilon(1e-3));
+    CHECK(b.status().soc == a.status().soc);
+    CHECK(b.status().capacity_ah == a.status().capacity_ah);
 }
 
 TEST_CASE("Joint estimator: a hover on a pack more resistive than configured, SOC corrected on the first R0", "[joint][truth]") {

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/estimate/coulomb_baseline.h"
+#include "host/score/coulomb_baseline.h"
 #include "host/config_json.h"
 #include "host/io/sample_reader.h"
 #include "host/score/estimator.h"
@@ -63,8 +63,8 @@ EstimatorColumn known_column(double time_bias_s, double capacity_factor, uint8_t
 }  // namespace
 
 TEST_CASE("Coulomb baseline: rated capacity, 50 s average current, by hand", "[score][estimate]") {
-    core::CoulombBaseline b;
-    core::CoulombBaseline::Config c;
+    host::score::CoulombBaseline b;
+    host::score::CoulombBaseline::Config c;
     c.rated_capacity_ah = 1.5f;
     b.configure(c);
     CHECK(b.status().remaining_mah == Approx(1500.0f));
@@ -199,6 +199,64 @@ TEST_CASE("Scoreboard: reading the logs from files gives the same result as in m
     ScoreOptions missing;
     missing.logs_dir = dir + "/nowhere";
     CHECK_THROWS_AS(score_scenarios(suite, cols, missing), InputError);
+}
+
+TEST_CASE("Scoreboard: copies of the suite with other seeds, pooled, with each copy's own figures", "[score]") {
+    const std::vector<sim::Scenario> suite = {scenario("healthy"), scenario("aged", R"({"pack": {"capacity_factor": 0.7}, "seed": 6})")};
+    const sim::Scenario copy2 = sim::reseeded(suite[1], 2);
+    CHECK(copy2.seed == 6u + 2u * 7919u);
+    CHECK(copy2.name == "aged@2");
+    CHECK(sim::reseeded(suite[1], 0).seed == 6u);
+    CHECK(sim::reseeded(suite[1], 0).name == "aged");
+
+    const std::vector<EstimatorColumn> cols = {known_column(0.0, 1.0, 0, 0.0)};
+    ScoreOptions opt;
+    opt.jobs = 2;
+    opt.copies = 3;
+    const ScoreResult r = score_scenarios(suite, cols, opt);
+    REQUIRE(r.flights.size() == 6);
+    const std::vector<std::string> names = {"healthy", "aged", "healthy@1", "aged@1", "healthy@2", "aged@2"};
+    for (size_t i = 0; i < names.size(); ++i) {
+        CHECK(r.flights[i].name == names[i]);
+        CHECK(r.flights[i].copy == static_cast<int>(i / 2));
+    }
+    // A copy is the reseeded scenario flown on its own; copy 0 is the suite as written.
+    const ScoreResult alone = score_scenarios({copy2}, cols, ScoreOptions{});
+    const json j = to_json(r);
+    CHECK(j["flights"][5]["estimators"].dump() == to_json(alone)["flights"][0]["estimators"].dump());
+    CHECK(j["flights"][5]["total_flight_time_s"] == to_json(alone)["flights"][0]["total_flight_time_s"]);
+    CHECK(j["flights"][1]["total_flight_time_s"] != j["flights"][3]["total_flight_time_s"]);
+    const json once = to_json(score_scenarios(suite, cols, ScoreOptions{}));
+    REQUIRE(j["summary_by_copy"].size() == 3);
+    CHECK(j["summary_by_copy"][0].dump() == once["summary"].dump());
+    CHECK(j["copies"] == 3);
+    CHECK_FALSE(once.contains("summary_by_copy"));
+    // Pooled counts are the copies' counts added up.
+    int of = 0, count = 0;
+    for (const json& c : j["summary_by_copy"]) {
+        of += c["false_warnings"]["known"]["of"].get<int>();
+        count += c["remaining_time_20"]["known"]["n"].get<int>();
+    }
+    CHECK(j["summary"]["false_warnings"]["known"]["of"] == of);
+    CHECK(j["summary"]["remaining_time_20"]["known"]["n"] == count);
+    CHECK(of == 6);
+    // The table shows the pooled figure, then the copies' range; every line as wide as the header.
+    const std::string table = format_table(r);
+    CHECK(table.find("3 copies of the suite") != std::string::npos);
+    CHECK(table.find("0/6 (0/2..0/2)") != std::string::npos);
+    std::stringstream in(table);
+    std::string line, header;
+    std::getline(in, line);
+    std::getline(in, line);
+    std::getline(in, header);
+    while (std::getline(in, line)) CHECK(line.size() == header.size());
+
+    ScoreOptions bad = opt;
+    bad.logs_dir = "/tmp";
+    CHECK_THROWS_AS(score_scenarios(suite, cols, bad), std::invalid_argument);
+    bad = ScoreOptions{};
+    bad.copies = 0;
+    CHECK_THROWS_AS(score_scenarios(suite, cols, bad), std::invalid_argument);
 }
 
 TEST_CASE("Diagnostic column: the flight-time solve fed the true pack, with and without the cutoff delay", "[score]") {

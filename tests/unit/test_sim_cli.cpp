@@ -103,6 +103,17 @@ TEST_CASE("battsim score prints a table or JSON and checks its arguments", "[cli
     CHECK(text.find("2 flights") != std::string::npos);
     CHECK(text.find("reference") != std::string::npos);
     CHECK(text.find("baseline") == std::string::npos);
+    const auto copies = run("score " + q(d.path) + " --columns oracle --copies 2 --json -j 2");
+    INFO(copies.err);
+    REQUIRE(copies.exit_code == 0);
+    const nlohmann::json cj = nlohmann::json::parse(copies.out);
+    REQUIRE(cj["flights"].size() == 4);
+    CHECK(cj["flights"][2]["name"] == "a@1");
+    CHECK(cj["flights"][2]["copy"] == 1);
+    CHECK(cj["summary_by_copy"].size() == 2);
+    CHECK(cj["summary"]["early_warnings"]["oracle"]["of"] == 2);  // b and b@1 are short
+    CHECK(run("score " + q(d.path) + " --copies 2 --logs " + q(d.path)).exit_code == 2);
+    CHECK(run("score " + q(d.path) + " --copies 0").exit_code == 2);
     const auto cols = run("score " + q(d.path) + " --columns reference,nonesuch");
     CHECK(cols.exit_code == 2);
     CHECK(cols.err.find("unknown estimator \"nonesuch\"") != std::string::npos);

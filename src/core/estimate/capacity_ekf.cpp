@@ -28,7 +28,7 @@ void CapacityEkf::start(float soc) {
     publish();
 }
 
-void CapacityEkf::predict(float current_a, float dt_s, bool ground, float ground_process_scale) {
+void CapacityEkf::predict(float current_a, float dt_s, bool ground, float ground_process_scale, float extra_soc_var) {
     if (!(dt_s > 0.0f)) return;
     const float q = x_[1];
     const float k = dt_s / (3600.0f * q);
@@ -46,7 +46,7 @@ void CapacityEkf::predict(float current_a, float dt_s, bool ground, float ground
     const float qc = config_.capacity_process_fraction_per_sqrt_s * rated_ah_;
     const float qp = config_.polarisation_process_ohm_per_sqrt_s;
     const float qb = config_.offset_process_a_per_sqrt_s;
-    p_[0][0] += qs * qs * dt_s;
+    p_[0][0] += qs * qs * dt_s + extra_soc_var;
     p_[1][1] += qc * qc * dt_s;
     p_[2][2] += qp * qp * dt_s;
     p_[3][3] += qb * qb * dt_s;

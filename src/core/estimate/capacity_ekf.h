@@ -61,7 +61,10 @@ public:
     // there), and the capacity's uncertainty is not coupled into the state of charge: the
     // charge drawn on the ground is small once the offset is out of it, and coupling it
     // through the raw (offset) current would make the offset look unobservable.
-    void predict(float current_a, float dt_s, bool ground = false, float ground_process_scale = 1.0f);
+    // extra_soc_var: variance added to the state of charge (charge counted with an error
+    // of its own, as over a logging gap).
+    void predict(float current_a, float dt_s, bool ground = false, float ground_process_scale = 1.0f,
+                 float extra_soc_var = 0.0f);
     // y: V + R0·(I_m − offset); ip: polarisation current (measured, low-passed);
     // extra_var_v2: variance added by the R0 error. learn_parameters = false holds capacity
     // and polarisation as "consider" states (at rest nothing flows that could tell them

@@ -127,11 +127,18 @@ public:
         float min_flight_s = 8.0f;           // before any verdict
         int persistence = 2;                 // consecutive verdicts before a warning
         float max_sample_gap_s = 0.75f;      // a longer gap between samples is a sensor (logging) fault
+        // Over such a gap the current is unknown: its charge is counted at the mean of the
+        // currents either side, and both filters' state of charge takes the variance of a
+        // charge error of this fraction × the larger of them × the gap (0: none added). The
+        // true charge scatters about that mean by 0.19 of it (RMS) over the suite's 1–3 s
+        // dropouts; 0.25 leans cautious (docs/estimator.md, fifteenth session).
+        float gap_charge_sigma_fraction = 0.25f;
+        float gap_hold_s = 5.0f;  // no capacity or polarisation learning this long after a gap
         float min_flying_current_a = 1.0f;   // the monitor's take-off current (set by the monitor), on the offset-corrected current
         float offset_fault_a = 0.5f;         // a learnt current offset beyond this (and 3 σ) is a sensor fault
         bool learn_offset_in_flight = false;  // in flight polarisation and capacity errors would drive it
-        float ground_soc_process_scale = 0.2f;
-        float resistance_settle_s = 40.0f;  // learn capacity on the prior R after this long without a measured R0    // SOC process noise on the ground, × the in-flight value
+        float ground_soc_process_scale = 0.2f;  // SOC process noise on the ground, × the in-flight value
+        float resistance_settle_s = 40.0f;  // learn capacity on the prior R after this long without a measured R0
         float offset_learn_max_current_a = 3.0f;  // the offset is learnt while the measured current is below this (on the ground)
         // Polarisation resistance scaled with the ohmic resistance (R0 now / R0 when learning
         // began): both fall as the pack warms in flight (the same Arrhenius behaviour), and a
@@ -249,6 +256,8 @@ private:
     bool has_flown_ = false;
     bool taken_off_ = false;  // the offset is learnt only before this
     float last_voltage_v_ = 0.0f;
+    float last_current_a_ = 0.0f;  // the previous sample's, for a gap's charge
+    float gap_hold_s_ = 0.0f;      // counts down after a gap: learning held
     uint32_t rest_reads_ = 0;
 };
 

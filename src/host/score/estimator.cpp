@@ -4,7 +4,7 @@
 #include <memory>
 #include <utility>
 
-#include "core/estimate/coulomb_baseline.h"
+#include "host/score/coulomb_baseline.h"
 #include "core/estimate/power_time_solver.h"
 #include "core/model/ocv.h"
 #include "host/sim/plant.h"
@@ -114,8 +114,8 @@ EstimatorColumn baseline_column() {
     col.name = "baseline";
     col.description = "coulomb counting from full, rated capacity, 50 s average current (ArduPilot/PX4 style)";
     col.run = [](const FlightInput& in) {
-        core::CoulombBaseline b;
-        core::CoulombBaseline::Config c;
+        CoulombBaseline b;
+        CoulombBaseline::Config c;
         c.rated_capacity_ah = in.config->monitor.battery.capacity_ah;
         b.configure(c);
         std::vector<Estimate> out;

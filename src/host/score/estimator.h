@@ -52,7 +52,7 @@ struct EstimatorColumn {
 // estimator inside the core).
 EstimatorColumn monitor_column(std::string name, std::string description,
                                std::function<void(core::MonitorConfig&)> tweak = nullptr);
-// core::CoulombBaseline with the config's rated capacity: what ArduPilot/PX4 users get.
+// CoulombBaseline with the config's rated capacity: what ArduPilot/PX4 users get.
 EstimatorColumn baseline_column();
 // Knows the true pack and state; assumes the flight's average power so far continues.
 // The floor for remaining-time error that no estimator can beat.

@@ -13,6 +13,7 @@
 #include <functional>
 #include <mutex>
 #include <sstream>
+#include <stdexcept>
 #include <thread>
 
 #include "host/io/sample_reader.h"
@@ -318,7 +319,7 @@ std::vector<Row> build_rows(const ScoreResult& r) {
               [](const FlightScore& f, const ColumnFlight& c, Count& n) {
                   if (!f.sensor_faulty) return;
                   ++n.n;
-                  if (c.cell_warning) ++n.k;
+                  if (c.cell_warning && !is_outlier(f.outlier_cells, c.named_cell)) ++n.k;
               });
     add_count("sensor_false_alarms", "sensor-fault warnings on clean logs",
               [](const FlightScore& f, const ColumnFlight& c, Count& n) {
@@ -384,9 +385,21 @@ FlightScore score_flight(const sim::SimulationResult& sim, const std::vector<cor
     return f;
 }
 
-ScoreResult score_scenarios(const std::vector<sim::Scenario>& scenarios, const std::vector<EstimatorColumn>& columns,
+ScoreResult score_scenarios(const std::vector<sim::Scenario>& suite, const std::vector<EstimatorColumn>& columns,
                             const ScoreOptions& options) {
+    if (options.copies < 1) throw std::invalid_argument("copies must be at least 1");
+    if (options.copies > 1 && !options.logs_dir.empty())
+        throw std::invalid_argument("copies of the suite are simulated; they cannot be read from a logs directory");
+    std::vector<sim::Scenario> scenarios;
+    std::vector<int> copy_of;
+    for (int k = 0; k < options.copies; ++k) {
+        for (const sim::Scenario& s : suite) {
+            scenarios.push_back(sim::reseeded(s, k));
+            copy_of.push_back(k);
+        }
+    }
     ScoreResult result;
+    result.copies = options.copies;
     for (const EstimatorColumn& c : columns) {
         result.columns.push_back(c.name);
         result.descriptions.push_back(c.description);
@@ -418,6 +431,7 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& scenarios, const s
                 const std::vector<core::Sample> samples = read_samples(path, simr);
                 if (remove) std::remove(path.c_str());
                 result.flights[i] = score_flight(simr, samples, columns);
+                result.flights[i].copy = copy_of[i];
                 if (!options.logs_dir.empty()) {
                     std::ifstream in(path, std::ios::binary);
                     std::stringstream buf;
@@ -445,6 +459,81 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& scenarios, const s
     return result;
 }
 
+namespace {
+
+// The flights of one copy of the suite, as a result of their own.
+ScoreResult copy_result(const ScoreResult& r, int copy) {
+    ScoreResult c;
+    c.columns = r.columns;
+    c.descriptions = r.descriptions;
+    for (const FlightScore& f : r.flights)
+        if (f.copy == copy) c.flights.push_back(f);
+    return c;
+}
+
+std::vector<std::vector<Row>> rows_by_copy(const ScoreResult& r) {
+    std::vector<std::vector<Row>> by;
+    if (r.copies > 1)
+        for (int k = 0; k < r.copies; ++k) by.push_back(build_rows(copy_result(r, k)));
+    return by;
+}
+
+// A row's figure for column c: NaN when it has none (Counted rows give k).
+double row_value(const Row& row, size_t c) {
+    switch (row.kind) {
+        case Row::Median: return row.stats[c].median_abs();
+        case Row::Worst: return row.stats[c].worst();
+        case Row::SignedMedian: return row.stats[c].median();
+        case Row::Max: return row.stats[c].max();
+        default: return row.counts[c].k;
+    }
+}
+
+std::string cell_text(const Row& row, size_t c) {
+    if (row.kind == Row::Counted) return std::to_string(row.counts[c].k) + "/" + std::to_string(row.counts[c].n);
+    return fmt_pct(row_value(row, c));
+}
+
+// The copies' lowest and highest figure for row i, column c (NaN, NaN when none has one).
+// A Worst row's figures are signed; they are ordered by magnitude (the mildest copy's worst,
+// then the harshest's).
+std::pair<double, double> copy_range(const std::vector<std::vector<Row>>& by, size_t i, size_t c) {
+    const bool by_magnitude = !by.empty() && by[0][i].kind == Row::Worst;
+    const auto key = [by_magnitude](double x) { return by_magnitude ? std::fabs(x) : x; };
+    double lo = NAN, hi = NAN;
+    for (const std::vector<Row>& rows : by) {
+        const double x = row_value(rows[i], c);
+        if (std::isnan(x)) continue;
+        if (std::isnan(lo) || key(x) < key(lo)) lo = x;
+        if (std::isnan(hi) || key(x) > key(hi)) hi = x;
+    }
+    return {lo, hi};
+}
+
+// " (lowest..highest)" of the copies' figures for row i, column c; counts as k/n, ordered
+// by their share (the copies need not have the same n: outlier cells come from the draw).
+std::string range_text(const std::vector<std::vector<Row>>& by, size_t i, size_t c) {
+    if (by[0][i].kind == Row::Counted) {
+        const Count* lo = nullptr;
+        const Count* hi = nullptr;
+        const auto share = [](const Count* n) { return n->n > 0 ? static_cast<double>(n->k) / n->n : 0.0; };
+        for (const std::vector<Row>& rows : by) {
+            const Count* n = &rows[i].counts[c];
+            if (n->n == 0) continue;
+            if (!lo || share(n) < share(lo)) lo = n;
+            if (!hi || share(n) > share(hi)) hi = n;
+        }
+        if (!lo) return " (-)";
+        const auto text = [](const Count* n) { return std::to_string(n->k) + "/" + std::to_string(n->n); };
+        return " (" + text(lo) + ".." + text(hi) + ")";
+    }
+    const std::pair<double, double> range = copy_range(by, i, c);
+    if (std::isnan(range.first)) return " (-)";
+    return " (" + fmt_pct(range.first) + ".." + fmt_pct(range.second) + ")";
+}
+
+}  // namespace
+
 std::string format_table(const ScoreResult& r) {
     int n_short = 0, n_degraded = 0, n_fault = 0;
     for (const FlightScore& f : r.flights) {
@@ -455,31 +544,65 @@ std::string format_table(const ScoreResult& r) {
     std::ostringstream out;
     out << "battsim score: " << r.flights.size() << " flights (" << n_short << " short, " << n_degraded
         << " degraded packs, " << n_fault << " with sensor faults); errors in % (time: of the true total flight time)\n";
+    if (r.copies > 1) {
+        out << "  " << r.copies << " copies of the suite (copy k: seeds + 7919 k); each figure over all of them, then (the "
+            << "copies' lowest..highest)\n";
+    }
     const std::vector<Row> rows = build_rows(r);
+    const std::vector<std::vector<Row>> by = rows_by_copy(r);
+    std::vector<std::vector<std::string>> cells(rows.size(), std::vector<std::string>(r.columns.size()));
+    for (size_t i = 0; i < rows.size(); ++i) {
+        for (size_t c = 0; c < r.columns.size(); ++c) {
+            cells[i][c] = cell_text(rows[i], c);
+            if (!by.empty()) cells[i][c] += range_text(by, i, c);
+        }
+    }
     size_t label_w = 6;
     for (const Row& row : rows) label_w = std::max(label_w, row.label.size());
     size_t col_w = 10;
     for (const std::string& c : r.columns) col_w = std::max(col_w, c.size() + 2);
+    for (const auto& line : cells)
+        for (const std::string& cell : line) col_w = std::max(col_w, cell.size() + 2);
     const auto pad_right = [](const std::string& s, size_t w) { return s + std::string(w > s.size() ? w - s.size() : 0, ' '); };
     const auto pad_left = [](const std::string& s, size_t w) { return std::string(w > s.size() ? w - s.size() : 0, ' ') + s; };
     out << pad_right("metric", label_w);
     for (const std::string& c : r.columns) out << pad_left(c, col_w);
     out << "\n";
-    for (const Row& row : rows) {
-        out << pad_right(row.label, label_w);
-        for (size_t c = 0; c < r.columns.size(); ++c) {
-            std::string cell;
-            if (row.kind == Row::Median) cell = fmt_pct(row.stats[c].median_abs());
-            else if (row.kind == Row::Worst) cell = fmt_pct(row.stats[c].worst());
-            else if (row.kind == Row::SignedMedian) cell = fmt_pct(row.stats[c].median());
-            else if (row.kind == Row::Max) cell = fmt_pct(row.stats[c].max());
-            else cell = std::to_string(row.counts[c].k) + "/" + std::to_string(row.counts[c].n);
-            out << pad_left(cell, col_w);
-        }
+    for (size_t i = 0; i < rows.size(); ++i) {
+        out << pad_right(rows[i].label, label_w);
+        for (size_t c = 0; c < r.columns.size(); ++c) out << pad_left(cells[i][c], col_w);
         out << "\n";
     }
     return out.str();
 }
+
+namespace {
+
+json summary_json(const std::vector<Row>& rows, const std::vector<std::string>& columns) {
+    json summary = json::object();
+    for (const Row& row : rows) {
+        json& m = summary[row.key];
+        for (size_t c = 0; c < columns.size(); ++c) {
+            const std::string& col = columns[c];
+            if (row.kind == Row::Median) {
+                m[col]["median_abs"] = num_or_null(row.stats[c].median_abs());
+                m[col]["n"] = row.stats[c].v.size();
+            } else if (row.kind == Row::Worst) {
+                m[col]["worst"] = num_or_null(row.stats[c].worst());
+            } else if (row.kind == Row::SignedMedian) {
+                m[col]["median"] = num_or_null(row.stats[c].median());
+                m[col]["n"] = row.stats[c].v.size();
+            } else if (row.kind == Row::Max) {
+                m[col]["max"] = num_or_null(row.stats[c].max());
+            } else {
+                m[col] = {{"count", row.counts[c].k}, {"of", row.counts[c].n}};
+            }
+        }
+    }
+    return summary;
+}
+
+}  // namespace
 
 json to_json(const ScoreResult& r) {
     json j;
@@ -498,31 +621,20 @@ json to_json(const ScoreResult& r) {
         {"resistance_error", "(estimate - pack series ohmic resistance at that instant) / truth, in %"},
         {"capacity_after_rest", "capacity read from the rests before and after the flight, at the end of the log, against the weakest cell's"},
         {"short_flight", "T < 0.8 x the healthy twin's T"},
-        {"false_warning", "low capacity or high resistance warning the pack does not justify, or short flight on a flight that is not short"}};
-    json summary = json::object();
-    for (const Row& row : build_rows(r)) {
-        json& m = summary[row.key];
-        for (size_t c = 0; c < r.columns.size(); ++c) {
-            const std::string& col = r.columns[c];
-            if (row.kind == Row::Median) {
-                m[col]["median_abs"] = num_or_null(row.stats[c].median_abs());
-                m[col]["n"] = row.stats[c].v.size();
-            } else if (row.kind == Row::Worst) {
-                m[col]["worst"] = num_or_null(row.stats[c].worst());
-            } else if (row.kind == Row::SignedMedian) {
-                m[col]["median"] = num_or_null(row.stats[c].median());
-                m[col]["n"] = row.stats[c].v.size();
-            } else if (row.kind == Row::Max) {
-                m[col]["max"] = num_or_null(row.stats[c].max());
-            } else {
-                m[col] = {{"count", row.counts[c].k}, {"of", row.counts[c].n}};
-            }
-        }
+        {"false_warning", "low capacity or high resistance warning the pack does not justify, or short flight on a flight that is not short"},
+        {"sensor_fault_blamed_on_cell", "on a sensor-fault flight, a named cell that is not one of the pack's outlier cells"},
+        {"copies", "copy k > 0 of the suite adds 7919 k to every scenario's seed and names its flights NAME@k; summary pools every copy, summary_by_copy has each"}};
+    j["copies"] = r.copies;
+    j["summary"] = summary_json(build_rows(r), r.columns);
+    if (r.copies > 1) {
+        json by = json::array();
+        for (const std::vector<Row>& rows : rows_by_copy(r)) by.push_back(summary_json(rows, r.columns));
+        j["summary_by_copy"] = by;
     }
-    j["summary"] = summary;
     json flights = json::array();
     for (const FlightScore& f : r.flights) {
         json fj = {{"name", f.name},
+                   {"copy", f.copy},
                    {"kind", f.kind},
                    {"cells", f.cells},
                    {"total_flight_time_s", sim::round_fixed(f.total_flight_time_s, 3)},

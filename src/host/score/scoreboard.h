@@ -17,7 +17,9 @@
 //   is active at or before 20 % of T;
 // - a false health warning is a low-capacity or high-resistance warning the pack does not
 //   justify (capacity above 0.9 × nominal, resistance below 1.2 × nominal at 25 °C), or a
-//   short-flight warning on a flight that is not short.
+//   short-flight warning on a flight that is not short;
+// - a sensor fault is blamed on a cell when a cell the truth does not call an outlier is
+//   named on a sensor-fault flight (naming a true outlier there is right, not blame).
 #pragma once
 #include <string>
 #include <vector>
@@ -37,6 +39,10 @@ constexpr int kScoreVersion = 1;
 struct ScoreOptions {
     int jobs = 1;
     std::string logs_dir;  // non-empty: estimators read DIR/NAME.csv instead of the in-memory log
+    // Copies of the suite flown: the suite itself, then sim::reseeded copies 1 … copies − 1
+    // (other gusts, cell spreads and sensor noise). The table pools every copy's flights and
+    // shows the spread of the copies' own figures. Not with logs_dir.
+    int copies = 1;
 };
 
 // Per flight and column.
@@ -62,6 +68,7 @@ struct ColumnFlight {
 
 struct FlightScore {
     std::string name;
+    int copy = 0;  // which copy of the suite (0: as written)
     std::string kind;
     int cells = 0;
     double total_flight_time_s = 0, healthy_total_flight_time_s = 0, flown_s = 0;
@@ -74,6 +81,7 @@ struct FlightScore {
 };
 
 struct ScoreResult {
+    int copies = 1;
     std::vector<std::string> columns;
     std::vector<std::string> descriptions;
     std::vector<FlightScore> flights;
@@ -87,7 +95,8 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& scenarios, const s
 FlightScore score_flight(const sim::SimulationResult& sim, const std::vector<core::Sample>& samples,
                          const std::vector<EstimatorColumn>& columns);
 
-// The table: one row per metric, one column per estimator.
+// The table: one row per metric, one column per estimator. With copies, each figure is
+// the pooled one followed by the range of the copies' own, "0.7 (0.4..1.5)".
 std::string format_table(const ScoreResult& r);
 nlohmann::json to_json(const ScoreResult& r);
 

@@ -114,6 +114,14 @@ void read_pack(Reader& r, PackSpec& p) {
 
 }  // namespace
 
+Scenario reseeded(const Scenario& s, int copy) {
+    Scenario r = s;
+    if (copy <= 0) return r;
+    r.seed = s.seed + 7919u * static_cast<uint64_t>(copy);
+    r.name = s.name + "@" + std::to_string(copy);
+    return r;
+}
+
 void resolve_defaults(Scenario& s) {
     PackSpec& p = s.pack;
     const double cap = p.capacity_ah;

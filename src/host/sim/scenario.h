@@ -89,6 +89,11 @@ nlohmann::json scenario_to_json(const Scenario& s);
 // sorted by name. Throws ScenarioError if a path does not exist or nothing is found.
 std::vector<std::string> find_scenario_files(const std::vector<std::string>& paths);
 
+// Copy k of a scenario (k >= 1): the same pack, load, faults and config with other random
+// draws (gusts, cell spread, sensor noise): seed + 7919·k, named NAME@k. k = 0 returns it
+// unchanged. `battsim score --copies` and scripts/joint-search.py --reseed use the same rule.
+Scenario reseeded(const Scenario& s, int copy);
+
 // Fills every value left at 0 (resistances, thermal constants, mean power) from the
 // pack's size. Idempotent; load_scenario() calls it.
 void resolve_defaults(Scenario& s);

@@ -2,11 +2,15 @@
 // charge drawn from a pack assumed full at connection, take the rated capacity as what
 // there is, and divide what is left by a 50 s average of the current. No model, no
 // resistance, no health warnings: the floor any better estimator has to clear.
+// A ruler's comparator like the oracle, so it lives with the scoreboard: the monitor never
+// runs it, and the firmware's flash does not carry it. Written to the core's rules all the
+// same (float, no heap), as a flight controller would run it.
 #pragma once
 #include "core/numeric.h"
 
 namespace battsim {
-namespace core {
+namespace host {
+namespace score {
 
 class CoulombBaseline {
 public:
@@ -32,9 +36,10 @@ public:
 private:
     Config config_;
     Status status_;
-    CompensatedSum consumed_mah_;
+    core::CompensatedSum consumed_mah_;
     bool started_ = false;
 };
 
-}  // namespace core
+}  // namespace score
+}  // namespace host
 }  // namespace battsim
