@@ -177,6 +177,7 @@ TEST_CASE("JSON manifest errors name the line, column and what was expected", "[
     CHECK(input_error([&] { load_manifest(t.path("nope.json")); }) == t.path("nope.json") + ": cannot open manifest");
     // A stray closer used to stall the position scanner (an endless loop before the message).
     CHECK(err("[}") == p + ":1:2: not valid JSON: syntax error while parsing value - unexpected '}'; expected '[', '{', or a literal");
+    CHECK(err("{\"schema\": \"battsim.manifest\", \"version\": 1e400}") == p + ":1:43: not valid JSON: number 1e400 is beyond a double's range");
 }
 
 TEST_CASE("CSV manifest: header, comments, quoting and errors with line and field", "[batch]") {

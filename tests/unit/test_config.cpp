@@ -103,6 +103,9 @@ TEST_CASE("Config files: errors give the line and column of the key or value", "
     CHECK(error_of(typo) == typo + ":3:13: $.joint.cutoff_delay: unknown key");
     const std::string syntax = temp.write("syntax.json", "{\n  \"schema\": \"battsim.config\",\n}\n");
     CHECK(error_of(syntax) == syntax + ":3:1: not valid JSON: syntax error while parsing object key - unexpected '}'; expected string literal");
+    // A number beyond a double: the parser gives no position, so its text is looked up.
+    const std::string huge = temp.write("huge.json", "{\n  \"schema\": \"battsim.config\", \"version\": 1,\n  \"battery\": {\"capacity_ah\": 3.7e358}\n}\n");
+    CHECK(error_of(huge) == huge + ":3:30: not valid JSON: number 3.7e358 is beyond a double's range");
     CHECK(error_of(temp.write("empty.json", " \n")).find("file is empty") != std::string::npos);
     CHECK(error_of(temp.path()) == temp.path() + ": cannot open config file: it is a directory");
     std::string text;

@@ -251,12 +251,8 @@ public:
 
     Manifest parse() {
         json j;
-        try {
-            j = json::parse(text_);
-        } catch (const json::parse_error& e) {
-            const JsonSyntaxError se = json_syntax_error(text_, e);
-            throw InputError(path_, se.line, se.column, "not valid JSON: " + se.what);
-        }
+        JsonSyntaxError se;
+        if (!parse_json_text(text_, j, se)) throw InputError(path_, se.line, se.column, "not valid JSON: " + se.what);
         check_keys(j, "$", {"schema", "version", "description", "base_dir", "defaults", "logs"});
         if (!j.contains("schema")) fail("$", "expected \"schema\": \"" + std::string(kManifestSchema) + "\"");
         if (j["schema"] != kManifestSchema)

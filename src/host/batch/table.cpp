@@ -262,10 +262,8 @@ json read_table_file(const std::string& path) {
     if (r != TextRead::Ok) throw InputError(path, 0, 0, text_read_message(r, "batch table"));
     if (text.empty()) throw InputError(path, 0, 0, "file is empty; expected a table written by `battsim batch --format json`");
     json t;
-    try {
-        t = json::parse(text);
-    } catch (const json::parse_error& e) {
-        const JsonSyntaxError se = json_syntax_error(text, e);
+    JsonSyntaxError se;
+    if (!parse_json_text(text, t, se)) {
         throw InputError(path, se.line, se.column,
                          "not valid JSON (" + se.what + "); expected a table written by `battsim batch --format json`");
     }

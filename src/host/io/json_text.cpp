@@ -144,6 +144,28 @@ JsonSyntaxError json_syntax_error(const std::string& text, const nlohmann::json:
     return out;
 }
 
+bool parse_json_text(const std::string& text, nlohmann::json& out, JsonSyntaxError& error) {
+    try {
+        out = nlohmann::json::parse(text);
+        return true;
+    } catch (const nlohmann::json::parse_error& e) {
+        error = json_syntax_error(text, e);
+    } catch (const nlohmann::json::out_of_range& e) {
+        // "[json.exception.out_of_range.406] number overflow parsing '3.7e358'": no byte
+        // offset, so the number's text is looked up.
+        const std::string what = e.what();
+        const std::size_t open = what.find('\'');
+        const std::size_t close = open == std::string::npos ? open : what.find('\'', open + 1);
+        const std::string number = close == std::string::npos ? std::string() : what.substr(open + 1, close - open - 1);
+        const std::size_t at = number.empty() ? std::string::npos : text.find(number);
+        const auto lc = line_column(text, at == std::string::npos ? 0 : at);
+        error.line = lc.first;
+        error.column = lc.second;
+        error.what = number.empty() ? what : "number " + number + " is beyond a double's range";
+    }
+    return false;
+}
+
 TextRead read_text_file(const std::string& path, std::string& text, std::size_t max_bytes) {
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) return TextRead::IsDirectory;

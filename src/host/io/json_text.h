@@ -88,6 +88,10 @@ struct JsonSyntaxError {
     std::string what;
 };
 JsonSyntaxError json_syntax_error(const std::string& text, const nlohmann::json::parse_error& e);
+// Parses a whole document. False, with where and what, when it is not valid JSON: a syntax
+// error, or a number beyond a double ("1e999"), which the parser reports without a position
+// (the first place the number's text occurs is given).
+bool parse_json_text(const std::string& text, nlohmann::json& out, JsonSyntaxError& error);
 
 // Reads a document (config, scenario, manifest, table) whole. Capped, so that a path to a
 // device or a runaway file gives a message instead of eating the memory.
@@ -104,12 +108,11 @@ nlohmann::json load_json_document(const std::string& path, const std::string& ki
     const TextRead r = read_text_file(path, text);
     if (r != TextRead::Ok) throw E(path + ": " + text_read_message(r, kind));
     if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw E(path + ": file is empty; expected " + expected);
-    try {
-        return nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
-        const JsonSyntaxError se = json_syntax_error(text, e);
+    nlohmann::json j;
+    JsonSyntaxError se;
+    if (!parse_json_text(text, j, se))
         throw E(path + ":" + std::to_string(se.line) + ":" + std::to_string(se.column) + ": not valid JSON: " + se.what);
-    }
+    return j;
 }
 
 }  // namespace host
