@@ -202,8 +202,9 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         status_.short_flight_cause = js.cause;
         short_flight = js.short_flight;
         // Sensor faults only the joint estimator can see: a current offset learnt on the
-        // ground, and samples missing for longer than any logger stall.
-        if (js.current_offset_fault || dt_s > config_.joint.max_sample_gap_s) raise(kWarnSensorFault, true);
+        // ground, and samples missing for longer than any logger stall (or than three of the
+        // log's own intervals).
+        if (js.current_offset_fault || js.sample_gap) raise(kWarnSensorFault, true);
         if (status_.cells_valid) cell_analyzer_.observe(sample.cell_voltage_v, sample.cell_count, current_a);
         if (js.flying && status_.cells_valid) {
             cell_analyzer_.update(sample.time_us, sample.cell_voltage_v, sample.cell_count, current_a,

@@ -419,6 +419,44 @@ TEST_CASE("Joint estimator: a logging gap's charge at the mean of the currents e
     CHECK(u_hold != u_gap);  // nothing held without a recognised gap
 }
 
+TEST_CASE("Joint estimator: a log's own slow rate is no gap; a gap is long against it", "[joint]") {
+    // An ArduPilot log may hold the battery once a second or slower: those intervals are the
+    // log's, not missing samples (until the fifteenth session they raised a sensor fault on
+    // every sample, and with the gap hold capacity would never have been learnt).
+    TremblayParams rated;
+    rated.capacity_ah = 1.5f;
+    rated.internal_resistance_ohm = 0.025f;
+    JointEstimator e = table_estimator(rated);
+    e.start(16.68f, 0.0f);
+    uint64_t t_us = 0;
+    bool any_gap = false;
+    float capacity_50s = 0.0f;
+    for (int k = 1; k <= 60; ++k) {
+        e.update(t_us += 1000000, 15.0f, 40.0f, 1.0f, true);
+        any_gap = any_gap || e.status().sample_gap;
+        if (k == 50) capacity_50s = e.status().capacity_ah;
+    }
+    CHECK_FALSE(any_gap);
+    CHECK(e.status().capacity_ah != capacity_50s);  // learning, not held
+    // 2.5 s is within three of its 1 s intervals; 4 s is not.
+    e.update(t_us += 2500000, 15.0f, 40.0f, 2.5f, true);
+    CHECK_FALSE(e.status().sample_gap);
+    e.update(t_us += 1000000, 15.0f, 40.0f, 1.0f, true);
+    e.update(t_us += 4000000, 15.0f, 40.0f, 4.0f, true);
+    CHECK(e.status().sample_gap);
+    e.update(t_us += 1000000, 15.0f, 40.0f, 1.0f, true);
+    CHECK_FALSE(e.status().sample_gap);
+    // At the reference logger's 67 ms the fixed 0.75 s bar decides.
+    JointEstimator fast = table_estimator(rated);
+    fast.start(16.68f, 0.0f);
+    t_us = 0;
+    for (int k = 0; k < 100; ++k) fast.update(t_us += 67000, 15.0f, 40.0f, 0.067f, true);
+    fast.update(t_us += 700000, 15.0f, 40.0f, 0.7f, true);
+    CHECK_FALSE(fast.status().sample_gap);
+    fast.update(t_us += 800000, 15.0f, 40.0f, 0.8f, true);
+    CHECK(fast.status().sample_gap);
+}
+
 TEST_CASE("Capacity EKF: predict adds the given state-of-charge variance", "[joint]") {
     // P00 ← F P Fᵀ + q² dt + extra: two predicts that differ only in the extra variance
     // differ by exactly that in σ²(soc), and not at all in the state.

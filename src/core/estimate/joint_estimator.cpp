@@ -47,6 +47,7 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     rest_reads_ = 0;
     last_voltage_v_ = 0.0f;
     last_current_a_ = 0.0f;
+    usual_dt_s_ = 0.0f;
 }
 
 void JointEstimator::start(float voltage_v, float current_a) {
@@ -75,7 +76,9 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     // capacity and polarisation are not learnt for gap_hold_s after it.
     float charge_a = current_a;
     float gap_var_soc = 0.0f;
-    if (dt_s > config_.max_sample_gap_s) {
+    if (!(usual_dt_s_ > 0.0f)) usual_dt_s_ = dt_s;  // the first interval seeds it
+    status_.sample_gap = dt_s > maxf(config_.max_sample_gap_s, 3.0f * usual_dt_s_);
+    if (status_.sample_gap) {
         charge_a = 0.5f * (current_a + last_current_a_);
         const float sd_soc = config_.gap_charge_sigma_fraction * maxf(fabsf(current_a), fabsf(last_current_a_)) * dt_s /
                              (3600.0f * rated_.capacity_ah);
@@ -83,6 +86,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         gap_hold_s_ = config_.gap_hold_s;
     } else {
         gap_hold_s_ -= dt_s;  // below zero: no gap in the last gap_hold_s
+        usual_dt_s_ += 0.05f * (dt_s - usual_dt_s_);
     }
     last_current_a_ = current_a;
     const float true_charge_a = charge_a - offset_a;

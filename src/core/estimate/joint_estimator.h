@@ -126,7 +126,9 @@ public:
         float cause_fraction = 0.9f;         // a cause alone must cost ≥ 10 % of the time
         float min_flight_s = 8.0f;           // before any verdict
         int persistence = 2;                 // consecutive verdicts before a warning
-        float max_sample_gap_s = 0.75f;      // a longer gap between samples is a sensor (logging) fault
+        // A longer gap between samples is a sensor (logging) fault; so is one over three of the
+        // log's own usual intervals, when these are longer (a log of the battery at 1 Hz).
+        float max_sample_gap_s = 0.75f;
         // Over such a gap the current is unknown: its charge is counted at the mean of the
         // currents either side, and both filters' state of charge takes the variance of a
         // charge error of this fraction × the larger of them × the gap (0: none added). The
@@ -185,6 +187,7 @@ public:
         float current_offset_a = 0.0f;     // learnt current-sensor offset
         float sigma_current_offset_a = 0.0f;
         bool current_offset_fault = false;
+        bool sample_gap = false;  // this sample ends a logging gap (a sensor fault)
         float rest_capacity_ah = 0.0f;     // after a flight and a rest (0 = none yet)
     };
 
@@ -258,6 +261,7 @@ private:
     float last_voltage_v_ = 0.0f;
     float last_current_a_ = 0.0f;  // the previous sample's, for a gap's charge
     float gap_hold_s_ = 0.0f;      // counts down after a gap: learning held
+    float usual_dt_s_ = 0.0f;      // the log's usual sample interval (0: not seen one yet)
     uint32_t rest_reads_ = 0;
 };
 
