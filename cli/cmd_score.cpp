@@ -79,10 +79,6 @@ std::function<int()> setup(CLI::App& sub) {
         opt.jobs = a->jobs > 0 ? a->jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
         opt.logs_dir = a->logs_dir;
         opt.copies = a->copies;
-        if (opt.copies > 1 && !opt.logs_dir.empty()) {
-            std::cerr << "battsim score: --copies simulates its flights; it cannot be used with --logs\n";
-            return kExitUsage;
-        }
         host::score::ScoreResult result;
         try {
             result = host::score::score_scenarios(scenarios, columns, opt);
@@ -92,6 +88,9 @@ std::function<int()> setup(CLI::App& sub) {
         } catch (const host::InputError& e) {
             std::cerr << "battsim score: " << e.what() << "\n";
             return kExitInputError;
+        } catch (const std::invalid_argument& e) {  // options the library refuses (--copies with --logs)
+            std::cerr << "battsim score: " << e.what() << "\n";
+            return kExitUsage;
         }
         for (const auto& f : result.flights)
             for (const std::string& n : f.notes) std::cerr << "battsim score: note: " << f.name << ": " << n << "\n";

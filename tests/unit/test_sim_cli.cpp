@@ -112,7 +112,9 @@ TEST_CASE("battsim score prints a table or JSON and checks its arguments", "[cli
     CHECK(cj["flights"][2]["copy"] == 1);
     CHECK(cj["summary_by_copy"].size() == 2);
     CHECK(cj["summary"]["early_warnings"]["oracle"]["of"] == 2);  // b and b@1 are short
-    CHECK(run("score " + q(d.path) + " --copies 2 --logs " + q(d.path)).exit_code == 2);
+    const auto with_logs = run("score " + q(d.path) + " --copies 2 --logs " + q(d.path));
+    CHECK(with_logs.exit_code == 2);
+    CHECK(with_logs.err.find("--copies simulates its flights; it cannot read them from a --logs directory") != std::string::npos);
     CHECK(run("score " + q(d.path) + " --copies 0").exit_code == 2);
     const auto cols = run("score " + q(d.path) + " --columns reference,nonesuch");
     CHECK(cols.exit_code == 2);

@@ -387,9 +387,9 @@ FlightScore score_flight(const sim::SimulationResult& sim, const std::vector<cor
 
 ScoreResult score_scenarios(const std::vector<sim::Scenario>& suite, const std::vector<EstimatorColumn>& columns,
                             const ScoreOptions& options) {
-    if (options.copies < 1) throw std::invalid_argument("copies must be at least 1");
+    if (options.copies < 1) throw std::invalid_argument("--copies must be at least 1");
     if (options.copies > 1 && !options.logs_dir.empty())
-        throw std::invalid_argument("copies of the suite are simulated; they cannot be read from a logs directory");
+        throw std::invalid_argument("--copies simulates its flights; it cannot read them from a --logs directory");
     std::vector<sim::Scenario> scenarios;
     std::vector<int> copy_of;
     for (int k = 0; k < options.copies; ++k) {
