@@ -34,6 +34,7 @@ void Monitor::configure(const MonitorConfig& config) {
     JointEstimator::Config jc = config.joint;
     jc.min_voltage_v = config.flight_time.min_flight_voltage_v;
     jc.min_flying_current_a = config.flying.min_flying_current_a;
+    jc.landed_hold_s = config.flying.landed_hold_s;
     joint_.configure(jc, config.battery, config.cells_in_series);
     cell_analyzer_.configure(config.cell_analysis);
     have_time_ = false;
@@ -206,7 +207,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         // log's own intervals).
         if (js.current_offset_fault || js.sample_gap) raise(kWarnSensorFault, true);
         if (status_.cells_valid) cell_analyzer_.observe(sample.cell_voltage_v, sample.cell_count, current_a);
-        if (js.flying && status_.cells_valid) {
+        if (js.loaded && status_.cells_valid) {
             cell_analyzer_.update(sample.time_us, sample.cell_voltage_v, sample.cell_count, current_a,
                                   js.polarisation_current_a, used_ah, js.soc, joint_.ocv());
         } else {

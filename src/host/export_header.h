@@ -152,6 +152,7 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.persistence", c.joint.persistence);
     f("joint.max_sample_gap_s", c.joint.max_sample_gap_s);
     f("joint.min_flying_current_a", c.joint.min_flying_current_a);
+    f("joint.landed_hold_s", c.joint.landed_hold_s);
     f("joint.offset_fault_a", c.joint.offset_fault_a);
     f("joint.learn_offset_in_flight", c.joint.learn_offset_in_flight);
     f("joint.polarisation_follows_resistance", c.joint.polarisation_follows_resistance);

@@ -457,6 +457,44 @@ TEST_CASE("Joint estimator: a log's own slow rate is no gap; a gap is long again
     CHECK(fast.status().sample_gap);
 }
 
+TEST_CASE("Joint estimator: one low sample in the air is no landing; a held one is", "[joint]") {
+    // The monitor holds a flight through a throttle dip (landed_hold_s); the estimator's own
+    // offset-corrected take-off threshold had ended the flight on a single sample below it,
+    // restarting the flight's clock, mean power and solves (the dissertation's flight 32 at
+    // 186.8 s; CMU M100 flight 24 at 38 s, which then read 0 s remaining for 6 s).
+    TremblayParams rated;
+    rated.capacity_ah = 1.5f;
+    rated.internal_resistance_ohm = 0.025f;
+    JointEstimator e = table_estimator(rated);
+    e.start(16.68f, 0.0f);
+    uint64_t t_us = 0;
+    for (int k = 0; k < 300; ++k) e.update(t_us += 67000, 15.0f, 20.0f, 0.067f, true);  // 20.1 s at 300 W
+    REQUIRE(e.status().time_valid);
+    const float remaining_s = e.status().remaining_time_s;
+    REQUIRE(remaining_s > 0.0f);
+    // One sample at 0.5 A (the monitor still flying), then 20 A again.
+    e.update(t_us += 67000, 15.5f, 0.5f, 0.067f, true);
+    CHECK(e.status().flying);
+    CHECK_FALSE(e.status().loaded);  // the fits do not learn from it
+    e.update(t_us += 67000, 15.0f, 20.0f, 0.067f, true);
+    CHECK(e.status().flying);
+    CHECK(e.status().time_valid);
+    // The clock ran on: the remaining time fell by the two samples' 0.134 s at most
+    // (a refreshed solve may move it a little), and the mean power counts the dip.
+    CHECK(e.status().remaining_time_s == Approx(remaining_s - 0.134f).margin(2.0));
+    CHECK(e.status().mean_power_w == Approx((300.0 * 301 + 15.5 * 0.5) / 302).epsilon(1e-3));
+    // Below the threshold for longer than the hold (1 s, the monitor's default): landed, even
+    // while the monitor (its own threshold on the measured current) still says flying.
+    for (int k = 0; k < 14; ++k) e.update(t_us += 67000, 15.6f, 0.3f, 0.067f, true);  // 0.938 s
+    CHECK(e.status().flying);
+    e.update(t_us += 67000, 15.6f, 0.3f, 0.067f, true);  // 1.005 s
+    CHECK_FALSE(e.status().flying);
+    // A new take-off after it starts a new flight: its mean power is its own.
+    for (int k = 0; k < 30; ++k) e.update(t_us += 67000, 15.0f, 30.0f, 0.067f, true);
+    CHECK(e.status().flying);
+    CHECK(e.status().mean_power_w == Approx(450.0f).epsilon(1e-3));
+}
+
 TEST_CASE("Capacity EKF: predict adds the given state-of-charge variance", "[joint]") {
     // P00 ← F P Fᵀ + q² dt + extra: two predicts that differ only in the extra variance
     // differ by exactly that in σ²(soc), and not at all in the state.

@@ -35,6 +35,7 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     end_s_ = health_end_s_ = total_wh_ = 0.0f;
     short_count_ = 0;
     was_flying_ = false;
+    below_takeoff_s_ = 0.0f;
     polarisation_scale_ = health_scale_ = 1.0f;
     soc_per_ohm_ = health_soc_per_ohm_ = 0.0f;
     polarisation_ref_ohm_ = 0.0f;
@@ -94,8 +95,18 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     // offset cannot keep a pack on the ground "flying"; at or above the offset-learning
     // current the pack counts as flying whatever the offset.
     const float takeoff_a = config_.min_flying_current_a + 3.0f * ekf_.status().sigma_offset_a;
-    flying = flying && (true_a >= takeoff_a || current_a >= config_.offset_learn_max_current_a);
-    if (flying && !was_flying_) {
+    const bool above = true_a >= takeoff_a || current_a >= config_.offset_learn_max_current_a;
+    // The threshold starts a flight at once, but ends one only after the monitor's landing
+    // hold: a single sample below it in the air (a descent, a throttle cut) had ended the
+    // flight and restarted its accumulators, publishing 0 s remaining until the solves came
+    // round again and judging the rest as a new flight (CMU M100 flight 24, at 38 s; the
+    // dissertation's flight 32 at 187 s). What the estimators learn from stays with the
+    // loaded samples alone (`flying` below): a landing's second of recovering voltages read
+    // as a weak cell on a hover.
+    below_takeoff_s_ = was_flying_ && !above ? below_takeoff_s_ + dt_s : 0.0f;
+    const bool airborne = flying && (above || (was_flying_ && below_takeoff_s_ <= config_.landed_hold_s + 1.0e-4f));
+    flying = flying && above;
+    if (airborne && !was_flying_) {
         // A take-off: the flight's accumulators start again.
         flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = solve_started_s_ = 0.0f;
         end_s_ = health_end_s_ = total_wh_ = 0.0f;
@@ -104,8 +115,9 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         takeoff_soc_ = health().soc;
         takeoff_soc_valid_ = config_.health.solves_from_takeoff_soc && ground_s_ >= config_.health.takeoff_soc_min_ground_s;
     }
-    was_flying_ = flying;
-    status_.flying = flying;
+    was_flying_ = airborne;
+    status_.flying = airborne;
+    status_.loaded = flying;
     // The short-lag estimate runs in flight only: fed on the ground as well (the take-off
     // ramp's pairs), the suite's median R0 error at 20 % of the flight rose from 4 to 5.4 %.
     if (flying) {
@@ -189,7 +201,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         fabsf(es.offset_a) > config_.offset_fault_a && fabsf(es.offset_a) > 3.0f * es.sigma_offset_a;
 
     charge_total_ah_ += true_charge_a * dt_s / 3600.0f;
-    if (flying) {
+    if (airborne) {
         has_flown_ = has_flown_ || flying_s_ > config_.min_flight_s;
         rest_s_ = ground_s_ = 0.0f;
     } else {
@@ -206,7 +218,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         // The curve reads the mean cell; like capacity_ah, report what the weakest holds.
         if (drop >= config_.rest_capacity_min_soc_drop) status_.rest_capacity_ah = weakest_cell_ah(charge_total_ah_ / drop);
     }
-    if (flying) {
+    if (airborne) {
         flying_s_ += dt_s;
         flying_energy_j_ += voltage_v * true_charge_a * dt_s;
         charge_since_takeoff_ah_ += true_charge_a * dt_s / 3600.0f;

@@ -137,6 +137,7 @@ public:
         float gap_charge_sigma_fraction = 0.25f;
         float gap_hold_s = 5.0f;  // no capacity or polarisation learning this long after a gap
         float min_flying_current_a = 1.0f;   // the monitor's take-off current (set by the monitor), on the offset-corrected current
+        float landed_hold_s = 1.0f;          // the monitor's landing hold (set by the monitor): how long below that current is a landing
         float offset_fault_a = 0.5f;         // a learnt current offset beyond this (and 3 σ) is a sensor fault
         bool learn_offset_in_flight = false;  // in flight polarisation and capacity errors would drive it
         float ground_soc_process_scale = 0.2f;  // SOC process noise on the ground, × the in-flight value
@@ -183,7 +184,8 @@ public:
         bool time_valid = false;
         bool short_flight = false;
         uint8_t cause = kCauseNone;        // Cause bits
-        bool flying = false;               // on the offset-corrected current
+        bool flying = false;               // in a flight: from a take-off on the offset-corrected current to a landing held landed_hold_s
+        bool loaded = false;               // flying and this sample above the take-off current: what the fits learn from
         float current_offset_a = 0.0f;     // learnt current-sensor offset
         float sigma_current_offset_a = 0.0f;
         bool current_offset_fault = false;
@@ -244,6 +246,7 @@ private:
     float health_end_s_ = 0.0f;        // the health filter's, from this flight's total solve (0: none yet)
     float total_wh_ = 0.0f;            // the health filter's: energy from take-off to the cutoff
     bool was_flying_ = false;
+    float below_takeoff_s_ = 0.0f;  // in flight, below the take-off current (offset-corrected) since
     int short_count_ = 0;
     float weakest_deficit_ = 0.0f;
     int cells_ = 1;
