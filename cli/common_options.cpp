@@ -6,6 +6,7 @@
 #include "command.h"
 #include "host/io/atomic_file.h"
 #include "host/plot/plot.h"
+#include "host/report/summary.h"
 
 namespace battsim {
 namespace cli {
@@ -154,6 +155,18 @@ int check_plot_option(const std::string& command, const std::string& path) {
 void print_brief(const nlohmann::json& s, std::ostream& out) {
     out << s["input"]["path"].get<std::string>() << ": " << s["samples"]["total"] << " samples, "
         << s["duration_s"] << " s\n";
+    // Samples the config's sensor limits kept out: a config for another pack (a 3S config on
+    // a 4S log) rejects much of a flight, and the figures below would not say so.
+    const auto rejected = s["samples"].value("rejected", nlohmann::json::object());
+    if (!rejected.empty()) {
+        out << "  kept out by the config's sensor limits:";
+        for (int f = 1; f < core::kSampleFaultCount; ++f) {
+            const char* key = host::sample_fault_key(static_cast<uint8_t>(f));
+            if (rejected.contains(key))
+                out << " " << rejected[key] << " " << key << " (" << host::sample_fault_limit(static_cast<uint8_t>(f)) << ")";
+        }
+        out << "; does the config match this pack?\n";
+    }
     const auto& f = s["flight"];
     if (f.is_null()) {
         out << "  no flight (current never reached the flying threshold)\n";

@@ -43,23 +43,25 @@ void Monitor::configure(const MonitorConfig& config) {
     status_.usable_capacity_ah = flight_time_.status().usable_capacity_ah;
 }
 
-bool Monitor::validate(const Sample& s, bool& cells_ok) const {
+SampleFault Monitor::validate(const Sample& s, bool& cells_ok) const {
     const SensorLimits& lim = config_.sensor;
     cells_ok = false;
-    if (!finitef(s.voltage_v) || !finitef(s.current_a)) return false;
-    if (s.voltage_v < lim.min_pack_voltage_v || s.voltage_v > lim.max_pack_voltage_v) return false;
-    if (s.current_a < lim.min_current_a || s.current_a > lim.max_current_a) return false;
-    if (s.cell_count >= 2 && s.cell_count <= kMaxCells) {
-        float sum = 0.0f;
-        bool ok = true;
-        for (int c = 0; c < s.cell_count; ++c) {
-            const float v = s.cell_voltage_v[c];
-            if (!finitef(v) || v < lim.min_cell_voltage_v || v > lim.max_cell_voltage_v) ok = false;
-            sum += v;
-        }
-        cells_ok = ok && fabsf(sum - s.voltage_v) <= lim.max_cell_sum_error_v;
+    if (!finitef(s.voltage_v) || !finitef(s.current_a)) return kSampleNotFinite;
+    if (s.voltage_v < lim.min_pack_voltage_v) return kSamplePackVoltageLow;
+    if (s.voltage_v > lim.max_pack_voltage_v) return kSamplePackVoltageHigh;
+    if (s.current_a < lim.min_current_a) return kSampleCurrentLow;
+    if (s.current_a > lim.max_current_a) return kSampleCurrentHigh;
+    if (s.cell_count < 2 || s.cell_count > kMaxCells) return kSampleOk;
+    float sum = 0.0f;
+    SampleFault cells = kSampleOk;
+    for (int c = 0; c < s.cell_count; ++c) {
+        const float v = s.cell_voltage_v[c];
+        if (!finitef(v) || v < lim.min_cell_voltage_v || v > lim.max_cell_voltage_v) cells = kSampleCellVoltage;
+        sum += v;
     }
-    return true;
+    if (cells == kSampleOk && !(fabsf(sum - s.voltage_v) <= lim.max_cell_sum_error_v)) cells = kSampleCellSum;
+    cells_ok = cells == kSampleOk;
+    return cells;
 }
 
 void Monitor::raise(Warning w, bool condition) {
@@ -82,7 +84,9 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
     status_.time_us = sample.time_us;
 
     bool cells_ok = false;
-    const bool valid = validate(sample, cells_ok);
+    const SampleFault fault = validate(sample, cells_ok);
+    status_.sample_fault = fault;
+    const bool valid = fault == kSampleOk || fault >= kSampleCellVoltage;
     const bool cells_present = sample.cell_count >= 2;
     status_.sample_valid = valid;
     status_.cells_valid = valid && cells_ok;

@@ -22,6 +22,20 @@ enum Warning : uint8_t {
 };
 const char* warning_name(Warning w);
 
+// Why a sample was kept out (the last sample's; the pack reading's reason wins over the
+// cells'): replay reports them, since a config for another pack rejects whole flights.
+enum SampleFault : uint8_t {
+    kSampleOk = 0,
+    kSampleNotFinite,
+    kSamplePackVoltageLow,   // below sensor.min_pack_voltage_v
+    kSamplePackVoltageHigh,  // above sensor.max_pack_voltage_v
+    kSampleCurrentLow,       // below sensor.min_current_a
+    kSampleCurrentHigh,      // above sensor.max_current_a
+    kSampleCellVoltage,      // a cell outside sensor.min/max_cell_voltage_v (cells only)
+    kSampleCellSum,          // the cells' sum off the pack voltage by more than max_cell_sum_error_v (cells only)
+    kSampleFaultCount,
+};
+
 struct MonitorStatus {
     uint64_t time_us = 0;
     float dt_s = 0.0f;
@@ -29,6 +43,7 @@ struct MonitorStatus {
     float current_a = 0.0f;
     float filtered_current_a = 0.0f;
     bool sample_valid = false;  // false: sensor fault, sample kept out of the estimators
+    uint8_t sample_fault = kSampleOk;  // SampleFault: why this sample (or its cells) was kept out
     bool cells_valid = false;
     bool initialised = false;   // initial state of charge known
     bool initial_forced = false;
@@ -76,7 +91,7 @@ public:
     const CellAnalyzer& cell_analyzer() const { return cell_analyzer_; }
 
 private:
-    bool validate(const Sample& s, bool& cells_ok) const;
+    SampleFault validate(const Sample& s, bool& cells_ok) const;  // the pack reading's fault, or the cells' (cells_ok false)
     void raise(Warning w, bool condition);
 
     MonitorConfig config_;

@@ -37,6 +37,28 @@ TEST_CASE("replay --json prints a parseable summary", "[cli]") {
     CHECK(j["flight"]["duration_s"].get<double>() == Approx(149 * 0.067 - 0.469).margin(0.07));
 }
 
+TEST_CASE("replay says how many samples the config's sensor limits kept out, and why", "[cli]") {
+    // A 4S log (16.5 V at rest) against limits for a 3S pack: the rest is above
+    // max_pack_voltage_v, the loaded 15.9 V is not.
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/ok.csv", raw_log());
+    nlohmann::json cfg = nlohmann::json::parse(clitest::read_file(kConfig));
+    cfg["sensor"]["max_pack_voltage_v"] = 16.0;
+    clitest::write_file(dir + "/3s-limits.json", cfg.dump());
+    const std::string args = "replay " + q(dir + "/ok.csv") + " -c " + q(dir + "/3s-limits.json");
+    const auto j = clitest::run_json(args + " --json");
+    CHECK(j["samples"]["total"] == 300);
+    CHECK(j["samples"]["valid"] == 150);
+    CHECK(j["samples"]["rejected"] == nlohmann::json{{"pack_voltage_high", 150}});
+    const auto brief = clitest::run(args);
+    REQUIRE(brief.exit_code == 0);
+    CHECK_THAT(brief.out, Catch::Contains("kept out by the config's sensor limits: 150 pack_voltage_high (sensor.max_pack_voltage_v)"));
+    // Nothing kept out: an empty object, and no such line.
+    const auto clean = clitest::run_json("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --json");
+    CHECK(clean["samples"]["rejected"] == nlohmann::json::object());
+    CHECK_THAT(clitest::run("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig)).out, !Catch::Contains("kept out"));
+}
+
 TEST_CASE("replay --estimator joint reports the cell step check's measurements", "[cli]") {
     // One step, 0.25 → 20 A, every cell 0.15 V lower: 0.15 / 19.75 A = 7.59 mΩ each. The
     // windows read one level throughout, so σ is the floor's: 2.5 mV · √(2/8) / 19.75 A.

@@ -64,27 +64,62 @@ TEST_CASE("Sensor faults are flagged and kept out of the estimators", "[monitor]
     const float nan = std::numeric_limits<float>::quiet_NaN();
     m.update(make(t, nan, 20.0f));
     CHECK_FALSE(m.status().sample_valid);
+    CHECK(m.status().sample_fault == kSampleNotFinite);
     CHECK((m.status().warnings & (1u << kWarnSensorFault)) != 0);
     const uint64_t fault_time = m.status().warning_time_us[kWarnSensorFault];
     CHECK(fault_time == t);
     t += 67000;
     m.update(make(t, 15.5f, 5000.0f));
     CHECK_FALSE(m.status().sample_valid);
+    CHECK(m.status().sample_fault == kSampleCurrentHigh);
     t += 67000;
     Sample lead = make(t, 15.5f, 20.0f);
     lead.cell_voltage_v[2] = 0.02f;  // the pack is fine, one tap reads nothing
     m.update(lead);
     CHECK(m.status().sample_valid);
     CHECK_FALSE(m.status().cells_valid);
+    CHECK(m.status().sample_fault == kSampleCellVoltage);
     CHECK(m.status().sensor_fault_samples == 3);
     // The charge over the two rejected samples is counted with the next good one's dt.
     t += 67000;
     m.update(make(t, 15.5f, 20.0f));
+    CHECK(m.status().sample_fault == kSampleOk);
     CHECK(m.status().consumed_mah - mah == Approx(20.0 * 4 * 0.067 / 3.6).epsilon(1e-3));
     CHECK(all_finite(m.status()));
     CHECK(m.status().warning_time_us[kWarnSensorFault] == fault_time);  // first time kept
     // The cell scorer never saw the collapsed tap.
     for (int c = 0; c < 4; ++c) CHECK(m.status().cell_score[c] == 0.0f);
+}
+
+TEST_CASE("Each kept-out sample says which limit it broke", "[monitor]") {
+    MonitorConfig cfg;
+    cfg.sensor.min_pack_voltage_v = 10.0f;
+    cfg.sensor.max_pack_voltage_v = 17.0f;
+    cfg.sensor.min_current_a = -5.0f;
+    cfg.sensor.max_current_a = 100.0f;
+    cfg.sensor.max_cell_sum_error_v = 0.5f;
+    Monitor m;
+    m.configure(cfg);
+    uint64_t t = 0;
+    const auto fault_of = [&](Sample s) {
+        s.time_us = t += 67000;
+        m.update(s);
+        return static_cast<SampleFault>(m.status().sample_fault);
+    };
+    CHECK(fault_of(make(0, 16.0f, 1.0f)) == kSampleOk);
+    CHECK(fault_of(make(0, 9.9f, 1.0f)) == kSamplePackVoltageLow);
+    CHECK(fault_of(make(0, 17.1f, 1.0f)) == kSamplePackVoltageHigh);  // a 4S config's limit on a 5S pack
+    CHECK(fault_of(make(0, 16.0f, -5.1f)) == kSampleCurrentLow);
+    CHECK(fault_of(make(0, 16.0f, 100.1f)) == kSampleCurrentHigh);
+    Sample off = make(0, 16.0f, 1.0f);
+    off.cell_voltage_v[0] += 0.6f;  // each cell plausible, their sum 0.6 V above the pack
+    CHECK(fault_of(off) == kSampleCellSum);
+    CHECK(m.status().sample_valid);  // the pack reading is still used
+    // The pack reading's fault wins: the cells are not judged without it.
+    Sample both = make(0, 17.5f, 1.0f);
+    both.cell_voltage_v[1] = 0.0f;
+    CHECK(fault_of(both) == kSamplePackVoltageHigh);
+    CHECK(m.status().sensor_fault_samples == 6);
 }
 
 TEST_CASE("Monitor survives hostile sample streams", "[monitor]") {

@@ -14,6 +14,32 @@ double round_sig(double x, int digits) {
     return std::round(x * scale) / scale;
 }
 
+const char* sample_fault_key(uint8_t fault) {
+    switch (fault) {
+        case core::kSampleNotFinite: return "not_finite";
+        case core::kSamplePackVoltageLow: return "pack_voltage_low";
+        case core::kSamplePackVoltageHigh: return "pack_voltage_high";
+        case core::kSampleCurrentLow: return "current_low";
+        case core::kSampleCurrentHigh: return "current_high";
+        case core::kSampleCellVoltage: return "cell_voltage";
+        case core::kSampleCellSum: return "cell_sum";
+        default: return "ok";
+    }
+}
+
+const char* sample_fault_limit(uint8_t fault) {
+    switch (fault) {
+        case core::kSampleNotFinite: return "a finite voltage and current";
+        case core::kSamplePackVoltageLow: return "sensor.min_pack_voltage_v";
+        case core::kSamplePackVoltageHigh: return "sensor.max_pack_voltage_v";
+        case core::kSampleCurrentLow: return "sensor.min_current_a";
+        case core::kSampleCurrentHigh: return "sensor.max_current_a";
+        case core::kSampleCellVoltage: return "sensor.min_cell_voltage_v / max_cell_voltage_v";
+        case core::kSampleCellSum: return "sensor.max_cell_sum_error_v";
+        default: return "";
+    }
+}
+
 void SummaryAccumulator::Totals::add(const Totals& o) {
     n += o.n;
     capacity_ah += o.capacity_ah;
@@ -57,6 +83,7 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
         outlier_finding_ = s.cell_finding;
     }
     seen_raised_ = s.warnings_raised;
+    if (s.sample_fault != core::kSampleOk && s.sample_fault < core::kSampleFaultCount) ++rejected_[s.sample_fault];
     if (!s.sample_valid) return;
     ++valid_samples_;
     if (!have_time_) first_time_us_ = s.time_us;
@@ -123,6 +150,12 @@ json mean_or_null(double sum, double n) { return n > 0 ? json(round_sig(sum / n)
 json SummaryAccumulator::to_json(int cells) const {
     json j;
     j["samples"] = {{"total", samples_}, {"valid", valid_samples_}, {"flying", flying_samples_}};
+    // Only the reasons that occurred: a whole flight rejected (a config for another pack)
+    // must be visible, an empty object is the usual case.
+    nlohmann::json rejected = nlohmann::json::object();
+    for (int f = 1; f < core::kSampleFaultCount; ++f)
+        if (rejected_[f] > 0) rejected[sample_fault_key(static_cast<uint8_t>(f))] = rejected_[f];
+    j["samples"]["rejected"] = rejected;
     j["duration_s"] = have_time_ ? round_sig((last_time_us_ - first_time_us_) * 1e-6, 7) : 0.0;
 
     if (!have_flight_) {

@@ -18,6 +18,10 @@ constexpr int kSummaryVersion = 1;
 // Rounds to `digits` significant digits so summaries print short, stable numbers.
 double round_sig(double x, int digits = 6);
 
+// The summary's key for a core::SampleFault, and the config key whose limit it broke.
+const char* sample_fault_key(uint8_t fault);
+const char* sample_fault_limit(uint8_t fault);
+
 class SummaryAccumulator {
 public:
     // Bucket count before neighbouring buckets merge; flights shorter than this are
@@ -55,6 +59,7 @@ private:
     size_t open_count_ = 0;
 
     uint64_t samples_ = 0, valid_samples_ = 0, flying_samples_ = 0;
+    uint64_t rejected_[core::kSampleFaultCount] = {};  // samples (or their cells) kept out, by reason
     bool have_time_ = false, have_flight_ = false;
     uint64_t first_time_us_ = 0, last_time_us_ = 0;
     uint64_t flight_first_us_ = 0, flight_last_us_ = 0;
