@@ -40,6 +40,16 @@ JointEstimator table_estimator(const TremblayParams& rated, bool health = true, 
     return e;
 }
 
+// table_estimator for a 1.5 Ah, 25 mΩ pack, started from rest at 16.68 V.
+JointEstimator started_estimator() {
+    TremblayParams rated;
+    rated.capacity_ah = 1.5f;
+    rated.internal_resistance_ohm = 0.025f;
+    JointEstimator e = table_estimator(rated);
+    e.start(16.68f, 0.0f);
+    return e;
+}
+
 // A racing-style power profile: bursts and cruise, constant power per phase.
 float demand_w(float t_s) {
     const int phase = static_cast<int>(t_s / 3.0f) % 5;
@@ -423,11 +433,7 @@ TEST_CASE("Joint estimator: a log's own slow rate is no gap; a gap is long again
     // An ArduPilot log may hold the battery once a second or slower: those intervals are the
     // log's, not missing samples (until the fifteenth session they raised a sensor fault on
     // every sample, and with the gap hold capacity would never have been learnt).
-    TremblayParams rated;
-    rated.capacity_ah = 1.5f;
-    rated.internal_resistance_ohm = 0.025f;
-    JointEstimator e = table_estimator(rated);
-    e.start(16.68f, 0.0f);
+    JointEstimator e = started_estimator();
     uint64_t t_us = 0;
     bool any_gap = false;
     float capacity_50s = 0.0f;
@@ -447,8 +453,7 @@ TEST_CASE("Joint estimator: a log's own slow rate is no gap; a gap is long again
     e.update(t_us += 1000000, 15.0f, 40.0f, 1.0f, true);
     CHECK_FALSE(e.status().sample_gap);
     // At the reference logger's 67 ms the fixed 0.75 s bar decides.
-    JointEstimator fast = table_estimator(rated);
-    fast.start(16.68f, 0.0f);
+    JointEstimator fast = started_estimator();
     t_us = 0;
     for (int k = 0; k < 100; ++k) fast.update(t_us += 67000, 15.0f, 40.0f, 0.067f, true);
     fast.update(t_us += 700000, 15.0f, 40.0f, 0.7f, true);
@@ -462,11 +467,7 @@ TEST_CASE("Joint estimator: one low sample in the air is no landing; a held one 
     // offset-corrected take-off threshold had ended the flight on a single sample below it,
     // restarting the flight's clock, mean power and solves (the dissertation's flight 32 at
     // 186.8 s; CMU M100 flight 24 at 38 s, which then read 0 s remaining for 6 s).
-    TremblayParams rated;
-    rated.capacity_ah = 1.5f;
-    rated.internal_resistance_ohm = 0.025f;
-    JointEstimator e = table_estimator(rated);
-    e.start(16.68f, 0.0f);
+    JointEstimator e = started_estimator();
     uint64_t t_us = 0;
     for (int k = 0; k < 300; ++k) e.update(t_us += 67000, 15.0f, 20.0f, 0.067f, true);  // 20.1 s at 300 W
     REQUIRE(e.status().time_valid);
