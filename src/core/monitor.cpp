@@ -86,7 +86,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
     bool cells_ok = false;
     const SampleFault fault = validate(sample, cells_ok);
     status_.sample_fault = fault;
-    const bool valid = fault == kSampleOk || fault >= kSampleCellVoltage;
+    const bool valid = fault == kSampleOk || fault >= kSampleCellVoltage;  // a cell fault keeps the pack reading
     const bool cells_present = sample.cell_count >= 2;
     status_.sample_valid = valid;
     status_.cells_valid = valid && cells_ok;

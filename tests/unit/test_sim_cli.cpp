@@ -45,10 +45,7 @@ TEST_CASE("battsim simulate writes a log and its truth; replay reads the log", "
     REQUIRE(run("simulate " + q(d.at("a.json")) + " --seed 99 -o " + q(d.at("c.csv"))).exit_code == 0);
     CHECK(clitest::read_file(d.at("c.csv")) != log);
 
-    const auto rep = run("replay " + q(d.at("a.csv")) + " -c " + q(std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-modified.json") + " --json");
-    INFO(rep.err);
-    REQUIRE(rep.exit_code == 0);
-    const nlohmann::json summary = nlohmann::json::parse(rep.out);
+    const nlohmann::json summary = clitest::run_json("replay " + q(d.at("a.csv")) + " -c " + q(std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-modified.json") + " --json");
     CHECK(summary["input"]["format"] == "raw");
     CHECK_FALSE(summary["flight"].is_null());
 }
@@ -81,19 +78,13 @@ TEST_CASE("battsim score prints a table or JSON and checks its arguments", "[cli
     Dir d;
     clitest::write_file(d.at("a.json"), scenario_json("a", 1));
     clitest::write_file(d.at("b.json"), scenario_json("b", 2, R"(, "pack": {"capacity_factor": 0.7})"));
-    const auto js = run("score " + q(d.path) + " --json -j 2");
-    INFO(js.err);
-    REQUIRE(js.exit_code == 0);
-    const nlohmann::json j = nlohmann::json::parse(js.out);
+    const nlohmann::json j = clitest::run_json("score " + q(d.path) + " --json -j 2");
     CHECK(j["flights"].size() == 2);
     CHECK(j["flights"][0]["name"] == "a");
     CHECK(j["flights"][1]["short_flight"] == true);
     // The diagnostic column runs only when named, and then beside the others.
     CHECK_FALSE(j["flights"][0]["estimators"].contains("solve-truth"));
-    const auto diag = run("score " + q(d.at("a.json")) + " --json --columns oracle,solve-truth");
-    INFO(diag.err);
-    REQUIRE(diag.exit_code == 0);
-    const nlohmann::json dj = nlohmann::json::parse(diag.out);
+    const nlohmann::json dj = clitest::run_json("score " + q(d.at("a.json")) + " --json --columns oracle,solve-truth");
     REQUIRE(dj["flights"][0]["estimators"].contains("solve-truth"));
     CHECK(dj["flights"][0]["estimators"]["solve-truth"]["remaining_energy_error_20_pct"].is_number());
     CHECK_FALSE(dj["flights"][0]["estimators"].contains("joint"));
@@ -103,10 +94,7 @@ TEST_CASE("battsim score prints a table or JSON and checks its arguments", "[cli
     CHECK(text.find("2 flights") != std::string::npos);
     CHECK(text.find("reference") != std::string::npos);
     CHECK(text.find("baseline") == std::string::npos);
-    const auto copies = run("score " + q(d.path) + " --columns oracle --copies 2 --json -j 2");
-    INFO(copies.err);
-    REQUIRE(copies.exit_code == 0);
-    const nlohmann::json cj = nlohmann::json::parse(copies.out);
+    const nlohmann::json cj = clitest::run_json("score " + q(d.path) + " --columns oracle --copies 2 --json -j 2");
     REQUIRE(cj["flights"].size() == 4);
     CHECK(cj["flights"][2]["name"] == "a@1");
     CHECK(cj["flights"][2]["copy"] == 1);

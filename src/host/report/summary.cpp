@@ -14,31 +14,22 @@ double round_sig(double x, int digits) {
     return std::round(x * scale) / scale;
 }
 
-const char* sample_fault_key(uint8_t fault) {
-    switch (fault) {
-        case core::kSampleNotFinite: return "not_finite";
-        case core::kSamplePackVoltageLow: return "pack_voltage_low";
-        case core::kSamplePackVoltageHigh: return "pack_voltage_high";
-        case core::kSampleCurrentLow: return "current_low";
-        case core::kSampleCurrentHigh: return "current_high";
-        case core::kSampleCellVoltage: return "cell_voltage";
-        case core::kSampleCellSum: return "cell_sum";
-        default: return "ok";
-    }
-}
+namespace {
+// Indexed by core::SampleFault: the summary's key, and the limit it broke.
+const char* const kSampleFaultText[core::kSampleFaultCount][2] = {
+    {"ok", ""},
+    {"not_finite", "a finite voltage and current"},
+    {"pack_voltage_low", "sensor.min_pack_voltage_v"},
+    {"pack_voltage_high", "sensor.max_pack_voltage_v"},
+    {"current_low", "sensor.min_current_a"},
+    {"current_high", "sensor.max_current_a"},
+    {"cell_voltage", "sensor.min_cell_voltage_v / max_cell_voltage_v"},
+    {"cell_sum", "sensor.max_cell_sum_error_v"},
+};
+}  // namespace
 
-const char* sample_fault_limit(uint8_t fault) {
-    switch (fault) {
-        case core::kSampleNotFinite: return "a finite voltage and current";
-        case core::kSamplePackVoltageLow: return "sensor.min_pack_voltage_v";
-        case core::kSamplePackVoltageHigh: return "sensor.max_pack_voltage_v";
-        case core::kSampleCurrentLow: return "sensor.min_current_a";
-        case core::kSampleCurrentHigh: return "sensor.max_current_a";
-        case core::kSampleCellVoltage: return "sensor.min_cell_voltage_v / max_cell_voltage_v";
-        case core::kSampleCellSum: return "sensor.max_cell_sum_error_v";
-        default: return "";
-    }
-}
+const char* sample_fault_key(uint8_t fault) { return fault < core::kSampleFaultCount ? kSampleFaultText[fault][0] : "ok"; }
+const char* sample_fault_limit(uint8_t fault) { return fault < core::kSampleFaultCount ? kSampleFaultText[fault][1] : ""; }
 
 void SummaryAccumulator::Totals::add(const Totals& o) {
     n += o.n;
