@@ -244,6 +244,36 @@ TEST_CASE("Sensor faults are visible in the log and leave the truth alone", "[si
     }
 }
 
+TEST_CASE("A positive lead before the bus input: the bus and the last cell read I·R low, the taps not",
+          "[sim][sensor]") {
+    // The bus voltage is taken past the positive main lead; the taps are not. Cell 4 is
+    // bus − tap 3, so it alone of the cells carries the lead, as on the reference logger.
+    const SimulationResult clean = simulate(scenario());
+    const SimulationResult wired = simulate(scenario(R"({"sensor": {"bus_lead_ohm": 0.004}})"));
+    const std::vector<RawRow> a = parse_raw(clean.log_text);
+    const std::vector<RawRow> b = parse_raw(wired.log_text);
+    REQUIRE(a.size() == b.size());
+    double current = 0, bus = 0, cell[4] = {};
+    int n = 0;
+    for (size_t k = 0; k < a.size(); ++k) {
+        if (a[k].t_ms < 35000 || a[k].t_ms > 120000) continue;  // in flight
+        current += a[k].current_ma / 1000.0;
+        bus += a[k].bus - b[k].bus;
+        for (int c = 0; c < 4; ++c) cell[c] += a[k].cell[c] - b[k].cell[c];
+        ++n;
+    }
+    REQUIRE(n > 1000);
+    const double drop_v = 0.004 * current / n;
+    CHECK(drop_v > 0.06);
+    CHECK(bus / n == Approx(drop_v).epsilon(0.03));
+    CHECK(cell[3] / n == Approx(drop_v).epsilon(0.05));
+    for (int c = 0; c < 3; ++c) CHECK(std::fabs(cell[c] / n) < 0.1 * drop_v);
+    CHECK_FALSE(wired.truth.sensor_faulty);
+    CHECK(wired.truth.total_flight_time_s == clean.truth.total_flight_time_s);
+    CHECK(truth_to_json(wired)["scenario"]["sensor"]["bus_lead_ohm"] == 0.004);
+    CHECK_FALSE(truth_to_json(clean)["scenario"]["sensor"].contains("bus_lead_ohm"));
+}
+
 TEST_CASE("A ground path carrying the main current: the bus and cell 1 read I·R low, the other cells not",
           "[sim][sensor]") {
     // The monitor's ground reaches the pack's negative also through the main lead: every

@@ -14,9 +14,12 @@
 //
 // Measurement topology matters: on the reference logger the last cell is read as
 // pack − last balance tap, so it carries the main lead and connector resistance; with
-// `last_cell_includes_lead` it is never compared with the others (its resistance carries the
-// lead, its drift mixes the two converters' gain errors); its values are still reported.
-// With `first_cell_includes_lead` the first cell is never named for resistance (see Config).
+// `last_cell_includes_lead` it stays out of the others' mean and median (its resistance
+// carries the lead, its drift the two converters' gain mismatch) and is never named for
+// resistance, but it is judged for capacity against them, always at the higher bar
+// (capacity_significance_sigmas): the lead is ohmic, which the current regressors take,
+// and the mismatch widens its own standard error. With
+// `first_cell_includes_lead` the first cell is never named for resistance (see Config).
 #pragma once
 #include <stdint.h>
 

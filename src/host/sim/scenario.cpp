@@ -287,6 +287,7 @@ Scenario scenario_from_json(const json& j, const std::string& origin, const std:
         r.number("tap_gain_sd", p.tap_gain_sd, 0.0, 0.1);
         r.number("tap_offset_sd_v", p.tap_offset_sd_v, 0.0, 1.0);
         r.number("ground_lead_ohm", p.ground_lead_ohm, 0.0, 0.1);
+        r.number("bus_lead_ohm", p.bus_lead_ohm, 0.0, 0.1);
         if (p.stall_first_max_s < p.stall_first_min_s) r.fail("$.sensor.stall_first_max_s", "must not be below stall_first_min_s");
         if (const json* u = r.find("unit")) {
             Reader ru(*u, "$.sensor.unit", origin);
@@ -463,6 +464,7 @@ json scenario_to_json(const Scenario& s) {
                    {"tap_gain_sd", q.tap_gain_sd},
                    {"tap_offset_sd_v", q.tap_offset_sd_v}};
     if (q.ground_lead_ohm > 0.0) sensor["ground_lead_ohm"] = q.ground_lead_ohm;  // omitted at its default of 0
+    if (q.bus_lead_ohm > 0.0) sensor["bus_lead_ohm"] = q.bus_lead_ohm;
     if (q.unit_given) {
         json gains = json::array(), offsets = json::array();
         for (int k = 0; k + 1 < p.cells; ++k) {

@@ -186,7 +186,7 @@ void SensorChain::feed(double t_s, double dt_s, const TrueValues& v, bool airbor
                             static_cast<double>(p_.shunt.scale_mv_per_10a) / 10000.0;
 
     const double ground_v = v.current_a * p_.ground_lead_ohm;  // the monitor's ground above the pack's negative
-    acc226_.bus += (v.voltage_v - ground_v) * dt_s;
+    acc226_.bus += (v.voltage_v - ground_v - v.current_a * p_.bus_lead_ohm) * dt_s;
     acc226_.shunt += shunt_mv * dt_s;
     acc226_.weight += dt_s;
     double tap = 0.0;

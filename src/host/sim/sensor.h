@@ -75,6 +75,11 @@ struct SensorParams {
     // grounded through the drone (a BEC). Every reading against that ground (the bus and
     // each tap) is low by I·R, so cell 1 and the pack read that much more resistance.
     double ground_lead_ohm = 0.0;
+    // ... and of the positive main lead between the pack's positive (the last balance pin)
+    // and where the bus voltage is taken: the bus reads I·R low and no tap does, so the last
+    // cell (bus − last tap) carries it. The reference logger's flights show about as much
+    // again as a cell's own resistance there (cell-resistance-fifths.py).
+    double bus_lead_ohm = 0.0;
     bool unit_given = false;  // true: use `unit` as is; false: draw it from the seed
     SensorUnit unit;
     core::ShuntCalibration shunt;
