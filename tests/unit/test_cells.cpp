@@ -69,6 +69,16 @@ Outcome fly(const float capacity_factor[4], const float resistance_factor[4], fl
     return out;
 }
 
+// A cell at 75 % of the others' capacity: named for capacity within a minute, its deficit
+// recovered.
+void check_named_for_capacity(const Outcome& o, int cell) {
+    CHECK(o.status.flagged_cell == cell);
+    CHECK(o.status.finding == CellAnalyzer::kLowCapacity);
+    CHECK(o.status.capacity_deficit[cell] == Approx(0.25f).margin(0.05f));
+    CHECK(o.first_named_s > 0.0f);
+    CHECK(o.first_named_s < 60.0f);
+}
+
 }  // namespace
 
 TEST_CASE("Flight-time solver: a weak cell pulls the pack to the cutoff early, by hand", "[cells][joint]") {
@@ -119,12 +129,7 @@ TEST_CASE("Cell check: a weak cell is named and its deficit recovered; healthy a
     const float unit_r[4] = {1.0f, 1.0f, 1.0f, 1.0f};
     SECTION("cell 2 at 75 % of the others' capacity") {
         const float q[4] = {1.0f, 0.75f, 1.0f, 1.0f};
-        const Outcome o = fly(q, unit_r, 150.0f);  // 0.96 Ah: the weak cell at SOC 0.15
-        CHECK(o.status.flagged_cell == 1);
-        CHECK(o.status.finding == CellAnalyzer::kLowCapacity);
-        CHECK(o.status.capacity_deficit[1] == Approx(0.25f).margin(0.05f));
-        CHECK(o.first_named_s > 0.0f);
-        CHECK(o.first_named_s < 60.0f);
+        check_named_for_capacity(fly(q, unit_r, 150.0f), 1);  // 0.96 Ah: the weak cell at SOC 0.15
     }
     SECTION("a healthy pack with a 1.5 % spread") {
         const float q[4] = {1.0f, 0.985f, 1.015f, 1.0f};
@@ -154,11 +159,7 @@ TEST_CASE("Cell check: a balance-tap error is not a weak cell; a weak cell besid
     }
     SECTION("cell 1 at 75 %: below its tap neighbour and the other cell alike") {
         const float q[4] = {0.75f, 1.0f, 1.0f, 1.0f};
-        const Outcome o = fly(q, unit_r, 150.0f);
-        CHECK(o.status.flagged_cell == 0);
-        CHECK(o.status.finding == CellAnalyzer::kLowCapacity);
-        CHECK(o.first_named_s > 0.0f);
-        CHECK(o.first_named_s < 60.0f);
+        check_named_for_capacity(fly(q, unit_r, 150.0f), 0);
     }
 }
 TEST_CASE("Cell check: the cell read across the main lead is judged for capacity, never for resistance", "[cells][truth]") {
@@ -169,12 +170,7 @@ TEST_CASE("Cell check: the cell read across the main lead is judged for capacity
     const float unit_q[4] = {1.0f, 1.0f, 1.0f, 1.0f};
     SECTION("the last cell at 75 %, behind a 4 mΩ lead: named for capacity, its deficit recovered") {
         const float q[4] = {1.0f, 1.0f, 1.0f, 0.75f};
-        const Outcome o = fly(q, unit_r, 150.0f, 0.0f, CellAnalyzer::Config{}, 0.004f);
-        CHECK(o.status.flagged_cell == 3);
-        CHECK(o.status.finding == CellAnalyzer::kLowCapacity);
-        CHECK(o.status.capacity_deficit[3] == Approx(0.25f).margin(0.05f));
-        CHECK(o.first_named_s > 0.0f);
-        CHECK(o.first_named_s < 60.0f);
+        check_named_for_capacity(fly(q, unit_r, 150.0f, 0.0f, CellAnalyzer::Config{}, 0.004f), 3);
     }
     SECTION("a healthy pack behind a lead twice the cells' resistance: nobody named") {
         CHECK(fly(unit_q, unit_r, 200.0f, 0.0f, CellAnalyzer::Config{}, 0.008f).first_named_s < 0.0f);
