@@ -221,6 +221,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         for (int c = 0; c < kMaxCells; ++c) {
             status_.cell_resistance_ohm[c] = ca.resistance_ohm[c];
             status_.cell_capacity_deficit[c] = ca.capacity_deficit[c];
+            status_.cell_capacity_deficit_sigma[c] = ca.capacity_deficit_sigma[c];
         }
     }
 

@@ -74,6 +74,7 @@ struct MonitorStatus {
     uint8_t cell_finding = 0;  // joint estimator: CellAnalyzer::Finding of outlier_cell
     float cell_resistance_ohm[kMaxCells] = {};
     float cell_capacity_deficit[kMaxCells] = {};
+    float cell_capacity_deficit_sigma[kMaxCells] = {};  // its standard error (the naming bar is in these)
 
     uint8_t warnings = 0;                       // bit per Warning, currently active
     uint8_t warnings_raised = 0;                // bit per Warning, ever raised

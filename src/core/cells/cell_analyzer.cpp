@@ -246,7 +246,8 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
         // Twice the threshold is beyond what those artefacts reach, and takes the usual bar;
         // not for the lead cell, whose drift carries the lead's warming and the converters'
         // mismatch: on the dissertation's flights 29 and 32 it reads 0.22 below the others
-        // at 2.1–2.2 standard errors (`flight.cell_capacity_deficit` in the joint goldens).
+        // at 2.0–2.2 standard errors (`flight.cell_capacity_deficit` and `…_sigma` in the
+        // joint goldens).
         const float sigmas = deficit > 2.0f * config_.capacity_deficit && c != lead_cell
                                  ? config_.significance_sigmas
                                  : config_.capacity_significance_sigmas;

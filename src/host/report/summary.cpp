@@ -203,13 +203,15 @@ json SummaryAccumulator::to_json(int cells) const {
         for (int c = 0; c < cells && c < core::kMaxCells; ++c)
             if (last_flying_.cell_resistance_ohm[c] != 0.0f) cell_analysis = true;
         if (cell_analysis) {  // the joint estimator's per-cell check
-            json r = json::array(), d = json::array();
+            json r = json::array(), d = json::array(), ds = json::array();
             for (int c = 0; c < cells && c < core::kMaxCells; ++c) {
                 r.push_back(round_sig(last_flying_.cell_resistance_ohm[c], 4));
                 d.push_back(round_sig(last_flying_.cell_capacity_deficit[c], 3));
+                ds.push_back(round_sig(last_flying_.cell_capacity_deficit_sigma[c], 3));
             }
             flight["cell_resistance_ohm"] = r;
             flight["cell_capacity_deficit"] = d;
+            flight["cell_capacity_deficit_sigma"] = ds;
         }
         j["flight"] = flight;
     }
