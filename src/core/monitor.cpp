@@ -187,12 +187,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
 
     bool short_flight = false;
     if (config_.estimator == EstimatorKind::Joint) {
-        {
-            const CellAnalyzer::Status& ca = cell_analyzer_.status();
-            joint_.set_weakest_cell_deficit(ca.finding == CellAnalyzer::kLowCapacity && ca.flagged_cell >= 0
-                                                ? ca.capacity_deficit[ca.flagged_cell]
-                                                : 0.0f);
-        }
+        joint_.set_weakest_cell_deficit(cell_analyzer_.status().pack_capacity_deficit);
         joint_.update(sample.time_us, sample.voltage_v, current_a, dt_s, flying);
         const JointEstimator::Status& js = joint_.status();
         status_.capacity_ah = js.capacity_ah;
@@ -223,6 +218,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
             status_.cell_capacity_deficit[c] = ca.capacity_deficit[c];
             status_.cell_capacity_deficit_sigma[c] = ca.capacity_deficit_sigma[c];
         }
+        status_.pack_capacity_deficit = ca.pack_capacity_deficit;
     }
 
     const PiaoCellScorer::Status& cs = cells_.status();

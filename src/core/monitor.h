@@ -75,6 +75,7 @@ struct MonitorStatus {
     float cell_resistance_ohm[kMaxCells] = {};
     float cell_capacity_deficit[kMaxCells] = {};
     float cell_capacity_deficit_sigma[kMaxCells] = {};  // its standard error (the naming bar is in these)
+    float pack_capacity_deficit = 0.0f;  // what the pack's capacity counts of its weakest cell (CellAnalyzer::Status)
 
     uint8_t warnings = 0;                       // bit per Warning, currently active
     uint8_t warnings_raised = 0;                // bit per Warning, ever raised

@@ -213,6 +213,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("cell_capacity_deficit", ca.capacity_deficit, 0, 1);
         r.number("cell_significance_sigmas", ca.significance_sigmas, 0, 100);
         r.number("cell_capacity_significance_sigmas", ca.capacity_significance_sigmas, 0, 100);
+        r.number("cell_pack_deficit_sigmas", ca.pack_deficit_sigmas, 0, 100);
         r.number("cell_min_charge_ah", ca.min_charge_ah, 0, kBig);
         r.number("cell_min_drift_v", ca.min_drift_v, 0, kBig);
         r.number("cell_slow_current_time_s", ca.slow_current_time_s, 0, kBig);
@@ -357,6 +358,7 @@ json config_to_json(const LoadedConfig& c) {
             {"cell_capacity_deficit", m.cell_analysis.capacity_deficit},
             {"cell_significance_sigmas", m.cell_analysis.significance_sigmas},
             {"cell_capacity_significance_sigmas", m.cell_analysis.capacity_significance_sigmas},
+            {"cell_pack_deficit_sigmas", m.cell_analysis.pack_deficit_sigmas},
             {"cell_min_charge_ah", m.cell_analysis.min_charge_ah},
             {"cell_min_drift_v", m.cell_analysis.min_drift_v},
             {"cell_slow_current_time_s", m.cell_analysis.slow_current_time_s},

@@ -177,6 +177,7 @@ void visit_monitor_config(Config& c, F&& f) {
     f("cell_analysis.min_drift_v", c.cell_analysis.min_drift_v);
     f("cell_analysis.significance_sigmas", c.cell_analysis.significance_sigmas);
     f("cell_analysis.capacity_significance_sigmas", c.cell_analysis.capacity_significance_sigmas);
+    f("cell_analysis.pack_deficit_sigmas", c.cell_analysis.pack_deficit_sigmas);
     f("cell_analysis.last_cell_includes_lead", c.cell_analysis.last_cell_includes_lead);
     f("cell_analysis.first_cell_includes_lead", c.cell_analysis.first_cell_includes_lead);
     f("cell_analysis.step.min_step_a", c.cell_analysis.step.min_step_a);

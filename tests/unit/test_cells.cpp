@@ -1,6 +1,7 @@
 // The per-cell check (drift regression for capacity) against injected truth, and the
 // flight-time solver's weak-cell pack voltage by hand.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -19,6 +20,8 @@ struct Outcome {
     CellAnalyzer::Status status;
     float first_named_s = -1.0f;
     bool named_for_resistance = false;  // at any sample
+    float first_counted_s = -1.0f;       // the pack first counts a deficit above 5 %
+    float max_counted_unnamed = 0.0f;    // the largest deficit the pack counted while no cell was named
 };
 
 // Four cells (the fourth, as on the reference logger, carries the lead: it is left out of
@@ -64,6 +67,9 @@ Outcome fly(const float capacity_factor[4], const float resistance_factor[4], fl
         a.update(static_cast<uint64_t>(t * 1.0e6f), v, 4, i, ip, charge, soc_mean, pack_ocv);
         if (out.first_named_s < 0.0f && a.status().flagged_cell >= 0) out.first_named_s = t;
         if (a.status().finding == CellAnalyzer::kHighResistance) out.named_for_resistance = true;
+        const float counted = a.status().pack_capacity_deficit;
+        if (out.first_counted_s < 0.0f && counted > 0.05f) out.first_counted_s = t;
+        if (a.status().flagged_cell < 0) out.max_counted_unnamed = std::max(out.max_counted_unnamed, counted);
     }
     out.status = a.status();
     return out;
@@ -143,6 +149,41 @@ TEST_CASE("Cell check: a weak cell is named and its deficit recovered; healthy a
         const Outcome o = fly(q, r, 200.0f);
         CHECK(o.status.finding != CellAnalyzer::kLowCapacity);
         CHECK(std::fabs(o.status.capacity_deficit[2]) < 0.05f);
+    }
+}
+
+TEST_CASE("Cell check: the pack counts a weak cell's deficit before naming it, conservatively", "[cells][truth]") {
+    const float unit_r[4] = {1.0f, 1.0f, 1.0f, 1.0f};
+    SECTION("cell 2 at 85 %: counted before it is named, never beyond its deficit") {
+        const float q[4] = {1.0f, 0.85f, 1.0f, 1.0f};
+        const Outcome o = fly(q, unit_r, 150.0f);
+        REQUIRE(o.first_named_s > 0.0f);
+        CHECK(o.first_counted_s > 0.0f);
+        CHECK(o.first_counted_s < o.first_named_s);
+        CHECK(o.max_counted_unnamed < 0.15f);
+        // Once named, the pack counts the named cell's own estimate.
+        CHECK(o.status.pack_capacity_deficit == o.status.capacity_deficit[1]);
+    }
+    SECTION("a healthy pack with a 1.5 % spread counts at most what its weakest cell lacks, and a little noise") {
+        const float q[4] = {1.0f, 0.985f, 1.015f, 1.0f};
+        const Outcome o = fly(q, unit_r, 200.0f);
+        CHECK(o.first_counted_s < 0.0f);
+        CHECK(o.max_counted_unnamed < 0.04f);
+    }
+    SECTION("without the bound (pack_deficit_sigmas 0) only a named cell counts") {
+        const float q[4] = {1.0f, 0.7f, 1.0f, 1.0f};
+        CellAnalyzer::Config off;
+        off.pack_deficit_sigmas = 0.0f;
+        const Outcome o = fly(q, unit_r, 150.0f, 0.0f, off);
+        CHECK(o.max_counted_unnamed == 0.0f);
+        CHECK(o.first_counted_s >= o.first_named_s);
+    }
+    SECTION("the cell read across the main lead counts only once named") {
+        const float q[4] = {1.0f, 1.0f, 1.0f, 0.7f};
+        const Outcome o = fly(q, unit_r, 150.0f, 0.0f, CellAnalyzer::Config{}, 0.004f);
+        CHECK(o.max_counted_unnamed == 0.0f);
+        CHECK(o.status.flagged_cell == 3);
+        CHECK(o.status.pack_capacity_deficit > 0.2f);
     }
 }
 

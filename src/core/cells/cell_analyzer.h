@@ -66,6 +66,14 @@ public:
         // cell 1 drifts up to 16 % at 4.3 σ with no capacity difference at rest). Beyond
         // twice the deficit threshold the usual bar applies.
         float capacity_significance_sigmas = 5.0f;
+        // What the pack's capacity counts before a cell is named: the largest deficit among
+        // the compared cells less this many standard errors (0 = only a named cell's). The
+        // pack delivers what its weakest cell holds, and a cell 30 % down is named only
+        // when its deficit is 3 σ clear, often past 20 % of the flight: until then the
+        // pack read as the mean cell, 31–36 % high (`4s-racing-weak-cell3-capacity-70`).
+        // One σ leaves every flight without a weak cell where it was on both suites. Cells
+        // read across a lead (below) count only once named.
+        float pack_deficit_sigmas = 1.0f;
         // Balance-tap artefacts. Cell k is read as tap k − tap k−1, so an error on one tap
         // moves the two cells sharing it apart by twice what it moves either from the other
         // cells: a drift ratio of 2 between the neighbour and the nearest other cell, where
@@ -94,6 +102,9 @@ public:
         float capacity_deficit[kMaxCells] = {};  // fraction below the others (+ = weaker)
         float capacity_deficit_sigma[kMaxCells] = {};
         int8_t flagged_cell = -1;                // 0-based, −1 = none
+        // The weakest cell's deficit as the pack counts it: a cell named for capacity, its
+        // own; otherwise the conservative bound of pack_deficit_sigmas (0 = none).
+        float pack_capacity_deficit = 0.0f;
         uint8_t finding = kNone;
     };
 

@@ -1,5 +1,6 @@
 #include "host/report/summary.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace battsim {
@@ -128,6 +129,7 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
         flight_last_us_ = s.time_us;
         at_last_flying_ = running_;
         last_flying_ = s;
+        max_pack_deficit_ = std::max(max_pack_deficit_, s.pack_capacity_deficit);
         rest_capacity_ah_ = 0.0f;  // a new flight: wait for the rest after it
     } else if (s.rest_capacity_ah > 0.0f) {
         rest_capacity_ah_ = s.rest_capacity_ah;
@@ -212,6 +214,8 @@ json SummaryAccumulator::to_json(int cells) const {
             flight["cell_resistance_ohm"] = r;
             flight["cell_capacity_deficit"] = d;
             flight["cell_capacity_deficit_sigma"] = ds;
+            flight["pack_capacity_deficit"] = {{"final", round_sig(last_flying_.pack_capacity_deficit, 3)},
+                                               {"max", round_sig(max_pack_deficit_, 3)}};
         }
         j["flight"] = flight;
     }

@@ -66,6 +66,7 @@ private:
     Totals running_;        // from the first flying sample
     Totals at_last_flying_; // snapshot of running_ at the last flying sample
     float rest_capacity_ah_ = 0.0f;  // the latest from a rest after the flight (0 = none)
+    float max_pack_deficit_ = 0.0f;  // the most the pack counted of a weak cell, in flight
     core::MonitorStatus first_flying_, last_flying_, last_;
     core::MonitorStatus latest_;  // any sample, valid or not: warnings and fault counts
     bool have_last_ = false, have_latest_ = false;
