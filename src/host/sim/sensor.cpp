@@ -27,6 +27,8 @@ int64_t round_div(int64_t a, int64_t b) { return a >= 0 ? (a + b / 2) / b : -((-
 // `value` in units of 10^-decimals, as text.
 void append_fixed(std::string& out, int64_t value, int decimals) {
     char buf[64];
+    // A 64-bit value has at most 19 digits; the bound also tells GCC the text fits.
+    decimals = decimals < 0 ? 0 : (decimals > 18 ? 18 : decimals);
     int64_t scale = 1;
     for (int i = 0; i < decimals; ++i) scale *= 10;
     const bool neg = value < 0;
