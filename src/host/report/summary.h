@@ -78,7 +78,6 @@ private:
     uint8_t short_cause_ = 0;        // cause bits when the short-flight warning was first raised
     int8_t outlier_cell_ = -1;       // cell named when the cell warning was first raised
     uint8_t outlier_finding_ = 0;
-    float at20_expected_time_s_ = 0; // joint estimator: a healthy pack's flight time at 20 %
 };
 
 }  // namespace host

@@ -246,7 +246,7 @@ bool prepare(const std::string& name, const std::vector<Trace>& traces, State& s
         static const double kTaus[] = {0.3, 1, 3, 10, 30, 100, 300, 1000};
         double best_gain = -1, best_tau = 10, best_r = 1e-4;
         for (double tau : kTaus) {
-            double sxx = 0, sxy = 0, sx = 0, sy = 0, syy = 0;
+            double sxx = 0, sxy = 0, sx = 0, sy = 0;
             size_t n = 0;
             for (size_t t = 0; t < traces.size(); ++t) {
                 const std::vector<double> x = rc_response(traces[t], st.specs[t], tau);
@@ -257,7 +257,6 @@ bool prepare(const std::string& name, const std::vector<Trace>& traces, State& s
                     sxy += x[k] * y;
                     sx += x[k];
                     sy += y;
-                    syy += y * y;
                     ++n;
                 }
             }
