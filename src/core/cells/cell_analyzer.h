@@ -71,8 +71,9 @@ public:
         // pack delivers what its weakest cell holds, and a cell 30 % down is named only
         // when its deficit is 3 σ clear, often past 20 % of the flight: until then the
         // pack read as the mean cell, 31–36 % high (`4s-racing-weak-cell3-capacity-70`).
-        // One σ leaves every flight without a weak cell where it was on both suites. Cells
-        // read across a lead (below) count only once named.
+        // One σ kept the median capacity error at 20 % on both suites (2.6 · 2.5 %; 0.5 σ
+        // raised it to 3.3 %, docs/estimator.md). Cells read across a lead (below) count
+        // only once named.
         float pack_deficit_sigmas = 1.0f;
         // Balance-tap artefacts. Cell k is read as tap k − tap k−1, so an error on one tap
         // moves the two cells sharing it apart by twice what it moves either from the other
