@@ -392,6 +392,55 @@ TEST_CASE("Joint estimator: early in a flight the remaining time leans on the he
     CHECK(blended.at20.remaining_energy_wh == tracking.at20.remaining_energy_wh);
 }
 
+TEST_CASE("Joint estimator: the verdict is refreshed once a round and warns after `persistence` short ones", "[joint]") {
+    // A pack at 40 % of its rated capacity flown at a steady 300 W: every verdict reads short
+    // once there is one. A round is the five solves, each solver_steps / solver_steps_per_update
+    // updates at most (a solve that meets the cutoff before the table's end stops there), so
+    // the first warning comes (persistence − 1) rounds after the first short verdict: by
+    // hand, at most 2 × 5 × 32 / 8 = 40 updates for persistence 3 against 1 at 8 steps per
+    // update, and 1 × 5 × 32 / 4 = 40 for 2 against 1 at 4 (the old default: a round of
+    // 2.7 s at 67 ms, now 1.35 s, with the same hold). On this pack the solves from
+    // take-off run into the cutoff, so a round is a little shorter.
+    const auto first_warning_update = [](int steps_per_update, int persistence) {
+        TremblayParams rated;
+        rated.capacity_ah = 1.5f;
+        rated.internal_resistance_ohm = 0.025f;
+        JointEstimator::Config jc;
+        jc.ocv = lipo_table();
+        jc.solver_steps = 32;
+        jc.solver_steps_per_update = steps_per_update;
+        jc.persistence = persistence;
+        JointEstimator e;
+        e.configure(jc, rated, 4);
+        Plant p{OcvCurve{}, 0.6f, 0.025f, 0.008f, 6.0f};
+        p.ocv.configure(lipo_table(), 4, rated);
+        e.start(p.ocv.voltage_v(1.0f), 0.0f);
+        float v = p.ocv.voltage_v(1.0f);
+        for (int k = 0; k < 3000; ++k) {
+            const float i = 300.0f / v;
+            v = p.step(i, 0.067f);
+            e.update(static_cast<uint64_t>(k) * 67000u, std::round(v * 100.0f) / 100.0f, i, 0.067f, true);
+            if (e.status().short_flight) return k;
+        }
+        return -1;
+    };
+    const int p1 = first_warning_update(8, 1), p3 = first_warning_update(8, 3);
+    const int old1 = first_warning_update(4, 1), old2 = first_warning_update(4, 2);
+    INFO("8 steps per update: first short verdict at update " << p1 << ", warning at " << p3
+         << "; 4 steps: " << old1 << ", " << old2);
+    REQUIRE(p1 > 0);
+    REQUIRE(old1 > 0);
+    CHECK(p3 - p1 <= 40);
+    CHECK(p3 - p1 >= 32);
+    CHECK(old2 - old1 <= 40);
+    CHECK(old2 - old1 >= 32);
+    // The faster refresh judges sooner: the first short verdict comes no later.
+    CHECK(p1 <= old1);
+    // The defaults are that pair: 8 steps per update, three verdicts.
+    CHECK(JointEstimator::Config{}.solver_steps_per_update == 8);
+    CHECK(JointEstimator::Config{}.persistence == 3);
+}
+
 TEST_CASE("Joint estimator: a logging gap's charge at the mean of the currents either side; learning held after it", "[joint]") {
     // 45 s at 40 A and a steady 15.0 V (sampled every 67 ms), a 2.5 s gap, then 10 A. The
     // gap's charge is counted at (40 + 10) / 2 = 25 A, so the flight's mean power after it is

@@ -121,11 +121,19 @@ public:
         float health_time_share = 0.5f;
         float health_time_fade_fraction = 0.5f;
         int solver_steps = 32;
-        int solver_steps_per_update = 4;  // keeps an update near 2,000 instructions
+        // A round of the five solves takes 5 × solver_steps / solver_steps_per_update
+        // updates: 8 steps per update refresh the remaining time and the verdict every
+        // 1.35 s at the reference logger's 68 ms (2.7 s with 4), for 300–500 x86
+        // instructions more per update (docs/benchmarks.md). A fresher verdict warned one
+        // more short flight in time on each suite (docs/estimator.md, twentieth session).
+        int solver_steps_per_update = 8;
         float short_flight_fraction = 0.8f;  // warn below this × a healthy pack's flight time
         float cause_fraction = 0.9f;         // a cause alone must cost ≥ 10 % of the time
         float min_flight_s = 8.0f;           // before any verdict
-        int persistence = 2;                 // consecutive verdicts before a warning
+        // Consecutive short verdicts before a warning: with the round above, a verdict must
+        // hold 2.7 s (three verdicts 1.35 s apart, as two 2.7 s apart with 4 steps per update).
+        // A shorter hold added false warnings on degraded packs that were not 20 % short.
+        int persistence = 3;
         // A longer gap between samples is a sensor (logging) fault; so is one over three of the
         // log's own usual intervals, when these are longer (a log of the battery at 1 Hz).
         float max_sample_gap_s = 0.75f;
