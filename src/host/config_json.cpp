@@ -68,6 +68,36 @@ json ekf_keys_json(const core::CapacityEkf::Config& e) {
     };
 }
 
+// A filter of the health kind (`joint.health_filter`, `joint.verdict_filter`).
+void read_filter_keys(ObjectReader& r, const char* key, core::JointEstimator::Config::HealthFilter& hf,
+                      const std::string& origin) {
+    const json* h = r.member(key);
+    if (!h) return;
+    ObjectReader rh(*h, r.child(key), origin);
+    rh.boolean("enabled", hf.enabled);
+    rh.number("polarisation_time_s", hf.polarisation_time_s, 0, kBig);
+    rh.number("polarisation_slow_time_s", hf.polarisation_slow_time_s, 0, kBig);
+    rh.number("polarisation_slow_share", hf.polarisation_slow_share, 0, 1);
+    rh.boolean("polarisation_follows_resistance", hf.polarisation_follows_resistance);
+    rh.boolean("first_resistance_soc_correction", hf.first_resistance_soc_correction);
+    rh.boolean("solves_from_takeoff_soc", hf.solves_from_takeoff_soc);
+    rh.number("takeoff_soc_min_ground_s", hf.takeoff_soc_min_ground_s, 0, kBig);
+    read_ekf_keys(rh, hf.ekf);
+}
+
+json filter_keys_json(const core::JointEstimator::Config::HealthFilter& hf) {
+    json h = ekf_keys_json(hf.ekf);
+    h["enabled"] = hf.enabled;
+    h["polarisation_time_s"] = hf.polarisation_time_s;
+    h["polarisation_slow_time_s"] = hf.polarisation_slow_time_s;
+    h["polarisation_slow_share"] = hf.polarisation_slow_share;
+    h["polarisation_follows_resistance"] = hf.polarisation_follows_resistance;
+    h["first_resistance_soc_correction"] = hf.first_resistance_soc_correction;
+    h["solves_from_takeoff_soc"] = hf.solves_from_takeoff_soc;
+    h["takeoff_soc_min_ground_s"] = hf.takeoff_soc_min_ground_s;
+    return h;
+}
+
 // Every float of the config in its shortest exact form (the fields are all float).
 void shorten_floats(json& j) {
     if (j.is_number_float()) {
@@ -173,19 +203,8 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("polarisation_slow_time_s", jc.polarisation_slow_time_s, 0, kBig);
         r.number("polarisation_slow_share", jc.polarisation_slow_share, 0, 1);
         read_ekf_keys(r, jc.ekf);
-        if (const json* h = r.member("health_filter")) {
-            ObjectReader rh(*h, r.child("health_filter"), origin);
-            core::JointEstimator::Config::HealthFilter& hf = jc.health;
-            rh.boolean("enabled", hf.enabled);
-            rh.number("polarisation_time_s", hf.polarisation_time_s, 0, kBig);
-            rh.number("polarisation_slow_time_s", hf.polarisation_slow_time_s, 0, kBig);
-            rh.number("polarisation_slow_share", hf.polarisation_slow_share, 0, 1);
-            rh.boolean("polarisation_follows_resistance", hf.polarisation_follows_resistance);
-            rh.boolean("first_resistance_soc_correction", hf.first_resistance_soc_correction);
-            rh.boolean("solves_from_takeoff_soc", hf.solves_from_takeoff_soc);
-            rh.number("takeoff_soc_min_ground_s", hf.takeoff_soc_min_ground_s, 0, kBig);
-            read_ekf_keys(rh, hf.ekf);
-        }
+        read_filter_keys(r, "health_filter", jc.health, origin);
+        read_filter_keys(r, "verdict_filter", jc.verdict, origin);
         r.number("offset_fault_a", jc.offset_fault_a, 0, kBig);
         r.number("offset_learn_max_current_a", jc.offset_learn_max_current_a, 0, kBig);
         r.number("rest_capacity_min_rest_s", jc.rest_capacity_min_rest_s, 0, kBig);
@@ -374,17 +393,8 @@ json config_to_json(const LoadedConfig& c) {
             {"cell_step_max_wait_samples", m.cell_analysis.step.max_wait_samples},
         };
         jj.update(ekf_keys_json(jc.ekf));
-        const core::JointEstimator::Config::HealthFilter& hf = jc.health;
-        json h = ekf_keys_json(hf.ekf);
-        h["enabled"] = hf.enabled;
-        h["polarisation_time_s"] = hf.polarisation_time_s;
-        h["polarisation_slow_time_s"] = hf.polarisation_slow_time_s;
-        h["polarisation_slow_share"] = hf.polarisation_slow_share;
-        h["polarisation_follows_resistance"] = hf.polarisation_follows_resistance;
-        h["first_resistance_soc_correction"] = hf.first_resistance_soc_correction;
-        h["solves_from_takeoff_soc"] = hf.solves_from_takeoff_soc;
-        h["takeoff_soc_min_ground_s"] = hf.takeoff_soc_min_ground_s;
-        jj["health_filter"] = h;
+        jj["health_filter"] = filter_keys_json(jc.health);
+        jj["verdict_filter"] = filter_keys_json(jc.verdict);
         if (jc.ocv.points >= 2) {
             json t = json::array();
             for (int k = 0; k < jc.ocv.points; ++k) t.push_back(jc.ocv.cell_voltage_v[k]);

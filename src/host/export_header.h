@@ -19,7 +19,7 @@
 namespace battsim {
 namespace host {
 
-// The capacity EKF's fields under `prefix` (the tracking and the health filter share them).
+// The capacity EKF's fields under `prefix` (the tracking, health and verdict filters share them).
 template <typename Ekf, typename F>
 void visit_ekf_config(const std::string& prefix, Ekf& e, F& f) {
     f(prefix + "voltage_sigma_v", e.voltage_sigma_v);
@@ -121,15 +121,22 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.hover_resistance.initial_resistance_ohm", c.joint.hover_resistance.initial_resistance_ohm);
     f("joint.hover_resistance.trend_sigma_per_s", c.joint.hover_resistance.trend_sigma_per_s);
     visit_ekf_config("joint.ekf.", c.joint.ekf, f);
-    f("joint.health.enabled", c.joint.health.enabled);
-    visit_ekf_config("joint.health.ekf.", c.joint.health.ekf, f);
-    f("joint.health.polarisation_time_s", c.joint.health.polarisation_time_s);
-    f("joint.health.polarisation_slow_time_s", c.joint.health.polarisation_slow_time_s);
-    f("joint.health.polarisation_slow_share", c.joint.health.polarisation_slow_share);
-    f("joint.health.polarisation_follows_resistance", c.joint.health.polarisation_follows_resistance);
-    f("joint.health.first_resistance_soc_correction", c.joint.health.first_resistance_soc_correction);
-    f("joint.health.solves_from_takeoff_soc", c.joint.health.solves_from_takeoff_soc);
-    f("joint.health.takeoff_soc_min_ground_s", c.joint.health.takeoff_soc_min_ground_s);
+    // The health and verdict filters: the same fields.
+    const char* const names[2] = {"joint.health.", "joint.verdict."};
+    decltype(&c.joint.health) const filters[2] = {&c.joint.health, &c.joint.verdict};
+    for (int k = 0; k < 2; ++k) {
+        auto& h = *filters[k];
+        const std::string p = names[k];
+        f(p + "enabled", h.enabled);
+        visit_ekf_config(p + "ekf.", h.ekf, f);
+        f(p + "polarisation_time_s", h.polarisation_time_s);
+        f(p + "polarisation_slow_time_s", h.polarisation_slow_time_s);
+        f(p + "polarisation_slow_share", h.polarisation_slow_share);
+        f(p + "polarisation_follows_resistance", h.polarisation_follows_resistance);
+        f(p + "first_resistance_soc_correction", h.first_resistance_soc_correction);
+        f(p + "solves_from_takeoff_soc", h.solves_from_takeoff_soc);
+        f(p + "takeoff_soc_min_ground_s", h.takeoff_soc_min_ground_s);
+    }
     f("joint.ocv.points", c.joint.ocv.points);
     for (int i = 0; i < core::kOcvTableMaxPoints; ++i) {
         f("joint.ocv.cell_voltage_v[" + std::to_string(i) + "]", c.joint.ocv.cell_voltage_v[i]);

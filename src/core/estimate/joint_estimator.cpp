@@ -5,6 +5,19 @@
 namespace battsim {
 namespace core {
 
+void JointEstimator::configure_branch(Branch& b, const Config::HealthFilter& c, float capacity_ah) {
+    b = Branch{};
+    b.ekf.configure(c.ekf, capacity_ah);
+    b.current.configure({c.polarisation_time_s});
+    b.slow_current.configure({c.polarisation_slow_time_s});
+}
+
+void JointEstimator::start_branch(Branch& b, float soc, float current_a) {
+    b.ekf.start(soc);
+    b.current.reset(current_a);
+    b.slow_current.reset(current_a);
+}
+
 void JointEstimator::configure(const Config& config, const TremblayParams& rated, int cells_in_series) {
     config_ = config;
     rated_ = rated;
@@ -17,16 +30,17 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     DifferenceResistanceEstimator::Config hc = config.hover_resistance;
     hc.initial_resistance_ohm = rated.internal_resistance_ohm;
     hover_resistance_.configure(hc);
-    ekf_.configure(config.ekf, rated.capacity_ah);
-    polarisation_current_ = LowPassFilter{};
-    polarisation_current_.configure({config.polarisation_time_s});
-    polarisation_slow_current_ = LowPassFilter{};
-    polarisation_slow_current_.configure({config.polarisation_slow_time_s});
-    health_ekf_.configure(config.health.ekf, rated.capacity_ah);
-    health_current_ = LowPassFilter{};
-    health_current_.configure({config.health.polarisation_time_s});
-    health_slow_current_ = LowPassFilter{};
-    health_slow_current_.configure({config.health.polarisation_slow_time_s});
+    // The tracking filter's settings sit in `joint` itself.
+    Config::HealthFilter& tc = tracking_settings_;
+    tc.ekf = config.ekf;
+    tc.polarisation_time_s = config.polarisation_time_s;
+    tc.polarisation_slow_time_s = config.polarisation_slow_time_s;
+    tc.polarisation_slow_share = config.polarisation_slow_share;
+    tc.polarisation_follows_resistance = config.polarisation_follows_resistance;
+    tc.first_resistance_soc_correction = config.first_resistance_soc_correction;
+    configure_branch(tracking_, tc, rated.capacity_ah);
+    configure_branch(health_, config.health, rated.capacity_ah);
+    configure_branch(verdict_, config.verdict, rated.capacity_ah);
     status_ = Status{};
     status_.capacity_ah = rated.capacity_ah;
     status_.resistance_ohm = status_.effective_resistance_ohm = rated.internal_resistance_ohm;
@@ -36,11 +50,8 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     short_count_ = 0;
     was_flying_ = false;
     below_takeoff_s_ = 0.0f;
-    polarisation_scale_ = health_scale_ = 1.0f;
-    soc_per_ohm_ = health_soc_per_ohm_ = 0.0f;
     polarisation_ref_ohm_ = 0.0f;
     start_soc_ = 1.0f;
-    takeoff_soc_ = 1.0f;
     takeoff_soc_valid_ = false;
     charge_total_ah_ = rest_s_ = ground_s_ = 0.0f;
     has_flown_ = false;
@@ -53,13 +64,10 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
 
 void JointEstimator::start(float voltage_v, float current_a) {
     const float soc = CapacityEkf::soc_at_rest_voltage(ocv_, voltage_v + current_a * rated_.internal_resistance_ohm);
-    ekf_.start(soc);
     start_soc_ = soc;
-    polarisation_current_.reset(current_a);
-    polarisation_slow_current_.reset(current_a);
-    health_ekf_.start(soc);
-    health_current_.reset(current_a);
-    health_slow_current_.reset(current_a);
+    start_branch(tracking_, soc, current_a);
+    start_branch(health_, soc, current_a);
+    start_branch(verdict_, soc, current_a);
     status_.started = true;
     status_.soc = clampf(soc, 0.0f, 1.0f);
 }
@@ -68,7 +76,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     if (!status_.started) start(voltage_v, current_a);
     // Flying on the offset-corrected current: a sensor reading 1.5 A high on the ground must
     // not start the flight (and its mean power) before take-off.
-    const float offset_a = ekf_.status().offset_a;
+    const float offset_a = tracking_.ekf.status().offset_a;
     const float true_a = current_a - offset_a;
     // A logging gap: its charge at the mean of the currents either side (the sample's own
     // current alone had counted a dropout across a burst's end 65 As short, on a 1.5 Ah pack
@@ -94,7 +102,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     // The take-off threshold carries the offset's own uncertainty (3 σ), so a half-learnt
     // offset cannot keep a pack on the ground "flying"; at or above the offset-learning
     // current the pack counts as flying whatever the offset.
-    const float takeoff_a = config_.min_flying_current_a + 3.0f * ekf_.status().sigma_offset_a;
+    const float takeoff_a = config_.min_flying_current_a + 3.0f * tracking_.ekf.status().sigma_offset_a;
     const bool above = true_a >= takeoff_a || current_a >= config_.offset_learn_max_current_a;
     // The threshold starts a flight at once, but ends one only after the monitor's landing
     // hold: a single sample below it in the air (a descent, a throttle cut) had ended the
@@ -112,7 +120,8 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         end_s_ = health_end_s_ = total_wh_ = 0.0f;
         short_count_ = 0;
         // ground_s_ still holds the time on the ground that ended here (cleared below).
-        takeoff_soc_ = health().soc;
+        health_.takeoff_soc = health().soc;
+        verdict_.takeoff_soc = verdict_branch().ekf.status().soc;
         takeoff_soc_valid_ = config_.health.solves_from_takeoff_soc && ground_s_ >= config_.health.takeoff_soc_min_ground_s;
     }
     was_flying_ = airborne;
@@ -146,11 +155,6 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     // excitation to measure it, after resistance_settle_s of flight on the prior): an R0
     // error at take-off (0.8 V at 50 A on a pack 60 % above its configured resistance)
     // would otherwise be read as charge and polarisation.
-    float ip = polarisation_current_.update(current_a, dt_s);
-    if (config_.polarisation_slow_share > 0.0f) {
-        const float w = config_.polarisation_slow_share;
-        ip = (1.0f - w) * ip + w * polarisation_slow_current_.update(current_a, dt_s);
-    }
     // Below the offset-learning current the pack is on the ground: what the voltage shows
     // there is the offset, never capacity or polarisation.
     const bool ground = current_a < config_.offset_learn_max_current_a;
@@ -159,7 +163,6 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     // would read as charge the sensor counted but the pack never gave (a false offset, and a
     // sensor-fault warning after every landing).
     taken_off_ = taken_off_ || flying;
-    ekf_.predict(charge_a, dt_s, ground, config_.ground_soc_process_scale, gap_var_soc);
     // On the ground the voltage is used as it is: R0 times a ground current is a few mV and
     // constant, while compensating with the offset-corrected current would move y as the
     // offset is learnt and slow that learning down (the offset reaches y only through the
@@ -168,33 +171,33 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     const bool learn = flying && !ground && (resistance_.status().valid || settled) && gap_hold_s_ < 0.0f;
     // The polarisation state is held at the ohmic resistance when learning began; from
     // then on the polarisation the voltage sees moves in proportion with R0.
-    if (learn && !(polarisation_ref_ohm_ > 0.0f)) {
-        polarisation_ref_ohm_ = r0;
-        // Learning starts on the first measured R0 (or the prior, settled): the state of
-        // charge takes what R0 would have moved it by from take-off.
-        const float dr_ohm = r0 - rated_.internal_resistance_ohm;
-        if (config_.first_resistance_soc_correction) ekf_.shift_soc(soc_per_ohm_ * dr_ohm);
-        if (config_.health.first_resistance_soc_correction) health_ekf_.shift_soc(health_soc_per_ohm_ * dr_ohm);
-    }
+    // Learning starts on the first measured R0 (or the prior, settled): each filter's state
+    // of charge takes what R0 would have moved it by from take-off.
+    const bool first_r0 = learn && !(polarisation_ref_ohm_ > 0.0f);
+    if (first_r0) polarisation_ref_ohm_ = r0;
+    const float dr_ohm = r0 - rated_.internal_resistance_ohm;
     const bool before_learning = flying && !ground && !learn;
     const float follow = polarisation_ref_ohm_ > 0.0f ? r0 / polarisation_ref_ohm_ : 1.0f;
-    polarisation_scale_ = config_.polarisation_follows_resistance ? follow : 1.0f;
     const float r0_var_v2 = (r_sigma * true_a) * (r_sigma * true_a);
     const bool learn_offset = (ground && !taken_off_) || (flying && config_.learn_offset_in_flight);
-    ekf_.correct(compensated_v, ip, r0_var_v2, ocv_, learn, learn_offset, polarisation_scale_);
-    if (before_learning) soc_per_ohm_ = soc_per_ohm(ekf_.status(), soc_per_ohm_, true_a);
-    if (config_.health.enabled) {
-        const float w = config_.health.polarisation_slow_share;
-        float hip = health_current_.update(current_a, dt_s);
-        if (w > 0.0f) hip = (1.0f - w) * hip + w * health_slow_current_.update(current_a, dt_s);
-        health_ekf_.predict(charge_a, dt_s, ground, config_.ground_soc_process_scale, gap_var_soc);
-        health_scale_ = config_.health.polarisation_follows_resistance ? follow : 1.0f;
-        health_ekf_.correct(compensated_v, hip, r0_var_v2, ocv_, learn, learn_offset, health_scale_);
-        if (before_learning) health_soc_per_ohm_ = soc_per_ohm(health_ekf_.status(), health_soc_per_ohm_, true_a);
-    } else {
-        health_scale_ = polarisation_scale_;
+    // The tracking, health and verdict filters: one step, each on its own settings.
+    Branch* const branches[3] = {&tracking_, &health_, &verdict_};
+    const Config::HealthFilter* const settings[3] = {&tracking_settings_, &config_.health, &config_.verdict};
+    for (int k = 0; k < 3; ++k) {
+        Branch& b = *branches[k];
+        const Config::HealthFilter& c = *settings[k];
+        if (!c.enabled) continue;
+        if (first_r0 && c.first_resistance_soc_correction) b.ekf.shift_soc(b.soc_per_ohm * dr_ohm);
+        const float w = c.polarisation_slow_share;
+        float ip = b.current.update(current_a, dt_s);
+        if (w > 0.0f) ip = (1.0f - w) * ip + w * b.slow_current.update(current_a, dt_s);
+        b.polarisation_current_a = ip;
+        b.ekf.predict(charge_a, dt_s, ground, config_.ground_soc_process_scale, gap_var_soc);
+        b.scale = c.polarisation_follows_resistance ? follow : 1.0f;
+        b.ekf.correct(compensated_v, ip, r0_var_v2, ocv_, learn, learn_offset, b.scale);
+        if (before_learning) b.soc_per_ohm = soc_per_ohm(b.ekf.status(), b.soc_per_ohm, true_a);
     }
-    const CapacityEkf::Status& es = ekf_.status();
+    const CapacityEkf::Status& es = tracking_.ekf.status();
     status_.current_offset_a = es.offset_a;
     status_.sigma_current_offset_a = es.sigma_offset_a;
     status_.current_offset_fault =
@@ -228,8 +231,8 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     status_.sigma_capacity_ah = health().sigma_capacity_ah;
     status_.measured_resistance_ohm = rs.valid ? rs.resistance_now_ohm : 0.0f;
     status_.measured_resistance_sigma_ohm = rs.valid ? rs.sigma_now_ohm : 0.0f;
-    status_.polarisation_ohm = es.polarisation_ohm * polarisation_scale_;
-    status_.polarisation_current_a = ip;
+    status_.polarisation_ohm = es.polarisation_ohm * tracking_.scale;
+    status_.polarisation_current_a = tracking_.polarisation_current_a;
     status_.mean_power_w = flying_s_ > 0.0f ? flying_energy_j_ / flying_s_ : 0.0f;
 
     // Flight-time solves, round robin, a bounded number of steps per update.
@@ -271,20 +274,21 @@ float JointEstimator::fuse_with_prior(bool valid, float measured_ohm, float sigm
 }
 
 void JointEstimator::start_solve() {
-    // The remaining time follows the tracking filter; the verdict's four solves the health one.
-    const CapacityEkf::Status& es = solve_ == kSolveRemaining ? ekf_.status() : health();
+    // The remaining time follows the tracking filter, the verdict's four solves the verdict
+    // filter, the energy the health one.
+    const Branch& b = solve_ == kSolveRemaining ? tracking_ : solve_ == kSolveHealth ? health_branch() : verdict_branch();
+    const CapacityEkf::Status& es = b.ekf.status();
     // The filter sees the mean cell; with a weak cell named, the solver steps the others
     // down and the weak one, a fraction (1 − deficit) of them, beside them.
     const float share = weakest_deficit_ > 0.0f ? 1.0f / static_cast<float>(cells_) : 0.0f;
     const float q = other_cells_ah(es.capacity_ah);
     const float ratio = 1.0f - weakest_deficit_;
-    const float scale = solve_ == kSolveRemaining ? polarisation_scale_ : health_scale_;
-    const float r_total = status_.effective_resistance_ohm + es.polarisation_ohm * scale;
+    const float r_total = status_.effective_resistance_ohm + es.polarisation_ohm * b.scale;
     // A healthy pack: rated resistance, and the polarisation the state holds at it.
     const float r_rated = rated_.internal_resistance_ohm + es.polarisation_ohm;
     // The charge at take-off: as the filter read it then, at rest, or as the present
     // estimate sees it.
-    const float soc_takeoff = takeoff_soc_valid_ ? takeoff_soc_
+    const float soc_takeoff = takeoff_soc_valid_ ? b.takeoff_soc
                                                  : clampf(es.soc + charge_since_takeoff_ah_ / es.capacity_ah, 0.0f, 1.0f);
     if (solve_ == kSolveRemaining) {
         solve_power_w_ = status_.mean_power_w;
@@ -295,7 +299,8 @@ void JointEstimator::start_solve() {
     const int n = config_.solver_steps;
     switch (solve_) {
         case kSolveRemaining: solver_.start(clampf(es.soc, 0.0f, 1.0f), q, r_total, p, v_min, n, share, ratio); break;
-        case kSolveTotal: solver_.start(soc_takeoff, q, r_total, p, v_min, n, share, ratio); break;
+        case kSolveTotal:
+        case kSolveHealth: solver_.start(soc_takeoff, q, r_total, p, v_min, n, share, ratio); break;
         case kSolveExpected: solver_.start(soc_takeoff, rated_.capacity_ah, r_rated, p, v_min, n); break;
         case kSolveCapacityOnly: solver_.start(soc_takeoff, q, r_rated, p, v_min, n, share, ratio); break;
         default: solver_.start(soc_takeoff, rated_.capacity_ah, r_total, p, v_min, n); break;
@@ -319,12 +324,16 @@ void JointEstimator::finish_solve() {
     // less what has flowed since. Energy is mostly capacity × state of charge, which the
     // health filter reads better early; the remaining time follows the tracking filter and
     // leans on this solve only early in a flight (docs/estimator.md, ninth and fourteenth sessions).
-    if (solve_ == kSolveTotal) {
+    // Without a verdict filter the verdict's total is the health filter's own solve.
+    const bool shared = !config_.verdict.enabled;
+    if (solve_ == kSolveHealth || (shared && solve_ == kSolveTotal)) {
         total_wh_ = r.energy_wh;
         health_end_s_ = r.time_s;
     }
-    solve_ = static_cast<uint8_t>((solve_ + 1) % kSolveCount);
-    if (solve_ != kSolveRemaining) return;
+    solve_ = static_cast<uint8_t>(solve_ + 1);
+    if (shared && solve_ == kSolveHealth) solve_ = kSolveCount;
+    if (solve_ < kSolveCount) return;
+    solve_ = kSolveRemaining;
 
     // A full round is in: publish, then judge.
     status_.time_valid = true;

@@ -93,6 +93,18 @@ public:
             float takeoff_soc_min_ground_s = 5.0f;
         };
         HealthFilter health;
+        // A third filter of the same kind for the short-flight verdict alone (its four
+        // solves). Its slow polarisation part (150 s) builds far slower than the plant's
+        // (40 s), so early in a flight it reads that build-up as charge drawn: a capacity
+        // leaning low, which brings a real shortfall's warning forward. The health filter
+        // keeps the capacity and energy it reports honest; the verdict keeps its 20 %
+        // margin on undegraded packs (docs/estimator.md, twenty-first session). The take-off
+        // state-of-charge keys are the health filter's. Disabled: the verdict reads `health`.
+        HealthFilter verdict = [] {
+            HealthFilter v{};
+            v.polarisation_slow_time_s = 150.0f;
+            return v;
+        }();
         OcvTable ocv;                       // optional; else the model's no-load curve
         float resistance_prior_fraction = 0.5f;  // σ of the configured resistance, as a fraction
         float polarisation_time_s = 3.0f;   // i_p time constant: fast enough that i_p follows the throttle and cannot mimic the SOC trend
@@ -121,18 +133,19 @@ public:
         float health_time_share = 0.5f;
         float health_time_fade_fraction = 0.5f;
         int solver_steps = 32;
-        // A round of the five solves takes 5 × solver_steps / solver_steps_per_update
-        // updates: 8 steps per update refresh the remaining time and the verdict every
-        // 1.35 s at the reference logger's 68 ms (2.7 s with 4), for 300–500 x86
-        // instructions more per update (docs/benchmarks.md). A fresher verdict warned one
-        // more short flight in time on each suite (docs/estimator.md, twentieth session).
-        int solver_steps_per_update = 8;
+        // A round of the six solves (five without a verdict filter) takes, per solve,
+        // solver_steps / solver_steps_per_update updates rounded up: 11 steps per update
+        // (3 updates a solve) refresh the remaining time and the verdict every 1.22 s at
+        // the reference logger's 68 ms (docs/benchmarks.md for the cost). A fresher verdict
+        // warned more short flights in time (docs/estimator.md, twentieth and twenty-first
+        // sessions).
+        int solver_steps_per_update = 11;
         float short_flight_fraction = 0.8f;  // warn below this × a healthy pack's flight time
         float cause_fraction = 0.9f;         // a cause alone must cost ≥ 10 % of the time
         float min_flight_s = 8.0f;           // before any verdict
         // Consecutive short verdicts before a warning: with the round above, a verdict must
-        // hold 2.7 s (three verdicts 1.35 s apart, as two 2.7 s apart with 4 steps per update).
-        // A shorter hold added false warnings on degraded packs that were not 20 % short.
+        // hold 2.4 s (three verdicts 1.22 s apart). Shorter holds added false warnings on
+        // degraded packs that were not 20 % short (twentieth session).
         int persistence = 3;
         // A longer gap between samples is a sensor (logging) fault; so is one over three of the
         // log's own usual intervals, when these are longer (a log of the battery at 1 Hz).
@@ -212,10 +225,29 @@ public:
     const OcvCurve& ocv() const { return ocv_; }
 
 private:
-    enum Solve : uint8_t { kSolveRemaining = 0, kSolveTotal, kSolveExpected, kSolveCapacityOnly, kSolveResistanceOnly, kSolveCount };
+    // The verdict's four solves, then the health filter's from take-off (its energy and
+    // time), skipped when the verdict reads the health filter.
+    enum Solve : uint8_t {
+        kSolveRemaining = 0, kSolveTotal, kSolveExpected, kSolveCapacityOnly, kSolveResistanceOnly, kSolveHealth,
+        kSolveCount
+    };
+    // A filter of the health kind, with its own polarisation currents.
+    struct Branch {
+        CapacityEkf ekf;
+        LowPassFilter current, slow_current;
+        float scale = 1.0f;        // its polarisation's R0 now / R0 when learning began
+        float soc_per_ohm = 0.0f;  // its SOC per ohm of prior R0 (before learning)
+        float takeoff_soc = 1.0f;  // at the last take-off
+        float polarisation_current_a = 0.0f;  // the low-passed current its polarisation saw last
+    };
+    static void configure_branch(Branch& b, const Config::HealthFilter& c, float capacity_ah);
+    static void start_branch(Branch& b, float soc, float current_a);
     void start_solve();
-    // The filter the capacity and the verdict's solves read: the health filter when enabled.
-    const CapacityEkf::Status& health() const { return config_.health.enabled ? health_ekf_.status() : ekf_.status(); }
+    // The filter the capacity and the energy read: the health filter when enabled.
+    const Branch& health_branch() const { return config_.health.enabled ? health_ : tracking_; }
+    const CapacityEkf::Status& health() const { return health_branch().ekf.status(); }
+    // ... and the one the verdict reads: its own, or as above.
+    const Branch& verdict_branch() const { return config_.verdict.enabled ? verdict_ : health_branch(); }
     float fuse_with_prior(bool valid, float measured_ohm, float sigma_ohm, float* sigma_out) const;
     float other_cells_ah(float mean_cell_ah) const;
     float weakest_cell_ah(float mean_cell_ah) const;
@@ -232,16 +264,13 @@ private:
     Status status_;
     TremblayParams rated_;
     OcvCurve ocv_;
-    float takeoff_soc_ = 1.0f;         // the health filter's, at the last take-off
     bool takeoff_soc_valid_ = false;   // wanted, and the take-off came after takeoff_soc_min_ground_s on the ground
     DifferenceResistanceEstimator resistance_;
     DifferenceResistanceEstimator hover_resistance_;
-    CapacityEkf ekf_;
-    LowPassFilter polarisation_current_;
-    LowPassFilter polarisation_slow_current_;
-    CapacityEkf health_ekf_;
-    LowPassFilter health_current_;
-    LowPassFilter health_slow_current_;
+    Config::HealthFilter tracking_settings_;  // the tracking filter's, gathered from `joint`
+    Branch tracking_;
+    Branch health_;
+    Branch verdict_;
     PowerTimeSolver solver_;
     uint8_t solve_ = kSolveRemaining;
     float solve_power_w_ = 0.0f;
@@ -258,11 +287,7 @@ private:
     int short_count_ = 0;
     float weakest_deficit_ = 0.0f;
     int cells_ = 1;
-    float polarisation_scale_ = 1.0f;   // R0 now / R0 when learning began
-    float health_scale_ = 1.0f;         // ... as the health filter's polarisation sees it
     float polarisation_ref_ohm_ = 0.0f;  // R0 when capacity and polarisation learning began (0: not yet)
-    float soc_per_ohm_ = 0.0f;           // the tracking filter's SOC per ohm of prior R0 (before learning)
-    float health_soc_per_ohm_ = 0.0f;    // ... the health filter's
     float start_soc_ = 1.0f;             // from the first resting voltage
     float charge_total_ah_ = 0.0f;       // offset-corrected, since start
     float ground_s_ = 0.0f;              // on the ground (not flying), since
