@@ -25,6 +25,9 @@ TEST_CASE("Config JSON round-trips", "[config]") {
     c.monitor.joint.health_time_fade_fraction = 0.75f;  // default 0.5
     c.monitor.joint.gap_charge_sigma_fraction = 0.4f;   // default 0.25
     c.monitor.joint.gap_hold_s = 2.5f;                  // default 5
+    c.monitor.joint.verdict.enabled = false;            // default true
+    c.monitor.joint.verdict.polarisation_slow_time_s = 90.0f;  // default 150
+    c.monitor.joint.verdict.ekf.capacity_sigma0_fraction = 0.12f;
     LoadedConfig back = config_from_json(config_to_json(c), "test");
     CHECK_FALSE(back.monitor.joint.health.enabled);
     CHECK(back.monitor.joint.health.ekf.voltage_sigma_v == 0.031f);
@@ -38,7 +41,11 @@ TEST_CASE("Config JSON round-trips", "[config]") {
     CHECK(back.monitor.joint.health_time_fade_fraction == 0.75f);
     CHECK(back.monitor.joint.gap_charge_sigma_fraction == 0.4f);
     CHECK(back.monitor.joint.gap_hold_s == 2.5f);
-    CHECK(back.monitor.joint.ekf.voltage_sigma_v == c.monitor.joint.ekf.voltage_sigma_v);  // the two filters' keys apart
+    CHECK_FALSE(back.monitor.joint.verdict.enabled);
+    CHECK(back.monitor.joint.verdict.polarisation_slow_time_s == 90.0f);
+    CHECK(back.monitor.joint.verdict.ekf.capacity_sigma0_fraction == 0.12f);
+    CHECK(back.monitor.joint.health.polarisation_slow_time_s == c.monitor.joint.health.polarisation_slow_time_s);
+    CHECK(back.monitor.joint.ekf.voltage_sigma_v == c.monitor.joint.ekf.voltage_sigma_v);  // the filters' keys apart
     CHECK(back.monitor.cell_analysis.step.steady_band_fraction == 0.2f);
     CHECK(back.monitor.cell_analysis.step.max_wait_samples == 20);
     CHECK(back.monitor.battery.capacity_ah == 2.2f);
@@ -71,6 +78,10 @@ TEST_CASE("Config errors name the key", "[config]") {
     j = config_to_json(default_config());
     j["joint"]["health_filter"]["enable"] = true;
     CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("$.joint.health_filter.enable: unknown key"));
+    j = config_to_json(default_config());
+    j["joint"]["verdict_filter"]["polarisation_slow_tme_s"] = 90;
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"),
+                      Catch::Contains("$.joint.verdict_filter.polarisation_slow_tme_s: unknown key"));
     j = config_to_json(default_config());
     j["joint"]["health_filter"]["polarisation_slow_share"] = 1.5;
     CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("$.joint.health_filter.polarisation_slow_share") &&
