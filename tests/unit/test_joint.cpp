@@ -481,6 +481,53 @@ TEST_CASE("Joint estimator: the verdict's own filter leans short and changes not
     CHECK(fly(hover).first_warning_s < 0.0f);
 }
 
+TEST_CASE("Joint estimator: a disabled filter's stand-in brings its own take-off charge", "[joint]") {
+    // A pack at 60 % rests 10 s, then flies at 300 W. With the health filter disabled (the
+    // tracking filter stands in for the energy's solve) or the verdict filter disabled (the
+    // health filter stands in for the verdict's), the solves from the take-off charge read the
+    // stand-in's own: the energy and the flight time from take-off agree with the present
+    // charge carried back within the polarisation's few % (a stand-in starting from a full
+    // pack's charge read about 60 % more).
+    for (int disabled = 0; disabled < 2; ++disabled) {
+        const auto fly_partial = [disabled](bool from_takeoff) {
+            TremblayParams rated;
+            rated.capacity_ah = 1.5f;
+            rated.internal_resistance_ohm = 0.025f;
+            JointEstimator::Config jc;
+            jc.ocv = lipo_table();
+            jc.health.enabled = disabled != 0;
+            jc.verdict.enabled = disabled != 1;
+            jc.health.solves_from_takeoff_soc = from_takeoff;
+            JointEstimator e;
+            e.configure(jc, rated, 4);
+            Plant p{OcvCurve{}, 1.5f, 0.025f, 0.008f, 6.0f};
+            p.ocv.configure(lipo_table(), 4, rated);
+            p.soc = 0.6f;
+            float v = p.ocv.voltage_v(0.6f);
+            e.start(v, 0.0f);
+            uint64_t t_us = 0;
+            for (int k = 0; k < 150; ++k, t_us += 67000u) {
+                v = p.step(0.0f, 0.067f);
+                e.update(t_us, std::round(v * 100.0f) / 100.0f, 0.0f, 0.067f, false);
+            }
+            for (int k = 0; k < 600; ++k, t_us += 67000u) {
+                const float i = 300.0f / v;
+                v = p.step(i, 0.067f);
+                e.update(t_us, std::round(v * 100.0f) / 100.0f, i, 0.067f, true);
+            }
+            return e.status();
+        };
+        const JointEstimator::Status takeoff = fly_partial(true), present = fly_partial(false);
+        INFO((disabled == 0 ? "health" : "verdict")
+             << " filter disabled: energy " << takeoff.remaining_energy_wh << " Wh from the take-off charge, "
+             << present.remaining_energy_wh << " Wh from the present one; total " << takeoff.total_time_s << " s, "
+             << present.total_time_s << " s");
+        REQUIRE(present.remaining_energy_wh > 0.0f);
+        CHECK(takeoff.remaining_energy_wh == Approx(present.remaining_energy_wh).epsilon(0.12));
+        CHECK(takeoff.total_time_s == Approx(present.total_time_s).epsilon(0.12));
+    }
+}
+
 TEST_CASE("Joint estimator: a logging gap's charge at the mean of the currents either side; learning held after it", "[joint]") {
     // 45 s at 40 A and a steady 15.0 V (sampled every 67 ms), a 2.5 s gap, then 10 A. The
     // gap's charge is counted at (40 + 10) / 2 = 25 A, so the flight's mean power after it is

@@ -120,8 +120,11 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         end_s_ = health_end_s_ = total_wh_ = 0.0f;
         short_count_ = 0;
         // ground_s_ still holds the time on the ground that ended here (cleared below).
-        health_.takeoff_soc = health().soc;
-        verdict_.takeoff_soc = verdict_branch().ekf.status().soc;
+        // Each filter keeps its own, so a disabled one's stand-in (health → tracking,
+        // verdict → health) brings its own take-off charge.
+        tracking_.takeoff_soc = tracking_.ekf.status().soc;
+        health_.takeoff_soc = health_.ekf.status().soc;
+        verdict_.takeoff_soc = verdict_.ekf.status().soc;
         takeoff_soc_valid_ = config_.health.solves_from_takeoff_soc && ground_s_ >= config_.health.takeoff_soc_min_ground_s;
     }
     was_flying_ = airborne;
