@@ -14,8 +14,10 @@ targets. Standard library only.
 --around FILE samples log-normally (sigma 0.4) around the settings in FILE (a JSON object
 of keys), crossing them with a grid of polarisation shapes; without it the keys are drawn
 log-uniformly from the ranges below. --settings FILE scores those settings once (e.g. a line
-of an earlier search, on the held-out suite with --suite scenarios-holdout). The first line
-is always the committed settings. The eighth session's searches (docs/estimator.md):
+of an earlier search, on the held-out suite with --suite scenarios-holdout); keys holding an
+object (`{"verdict_filter": {"enabled": false}}`) replace that section. --copies N pools N
+copies of the suite, as `battsim score --copies` does. The first line is always the committed
+settings. The eighth session's searches (docs/estimator.md):
 
     python3 scripts/joint-search.py --no-health-filter --samples 250 --seed 1 --out one.jsonl
     python3 scripts/joint-search.py --no-health-filter --around best.json --samples 240 --seed 2 --out near.jsonl
@@ -95,7 +97,7 @@ def reseed(suite_dir, k):
             json.dump(sc, f)
 
 
-def score(battsim, suite, settings, health, health_off, reseed_k=0, keep=None):
+def score(battsim, suite, settings, health, health_off, reseed_k=0, keep=None, copies=1):
     with tempfile.TemporaryDirectory() as tmp:
         configs = os.path.join(tmp, "configs")
         shutil.copytree(os.path.join(ROOT, "configs"), configs)
@@ -113,7 +115,7 @@ def score(battsim, suite, settings, health, health_off, reseed_k=0, keep=None):
                 json.dump(c, f)
         out = os.path.join(tmp, "score.json")
         r = subprocess.run([battsim, "score", "-j2", "--columns", "oracle,joint", "--json", "-o", out,
-                            os.path.join(configs, suite)], capture_output=True, text=True)
+                            "--copies", str(copies), os.path.join(configs, suite)], capture_output=True, text=True)
         if r.returncode != 0:
             print(f"joint-search: battsim score failed for {json.dumps(settings)}:\n{r.stderr}", file=sys.stderr)
             return None
@@ -127,10 +129,12 @@ def score(battsim, suite, settings, health, health_off, reseed_k=0, keep=None):
              abs(f["estimators"]["oracle"]["remaining_time_error_pct"][1]) for f in d["flights"]]
     return {
         "above_oracle_20": statistics.median(above), "above_oracle_20_largest": max(above),
+        "remaining_time_20": joint("remaining_time_20")["median_abs"],
         "remaining_time_50": joint("remaining_time_50")["median_abs"],
         "energy_20": joint("remaining_energy_20")["median_abs"],
         "capacity_20": joint("capacity_20")["median_abs"], "capacity_end": joint("capacity_end")["median_abs"],
         "early_warnings": joint("early_warnings")["count"], "false_warnings": joint("false_warnings")["count"],
+        "false_warnings_undegraded": joint("false_warnings_undegraded")["count"],
     }
 
 
@@ -184,6 +188,8 @@ def main():
     ap.add_argument("--validate", help="a search's JSON lines: score its --top best (most warnings, fewest false, "
                     "smallest gap) and the committed settings on --reseeds, print the means, and stop")
     ap.add_argument("--keep-json", help="with --settings: also write those settings' full `battsim score --json` report here")
+    ap.add_argument("--copies", type=int, default=1,
+                    help="fly the suite this many times (battsim score --copies; figures pool every copy)")
     ap.add_argument("--top", type=int, default=12)
     ap.add_argument("--reseeds", default="1,2,3", help="the seed moves --validate scores on")
     a = ap.parse_args()
@@ -208,7 +214,7 @@ def main():
             else:
                 p = sample_around(rng, centre, k, shapes) if centre else sample_random(rng)
             keep = a.keep_json if a.settings and k >= 0 else None
-            m = score(a.battsim, a.suite, p, a.health, a.no_health_filter, a.reseed, keep)
+            m = score(a.battsim, a.suite, p, a.health, a.no_health_filter, a.reseed, keep, a.copies)
             out.write(json.dumps({"settings": p, "figures": m}) + "\n")
             out.flush()
             if m:

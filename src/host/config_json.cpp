@@ -68,9 +68,11 @@ json ekf_keys_json(const core::CapacityEkf::Config& e) {
     };
 }
 
-// A filter of the health kind (`joint.health_filter`, `joint.verdict_filter`).
+// A filter of the health kind (`joint.health_filter`, `joint.verdict_filter`). The take-off
+// state-of-charge keys are the health filter's alone (the verdict filter follows them), so in
+// `verdict_filter` they are unknown keys rather than settings that would do nothing.
 void read_filter_keys(ObjectReader& r, const char* key, core::JointEstimator::Config::HealthFilter& hf,
-                      const std::string& origin) {
+                      const std::string& origin, bool takeoff_keys) {
     const json* h = r.member(key);
     if (!h) return;
     ObjectReader rh(*h, r.child(key), origin);
@@ -80,12 +82,14 @@ void read_filter_keys(ObjectReader& r, const char* key, core::JointEstimator::Co
     rh.number("polarisation_slow_share", hf.polarisation_slow_share, 0, 1);
     rh.boolean("polarisation_follows_resistance", hf.polarisation_follows_resistance);
     rh.boolean("first_resistance_soc_correction", hf.first_resistance_soc_correction);
-    rh.boolean("solves_from_takeoff_soc", hf.solves_from_takeoff_soc);
-    rh.number("takeoff_soc_min_ground_s", hf.takeoff_soc_min_ground_s, 0, kBig);
+    if (takeoff_keys) {
+        rh.boolean("solves_from_takeoff_soc", hf.solves_from_takeoff_soc);
+        rh.number("takeoff_soc_min_ground_s", hf.takeoff_soc_min_ground_s, 0, kBig);
+    }
     read_ekf_keys(rh, hf.ekf);
 }
 
-json filter_keys_json(const core::JointEstimator::Config::HealthFilter& hf) {
+json filter_keys_json(const core::JointEstimator::Config::HealthFilter& hf, bool takeoff_keys) {
     json h = ekf_keys_json(hf.ekf);
     h["enabled"] = hf.enabled;
     h["polarisation_time_s"] = hf.polarisation_time_s;
@@ -93,8 +97,10 @@ json filter_keys_json(const core::JointEstimator::Config::HealthFilter& hf) {
     h["polarisation_slow_share"] = hf.polarisation_slow_share;
     h["polarisation_follows_resistance"] = hf.polarisation_follows_resistance;
     h["first_resistance_soc_correction"] = hf.first_resistance_soc_correction;
-    h["solves_from_takeoff_soc"] = hf.solves_from_takeoff_soc;
-    h["takeoff_soc_min_ground_s"] = hf.takeoff_soc_min_ground_s;
+    if (takeoff_keys) {
+        h["solves_from_takeoff_soc"] = hf.solves_from_takeoff_soc;
+        h["takeoff_soc_min_ground_s"] = hf.takeoff_soc_min_ground_s;
+    }
     return h;
 }
 
@@ -203,8 +209,8 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("polarisation_slow_time_s", jc.polarisation_slow_time_s, 0, kBig);
         r.number("polarisation_slow_share", jc.polarisation_slow_share, 0, 1);
         read_ekf_keys(r, jc.ekf);
-        read_filter_keys(r, "health_filter", jc.health, origin);
-        read_filter_keys(r, "verdict_filter", jc.verdict, origin);
+        read_filter_keys(r, "health_filter", jc.health, origin, true);
+        read_filter_keys(r, "verdict_filter", jc.verdict, origin, false);
         r.number("offset_fault_a", jc.offset_fault_a, 0, kBig);
         r.number("offset_learn_max_current_a", jc.offset_learn_max_current_a, 0, kBig);
         r.number("rest_capacity_min_rest_s", jc.rest_capacity_min_rest_s, 0, kBig);
@@ -393,8 +399,8 @@ json config_to_json(const LoadedConfig& c) {
             {"cell_step_max_wait_samples", m.cell_analysis.step.max_wait_samples},
         };
         jj.update(ekf_keys_json(jc.ekf));
-        jj["health_filter"] = filter_keys_json(jc.health);
-        jj["verdict_filter"] = filter_keys_json(jc.verdict);
+        jj["health_filter"] = filter_keys_json(jc.health, true);
+        jj["verdict_filter"] = filter_keys_json(jc.verdict, false);
         if (jc.ocv.points >= 2) {
             json t = json::array();
             for (int k = 0; k < jc.ocv.points; ++k) t.push_back(jc.ocv.cell_voltage_v[k]);

@@ -82,6 +82,10 @@ TEST_CASE("Config errors name the key", "[config]") {
     j["joint"]["verdict_filter"]["polarisation_slow_tme_s"] = 90;
     CHECK_THROWS_WITH(config_from_json(j, "x.json"),
                       Catch::Contains("$.joint.verdict_filter.polarisation_slow_tme_s: unknown key"));
+    j = config_to_json(default_config());  // the take-off keys are the health filter's alone
+    j["joint"]["verdict_filter"]["solves_from_takeoff_soc"] = false;
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"),
+                      Catch::Contains("$.joint.verdict_filter.solves_from_takeoff_soc: unknown key"));
     j = config_to_json(default_config());
     j["joint"]["health_filter"]["polarisation_slow_share"] = 1.5;
     CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("$.joint.health_filter.polarisation_slow_share") &&
