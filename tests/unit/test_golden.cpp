@@ -53,12 +53,13 @@ TEST_CASE("Golden summaries of the predictive-bms flights", "[golden][data]") {
     }
 }
 
-// The scoreboard as change indication: every estimator's numbers on both simulated suites
-// and on the last-cell set (a weak cell read across the positive lead).
+// The scoreboard as change indication: every estimator's numbers on both simulated suites,
+// the last-cell set (a weak cell read across the positive lead) and the rest-polarisation
+// stress suite (the real packs' polarisation time constants).
 // A change is either a bug or an intended change of the numbers (scripts/update-goldens.sh;
 // say in the commit what moved and why).
 TEST_CASE("Golden scoreboards of the simulated suites", "[golden]") {
-    for (const char* suite : {"scenarios", "scenarios-holdout", "scenarios-last-cell"}) {
+    for (const char* suite : {"scenarios", "scenarios-holdout", "scenarios-last-cell", "scenarios-rest-polarisation"}) {
         const std::string dir = std::string(BATTSIM_SOURCE_DIR) + "/configs/" + suite;
         std::vector<sim::Scenario> scenarios;
         for (const std::string& f : sim::find_scenario_files({dir})) scenarios.push_back(sim::load_scenario(f));
