@@ -1,0 +1,95 @@
+// battsim calibrate LOG... -c CFG [-o OUT.json]: the health filter's slow polarisation share
+// for a pack, from its own flights (the in-flight capacity against the rests').
+#include <iomanip>
+#include <iostream>
+
+#include "command.h"
+#include "common_options.h"
+#include "host/fit/shape_calibration.h"
+#include "host/io/atomic_file.h"
+
+namespace battsim {
+namespace cli {
+namespace {
+
+struct CalibrateArgs {
+    std::vector<std::string> logs;
+    std::string output;
+    bool json = false;
+    host::ShapeCalibrationOptions options;
+    InputArgs input;
+};
+
+void print_table(const host::ShapeCalibration& c, std::ostream& os) {
+    os << "battsim calibrate: " << c.logs.size() << " flight(s) with a rest; capacity from the rests:";
+    for (double v : c.rest_ah) os << " " << std::fixed << std::setprecision(3) << v;
+    os << " Ah\n  slow share  mean |final/rest - 1|  final capacity (Ah)\n";
+    for (const host::ShapeCandidate& k : c.candidates) {
+        os << "  " << std::setw(10) << std::setprecision(2) << k.slow_share << "  " << std::setw(19)
+           << std::setprecision(1) << 100.0 * k.mean_abs_error << " %";
+        for (double v : k.final_ah) os << "  " << std::setprecision(3) << v;
+        os << "\n";
+    }
+    os << std::setprecision(2) << "  chosen " << c.chosen_share
+       << (c.changed ? " (changed from " : " (kept: the configured ") << c.configured_share << ")\n";
+    for (const std::string& f : c.logs_without_rest) os << "  no rest after a flight, not used: " << f << "\n";
+}
+
+std::function<int()> setup(CLI::App& sub) {
+    auto a = std::make_shared<CalibrateArgs>();
+    sub.add_option("LOG", a->logs, "Logs of one pack (each with a rest after its flight)")->required();
+    sub.add_option("-o,--output", a->output, "Write the config with the calibrated share here (JSON)");
+    sub.add_flag("--json", a->json, "Print the calibration JSON on standard output");
+    sub.add_option("--shares", a->options.slow_shares, "Candidate slow shares (0..1), comma-separated")
+        ->delimiter(',')
+        ->check(CLI::Range(0.0, 1.0))
+        ->capture_default_str();
+    sub.add_option("--tolerance", a->options.tolerance,
+                   "Keep the configured share while its mean |final/rest - 1| is within this")
+        ->check(CLI::Range(0.0, 1.0))
+        ->capture_default_str();
+    add_input_options(sub, a->input);
+    return [a]() -> int {
+        if (a->input.estimator == "reference") {
+            std::cerr << "battsim calibrate: --estimator: the calibration is of the joint estimator's health filter\n";
+            return kExitUsage;
+        }
+        host::ReplayOptions opt;
+        if (int rc = resolve_input(a->input, opt.reader, opt.config)) return rc;
+        host::ShapeCalibration c;
+        try {
+            c = host::calibrate_slow_share(a->logs, opt, a->options);
+        } catch (const host::InputError& e) {
+            std::cerr << "battsim calibrate: " << e.what() << "\n";
+            return kExitInputError;
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "battsim calibrate: " << e.what() << "\n";
+            return kExitFailure;
+        } catch (const std::runtime_error& e) {
+            std::cerr << "battsim calibrate: " << e.what() << "\n";
+            return kExitOutputError;
+        }
+        if (!a->output.empty()) {
+            host::LoadedConfig out = opt.config;
+            out.monitor.joint.health.polarisation_slow_share = static_cast<float>(c.chosen_share);
+            out.description += (out.description.empty() ? "" : "; ") + std::string("health filter's slow share ") +
+                               (c.changed ? "calibrated" : "checked") + " on " + std::to_string(c.logs.size()) +
+                               " flight(s) by battsim calibrate";
+            try {
+                host::write_file_atomic(a->output, host::config_to_json(out).dump(2) + "\n");
+            } catch (const std::runtime_error& e) {
+                std::cerr << "battsim calibrate: " << e.what() << "\n";
+                return kExitOutputError;
+            }
+        }
+        if (a->json) std::cout << host::to_json(c).dump(2) << "\n";
+        else print_table(c, std::cout);
+        return kExitOk;
+    };
+}
+
+const RegisterCommand reg{{"calibrate", "Calibrate a pack's polarisation shape from its flights' rests", setup}};
+
+}  // namespace
+}  // namespace cli
+}  // namespace battsim

@@ -1,0 +1,86 @@
+// battsim calibrate run as a program: a pack whose polarisation builds faster than the health
+// filter assumes is recalibrated, one that matches keeps the config's share; the calibrated
+// config is written and read back; logs without a rest and bad options fail clearly.
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+
+#include "cli_util.h"
+
+using clitest::q;
+using clitest::run;
+
+namespace {
+const std::string kSource = BATTSIM_SOURCE_DIR;
+const std::string kConfig = kSource + "/configs/sim-4s.json";
+
+// Simulates a repo scenario into `dir` and returns the log's path.
+std::string simulate(const std::string& dir, const std::string& scenario) {
+    const std::string log = dir + "/" + scenario.substr(scenario.rfind('/') + 1) + ".csv";
+    const auto r = run("simulate " + q(kSource + "/configs/" + scenario + ".json") + " -o " + q(log));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    return log;
+}
+}  // namespace
+
+TEST_CASE("calibrate raises the slow share for a pack whose polarisation builds faster", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    // The real packs' rest time constants (3 s / 22 s): the committed share reads the racing
+    // pack's capacity 14 % under its rests' at the end of the flight.
+    const std::string log = simulate(dir, "scenarios-rest-polarisation/rp-4s-racing-healthy-a");
+    const std::string out = dir + "/calibrated.json";
+    const auto j = clitest::run_json("calibrate " + q(log) + " -c " + q(kConfig) + " -o " + q(out) + " --json");
+    CHECK(j["schema"] == "battsim.shape_calibration");
+    CHECK(j["configured_slow_share"].get<double>() == Approx(0.2));
+    CHECK(j["changed"] == true);
+    const double chosen = j["chosen_slow_share"].get<double>();
+    CHECK(chosen > 0.35);
+    REQUIRE(j["logs"].size() == 1);
+    REQUIRE(j["candidates"].size() == 8);  // the configured share, then the other seven
+    double configured_error = 0, chosen_error = 1;
+    for (const auto& c : j["candidates"]) {
+        if (c["slow_share"].get<double>() == Approx(0.2)) configured_error = c["mean_abs_error"].get<double>();
+        if (c["slow_share"].get<double>() == Approx(chosen)) chosen_error = c["mean_abs_error"].get<double>();
+    }
+    CHECK(configured_error > 0.1);
+    CHECK(chosen_error < 0.05);
+    // The written config carries the share and reads back as a config.
+    const auto cfg = nlohmann::json::parse(clitest::read_file(out));
+    CHECK(cfg["joint"]["health_filter"]["polarisation_slow_share"].get<double>() == Approx(chosen).epsilon(1e-6));
+    const auto again = clitest::run_json("calibrate " + q(log) + " -c " + q(out) + " --json");
+    CHECK(again["changed"] == false);
+}
+
+TEST_CASE("calibrate keeps the share of a pack the health filter already fits", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string log = simulate(dir, "scenarios/4s-racing-healthy-a");
+    const auto j = clitest::run_json("calibrate " + q(log) + " -c " + q(kConfig) + " --json");
+    CHECK(j["changed"] == false);
+    CHECK(j["chosen_slow_share"].get<double>() == Approx(0.2));
+    CHECK(j["candidates"][0]["mean_abs_error"].get<double>() < 0.05);
+}
+
+TEST_CASE("calibrate fails clearly without a rest, on a bad log and for the reference estimator", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    // A flight that ends under load has no rest to read the capacity from.
+    std::string s;
+    long t = 630;
+    for (int k = 0; k < 150; ++k, t += 67) s += std::to_string(t) + ",16.50,4.12,4.13,4.12,4.13,250.00,1.32,\n";
+    for (int k = 0; k < 600; ++k, t += 67) s += std::to_string(t) + ",15.90,3.97,3.98,3.97,3.98,20000.00,7.94,\n";
+    clitest::write_file(dir + "/no-rest.csv", s);
+    auto r = run("calibrate " + q(dir + "/no-rest.csv") + " -c " + q(kConfig));
+    CHECK(r.exit_code == 1);
+    CHECK(r.err.find("no log has a rest") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir + "/out.json"));
+    clitest::write_file(dir + "/bad.csv", "630,16.50,4.12,4.13\nnot a row\n");
+    r = run("calibrate " + q(dir + "/bad.csv") + " -c " + q(kConfig) + " -o " + q(dir + "/out.json"));
+    CHECK(r.exit_code == 3);
+    CHECK(r.err.find("bad.csv") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir + "/out.json"));
+    r = run("calibrate " + q(dir + "/no-rest.csv") + " -c " + q(kConfig) + " --estimator reference");
+    CHECK(r.exit_code == 2);
+    r = run("calibrate " + q(dir + "/no-rest.csv") + " -c " + q(kConfig) + " --shares 0.1,1.5");
+    CHECK(r.exit_code == 2);  // a share outside 0..1 is a usage error
+}
