@@ -9,6 +9,7 @@ column of both and the shares chosen. Standard library only.
 
     python3 scripts/calibrate-next-flight.py configs/scenarios-rest-polarisation
     python3 scripts/calibrate-next-flight.py configs/scenarios configs/scenarios-holdout
+    python3 scripts/calibrate-next-flight.py --shift-other-filters tracking,verdict configs/scenarios-rest-polarisation
 """
 import argparse
 import collections
@@ -41,7 +42,20 @@ def figures(summary):
                 g("early_warnings")["of"], g("false_warnings")["count"], g("false_warnings_undegraded")["count"]))
 
 
-def score_suite(battsim, suite, binary_args):
+def shift_other_filters(config_path, shift, others):
+    """Moves the tracking and/or verdict filter's slow share by the health filter's change
+    (an experiment: `battsim calibrate` itself moves the health filter's alone)."""
+    if not others or shift == 0:
+        return
+    config = json.load(open(config_path))
+    joint = config["joint"]
+    for name in others:
+        section = joint if name == "tracking" else joint["verdict_filter"]
+        section["polarisation_slow_share"] = min(1.0, max(0.0, section["polarisation_slow_share"] + shift))
+    json.dump(config, open(config_path, "w"), indent=1)
+
+
+def score_suite(battsim, suite, others):
     tmp = tempfile.mkdtemp(prefix="calnext-")
     try:
         plain, calibrated, configs = (os.path.join(tmp, d) for d in ("plain", "calibrated", "configs"))
@@ -63,14 +77,16 @@ def score_suite(battsim, suite, binary_args):
             elif r.returncode != 0:
                 sys.exit("calibrate-next-flight: battsim calibrate %s: %s" % (log, r.stderr.strip()))
             else:
-                shares[json.loads(r.stdout)["chosen_slow_share"]] += 1
+                report = json.loads(r.stdout)
+                shares[report["chosen_slow_share"]] += 1
+                shift_other_filters(cal_cfg, report["chosen_slow_share"] - report["configured_slow_share"], others)
             nxt = dict(scenario, seed=scenario["seed"] + COPY_SEED_STEP)
             json.dump(dict(nxt, monitor_config=monitor), open(os.path.join(plain, name + ".json"), "w"))
             json.dump(dict(nxt, monitor_config=cal_cfg), open(os.path.join(calibrated, name + ".json"), "w"))
         out = {}
         for label, d in (("as configured", plain), ("calibrated", calibrated)):
             o = os.path.join(tmp, label.replace(" ", "-") + ".json")
-            run([battsim, "score", "-j2", "--json", "--columns", "oracle,joint", d, "-o", o] + binary_args)
+            run([battsim, "score", "-j2", "--json", "--columns", "oracle,joint", d, "-o", o])
             out[label] = json.load(open(o))["summary"]
         print("%s (next flights, %d):" % (os.path.relpath(suite, ROOT), sum(shares.values())))
         for label, s in out.items():
@@ -84,9 +100,15 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("suites", nargs="+", help="scenario directories")
     ap.add_argument("--battsim", default=os.path.join(ROOT, "build", "battsim"))
+    ap.add_argument("--shift-other-filters", default="",
+                    help="comma-separated: tracking, verdict; move their slow shares by the health filter's change too")
     a = ap.parse_args()
+    others = [x for x in a.shift_other_filters.split(",") if x]
+    for x in others:
+        if x not in ("tracking", "verdict"):
+            ap.error("--shift-other-filters: expected tracking or verdict, found %r" % x)
     for suite in a.suites:
-        score_suite(a.battsim, os.path.abspath(suite), [])
+        score_suite(a.battsim, os.path.abspath(suite), others)
 
 
 if __name__ == "__main__":
