@@ -57,17 +57,12 @@ std::function<int()> setup(CLI::App& sub) {
         host::ReplayOptions opt;
         if (int rc = resolve_input(a->input, opt.reader, opt.config)) return rc;
         host::ShapeCalibration c;
-        try {
-            c = host::calibrate_slow_share(a->logs, opt, a->options);
-        } catch (const host::InputError& e) {
-            std::cerr << "battsim calibrate: " << e.what() << "\n";
-            return kExitInputError;
-        } catch (const std::invalid_argument& e) {
-            std::cerr << "battsim calibrate: " << e.what() << "\n";
+        const char* const command = "battsim calibrate";
+        if (int rc = run_job(command, [&] { c = host::calibrate_slow_share(a->logs, opt, a->options); })) return rc;
+        if (c.logs.empty()) {
+            std::cerr << command << ": no log has a rest after a flight to read the capacity from (" << a->logs.size()
+                      << " given)\n";
             return kExitFailure;
-        } catch (const std::runtime_error& e) {
-            std::cerr << "battsim calibrate: " << e.what() << "\n";
-            return kExitOutputError;
         }
         if (!a->output.empty()) {
             host::LoadedConfig out = opt.config;
@@ -75,12 +70,8 @@ std::function<int()> setup(CLI::App& sub) {
             out.description += (out.description.empty() ? "" : "; ") + std::string("health filter's slow share ") +
                                (c.changed ? "calibrated" : "checked") + " on " + std::to_string(c.logs.size()) +
                                " flight(s) by battsim calibrate";
-            try {
-                host::write_file_atomic(a->output, host::config_to_json(out).dump(2) + "\n");
-            } catch (const std::runtime_error& e) {
-                std::cerr << "battsim calibrate: " << e.what() << "\n";
-                return kExitOutputError;
-            }
+            if (int rc = run_job(command, [&] { host::write_file_atomic(a->output, host::config_to_json(out).dump(2) + "\n"); }))
+                return rc;
         }
         if (a->json) std::cout << host::to_json(c).dump(2) << "\n";
         else print_table(c, std::cout);

@@ -73,9 +73,10 @@ ShapeCalibration calibrate_slow_share(const std::vector<std::string>& logs, cons
             cand.final_ah.push_back(final_ah);
             cand.mean_abs_error += std::fabs(final_ah / out.rest_ah[j] - 1.0);
         }
-        if (k == 0 && out.logs.empty())
-            throw std::invalid_argument("no log has a rest after a flight to read the capacity from (" +
-                                        std::to_string(logs.size()) + " given)");
+        if (k == 0 && out.logs.empty()) {  // nothing to calibrate on: the configured share stands
+            out.chosen_share = out.configured_share;
+            return out;
+        }
         cand.mean_abs_error /= static_cast<double>(out.logs.size());
         out.candidates.push_back(cand);
     }

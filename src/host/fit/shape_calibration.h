@@ -41,8 +41,9 @@ struct ShapeCalibration {
 };
 
 // Replays each log with the joint estimator, whatever `base.config` selects. Throws
-// InputError for a bad log, std::invalid_argument when no log has a rest after a flight or a
-// share is outside [0, 1].
+// InputError for a bad log, std::invalid_argument for a share outside [0, 1]. With no log
+// that has a rest after a flight, `logs` and `candidates` come back empty and the configured
+// share stands.
 ShapeCalibration calibrate_slow_share(const std::vector<std::string>& logs, const ReplayOptions& base,
                                       const ShapeCalibrationOptions& options);
 
