@@ -26,7 +26,10 @@ COPY_SEED_STEP = 7919  # battsim score --copies: copy k adds 7919 k to the seed
 
 
 def run(args):
-    r = subprocess.run(args, capture_output=True, text=True)
+    try:
+        r = subprocess.run(args, capture_output=True, text=True)
+    except OSError as e:
+        sys.exit("calibrate-next-flight: cannot run %s (%s); build first or pass --battsim" % (args[0], e.strerror))
     if r.returncode != 0:
         sys.exit("calibrate-next-flight: %s failed (%d): %s" % (" ".join(args), r.returncode, r.stderr.strip()))
     return r.stdout
@@ -70,7 +73,7 @@ def score_suite(battsim, suite, others):
             run([battsim, "simulate", path, "-o", log, "--truth", os.path.join(tmp, name + ".truth.json")])
             cal_cfg = os.path.join(configs, name + ".json")
             r = subprocess.run([battsim, "calibrate", log, "-c", monitor, "-o", cal_cfg, "--json"],
-                               capture_output=True, text=True)
+                               capture_output=True, text=True)  # battsim ran already: simulate above
             if r.returncode == 1:  # no rest to read (a current-offset sensor never rests): as configured
                 cal_cfg = monitor
                 shares["no rest"] += 1
@@ -108,6 +111,8 @@ def main():
         if x not in ("tracking", "verdict"):
             ap.error("--shift-other-filters: expected tracking or verdict, found %r" % x)
     for suite in a.suites:
+        if not os.path.isdir(suite):
+            ap.error("%s: not a directory of scenarios" % suite)
         score_suite(a.battsim, os.path.abspath(suite), others)
 
 
