@@ -1,0 +1,107 @@
+// battsim fit-ocv LOG... -c CFG [-o OUT.json]: the joint estimator's OCV table stitched from
+// a fleet's ordinary flights (each starting at its own state of charge), for packs nobody
+// discharged slowly on a bench.
+#include <iomanip>
+#include <iostream>
+
+#include "command.h"
+#include "common_options.h"
+#include "host/fit/ocv_stitch.h"
+#include "host/io/atomic_file.h"
+
+namespace battsim {
+namespace cli {
+namespace {
+
+struct FitOcvArgs {
+    std::vector<std::string> logs, test_logs;
+    std::string output, report;
+    bool json = false;
+    host::fit::OcvStitchOptions options;
+    InputArgs input;
+};
+
+void print_brief(const host::fit::OcvStitch& s, std::ostream& os) {
+    size_t fitted = 0, tested = 0;
+    for (const auto& f : s.flights) (f.test ? tested : fitted) += 1;
+    os << std::fixed << "battsim fit-ocv: " << fitted << " flight(s) fitted" << (tested ? ", " + std::to_string(tested) + " tested" : "")
+       << "; SOC span " << std::setprecision(2) << s.soc_min << " .. " << s.soc_max << " of " << std::setprecision(3)
+       << s.capacity_ah << " Ah; " << s.iterations << " iterations; polarisation low-passes " << std::setprecision(1) << s.fast_time_s << " s and "
+       << s.slow_time_s << " s\n";
+    os << "  SOC    config V   fitted V   samples\n";
+    const size_t n = s.table_v.size();
+    for (size_t j = n; j-- > 0;) {
+        os << "  " << std::setprecision(2) << std::setw(4) << static_cast<double>(j) / static_cast<double>(n - 1) << "  "
+           << std::setprecision(4) << std::setw(8) << s.prior_v[j] << "  " << std::setw(9) << s.table_v[j] << "  "
+           << std::setprecision(0) << std::setw(8) << s.support[j] << "\n";
+    }
+    os << std::setprecision(4) << "  pack resistance (flights' median ohmic / fast / slow), config curve: " << s.resistance_before_ohm << " / "
+       << s.fast_before_ohm << " / " << s.slow_before_ohm << " ohm; fitted: " << s.resistance_ohm << " / " << s.fast_ohm
+       << " / " << s.slow_ohm << " ohm\n";
+    os << std::setprecision(1) << "  rms error per cell: config curve " << 1000.0 * s.rms_before_v << " mV, fitted "
+       << 1000.0 * s.rms_v << " mV";
+    if (tested)
+        os << "; test flights " << 1000.0 * s.test_rms_before_v << " mV -> " << 1000.0 * s.test_rms_v << " mV";
+    os << "\n";
+}
+
+std::function<int()> setup(CLI::App& sub) {
+    auto a = std::make_shared<FitOcvArgs>();
+    sub.add_option("LOG", a->logs, "Flight logs of one pack model (starting at different states of charge)")->required();
+    sub.add_option("--test", a->test_logs, "Logs evaluated with the fitted table, not fitted");
+    sub.add_option("-o,--output", a->output, "Write the config with the fitted table here (JSON)");
+    sub.add_option("--report", a->report, "Write the fit report here (JSON, schema battsim.ocv_stitch)");
+    sub.add_flag("--json", a->json, "Print the report on standard output");
+    sub.add_option("--points", a->options.points, "Table points from empty to full")->check(CLI::Range(2, 21))->capture_default_str();
+    sub.add_option("--prior-sigma", a->options.prior_sigma_v,
+                   "Per cell, V: how far the table may leave the config's curve where no flight reaches")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    sub.add_option("--smooth-sigma", a->options.smooth_sigma_v, "Per cell, V: second difference of that distance")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    sub.add_option("--fast-time", a->options.fast_time_s, "Seconds: the fast polarisation's low-pass of the current")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    sub.add_option("--slow-time", a->options.slow_time_s, "Seconds: the slow polarisation's low-pass of the current (0: the best fit of 20, 30, 45, 60, 90)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    sub.add_option("--empty-sigma", a->options.empty_sigma_v,
+                   "Per cell, V: how far the empty point (SOC 0) may leave the config's (its minimum voltage)")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    sub.add_option("--rest-weight", a->options.rest_weight, "Weight of a sample at rest (|I| < 1 A) against one in flight")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    sub.add_option("--iterations", a->options.iterations, "Most alternations of the shared solve and the per-flight steps")
+        ->check(CLI::Range(1, 100000))
+        ->capture_default_str();
+    sub.add_flag("!--ignore-table", a->options.prior_from_table,
+                 "Start from the config's model curve even when it has a table (to check a table against the flights)");
+    sub.add_flag("!--no-fullest-is-full", a->options.fullest_is_full,
+                 "Do not take the fullest flight's start as a full pack (only the config's curve then pins the axis)");
+    add_input_options(sub, a->input);
+    return [a]() -> int {
+        const char* const command = "battsim fit-ocv";
+        host::ReaderOptions reader;
+        host::LoadedConfig config;
+        if (int rc = resolve_input(a->input, reader, config, command)) return rc;
+        host::fit::OcvStitch s;
+        if (int rc = run_job(command, [&] { s = host::fit::stitch_ocv(a->logs, a->test_logs, reader, config, a->options); }))
+            return rc;
+        if (!a->output.empty()) {
+            host::LoadedConfig out = host::fit::with_stitched_table(config, s);
+            out.description += (out.description.empty() ? "" : "; ") + std::string("joint OCV table fitted by battsim fit-ocv on ") +
+                               std::to_string(a->logs.size()) + " flight(s)";
+            if (int rc = run_job(command, [&] { host::write_file_atomic(a->output, host::config_to_json(out).dump(2) + "\n"); }))
+                return rc;
+        }
+        return finish_report(command, host::fit::to_json(s), a->report, a->json, [&](std::ostream& os) { print_brief(s, os); });
+    };
+}
+
+const RegisterCommand reg{{"fit-ocv", "Fit the joint estimator's OCV table to a fleet's flights", setup}};
+
+}  // namespace
+}  // namespace cli
+}  // namespace battsim

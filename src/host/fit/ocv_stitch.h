@@ -1,0 +1,95 @@
+// The joint estimator's OCV table stitched together from a fleet's ordinary flights, for
+// packs nobody discharged slowly on a bench. Each flight starts at its own state of charge
+// (packs flown again without a recharge) and covers a slice of the curve; the slices overlap.
+// One table, one ohmic resistance and two polarisation terms are shared by all flights,
+// each flight's starting state of charge is its own, and all are fitted together to the
+// measured voltage:
+//   V/N = OCV(s0 − q/C) − r·I − r_fast·LP(I, fast) − r_slow·LP(I, slow)
+// with q the charge counted since the log's first sample and C the config's capacity. For
+// fixed starting states the model is linear in the table and the resistances, so the fit
+// alternates a linear least-squares solve with a Gauss-Newton step per flight (separable
+// least squares), with robust (Huber) weights: real logs have short sags no curve explains.
+//
+// What the data cannot say is taken from the config: where no flight reaches, the table
+// keeps the config's curve (a weak prior, and the correction to it is kept smooth), and the
+// state-of-charge axis is the config's capacity (flights that never reach empty do not
+// measure it). The table is only as right as that axis: the capacity the monitor then reports
+// is against it, which is what a fleet compares pack by pack.
+#pragma once
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "host/config_json.h"
+#include "host/io/sample_reader.h"
+
+namespace battsim {
+namespace host {
+namespace fit {
+
+struct OcvStitchOptions {
+    int points = 21;                // table points, SOC 0 … 1 (2..core::kOcvTableMaxPoints)
+    double fast_time_s = 3.0;       // the polarisation's two low-passes of the current
+    double slow_time_s = 0.0;       // 0: the best fit of 20, 30, 45, 60 and 90 s
+    double prior_sigma_v = 0.05;    // per cell: the table's distance from the config's curve
+    double smooth_sigma_v = 0.005;  // per cell: second difference of that distance
+    // Per cell: the table's empty point (SOC 0) against the config's: what "empty" means is
+    // the user's choice (the capacity is the charge down to it), and flights rarely get there.
+    double empty_sigma_v = 0.01;
+    double huber_k = 1.5;           // robust weight beyond this many robust standard deviations
+    int iterations = 100;
+    // Weight of a sample at rest (|I| < 1 A) against one in flight: the rests before and
+    // after a flight hold the curve itself, the flight holds it behind the sag's model.
+    double rest_weight = 10.0;
+    double chain_slope_v = 0.5;     // per cell per unit SOC: placing starts below every known rest
+    // The fullest flight's start is taken as full (SOC 1): without it only the weak prior
+    // pins where the slices sit on the state-of-charge axis.
+    bool fullest_is_full = true;
+    // Start from the config's table when it has one; false: from its model's no-load curve.
+    bool prior_from_table = true;
+};
+
+struct OcvStitchFlight {
+    std::string log;
+    bool test = false;        // evaluated with the fitted table, not fitted
+    size_t samples = 0;       // valid samples used
+    double charge_ah = 0;     // counted over the log
+    double start_soc_before = 0, start_soc = 0;  // fitted on the config's curve / on the table
+    double rms_before_v = 0, rms_v = 0;          // per cell
+    double resistance_before_ohm = 0, resistance_ohm = 0;  // the flight's own ohmic, pack
+};
+
+struct OcvStitch {
+    int cells = 1;
+    double capacity_ah = 0;
+    std::vector<double> prior_v;  // the config's curve at the table's points, per cell
+    std::vector<double> table_v;  // fitted, per cell, ascending
+    std::vector<double> support;  // samples per point (interpolation weight): what the data holds
+    double soc_min = 0, soc_max = 0;   // the fitted flights' span
+    // Pack resistances, fitted with the config's curve and with the table: the flights'
+    // median ohmic one, and the shared polarisation.
+    double resistance_before_ohm = 0, fast_before_ohm = 0, slow_before_ohm = 0;
+    double resistance_ohm = 0, fast_ohm = 0, slow_ohm = 0;
+    double rms_before_v = 0, rms_v = 0;            // fitted flights, per cell
+    double test_rms_before_v = 0, test_rms_v = 0;  // test flights (0 without any)
+    int iterations = 0;
+    double fast_time_s = 0, slow_time_s = 0;  // the polarisation's low-passes (slow: chosen)
+    std::vector<std::pair<double, double>> slow_time_candidates;  // (slow time s, rms V per cell)
+    std::vector<OcvStitchFlight> flights;
+};
+
+// Reads every log (throws InputError like replay_log) and fits. Throws std::invalid_argument
+// for bad options or fewer than one usable fitted log.
+OcvStitch stitch_ocv(const std::vector<std::string>& logs, const std::vector<std::string>& test_logs,
+                     const ReaderOptions& reader, const LoadedConfig& config, const OcvStitchOptions& options);
+
+// `config` with the fitted table as the joint estimator's `ocv_cell_voltage_v`.
+LoadedConfig with_stitched_table(const LoadedConfig& config, const OcvStitch& s);
+
+nlohmann::json to_json(const OcvStitch& s);
+
+}  // namespace fit
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,75 @@
+// battsim fit-ocv run as a program: a fleet of real CMU Matrice 100 flights, each starting at
+// its own state of charge, gives a table that explains flights it never saw better than the
+// config's estimated curve; the written config reads back and replays; bad input fails clearly.
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include "cli_util.h"
+
+using clitest::q;
+using clitest::run;
+
+namespace {
+const std::string kSource = BATTSIM_SOURCE_DIR;
+const std::string kData = BATTSIM_DATA_DIR;
+const std::string kCmu =
+    " --time-col time --time-unit s --voltage-col battery_voltage --current-col battery_current --current-unit A";
+
+std::string flights(std::initializer_list<int> ids) {
+    std::string s;
+    for (int id : ids) s += " " + q(kData + "/cmu-m100/flights/" + std::to_string(id) + ".csv");
+    return s;
+}
+}  // namespace
+
+TEST_CASE("fit-ocv stitches a table from real fleet flights and it holds on held-out ones", "[cli][data]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string out = dir + "/m100.json";
+    const std::string cfg = kSource + "/configs/dji-tb47d-6s.json";
+    // Twelve flights to fit (starts from 3.5 to 4.3 V per cell), four held out.
+    const auto j = clitest::run_json("fit-ocv" + flights({1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23}) + " --test" +
+                                     flights({2, 4, 6, 8}) + " -c " + q(cfg) + kCmu + " -o " + q(out) + " --json");
+    CHECK(j["schema"] == "battsim.ocv_stitch");
+    CHECK(j["cells"] == 6);
+    REQUIRE(j["flights"].size() == 16u);
+    const auto& table = j["ocv_cell_voltage_v"]["fitted"];
+    REQUIRE(table.size() == 21u);
+    for (size_t k = 1; k < table.size(); ++k) CHECK(table[k].get<double>() > table[k - 1].get<double>());
+    // The pack tops out near 4.3 V per cell (a high-voltage LiPo), which the config's estimated
+    // curve (a 4.2 V pack's, scaled) puts at 4.24.
+    CHECK(table[20].get<double>() > 4.27);
+    const auto& rms = j["rms_v_per_cell"];
+    INFO(rms.dump());
+    CHECK(rms["fitted"].get<double>() < 0.6 * rms["config_curve"].get<double>());
+    CHECK(rms["test_fitted"].get<double>() < 0.6 * rms["test_config_curve"].get<double>());
+    CHECK(j["soc_span"][1].get<double>() == Approx(1.0).margin(1e-6));
+
+    // The config carries the table and replays a flight.
+    const auto written = nlohmann::json::parse(clitest::read_file(out));
+    REQUIRE(written["joint"]["ocv_cell_voltage_v"].size() == 21u);
+    CHECK(written["joint"]["ocv_cell_voltage_v"][20].get<double>() == Approx(table[20].get<double>()).margin(1e-4));
+    const auto summary = clitest::run_json("replay" + flights({2}) + " -c " + q(out) + kCmu + " --estimator joint --json");
+    CHECK(summary["flight"]["capacity_ah"]["final"].get<double>() > 0.0);
+}
+
+TEST_CASE("fit-ocv reports bad input and bad options with their exit codes", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string cfg = q(kSource + "/configs/sim-4s.json");
+    const auto missing = run("fit-ocv " + q(dir + "/nope.csv") + " -c " + cfg);
+    CHECK(missing.exit_code == 3);
+    CHECK(missing.err.find("nope.csv") != std::string::npos);
+    clitest::write_file(dir + "/bad.csv", "time_s,voltage_v,current_a\n0,16.0,0.1\n0.1,sixteen,0.1\n");
+    const auto bad = run("fit-ocv " + q(dir + "/bad.csv") + " -c " + cfg);
+    CHECK(bad.exit_code == 3);
+    CHECK(bad.err.find("bad.csv:3") != std::string::npos);
+    clitest::write_file(dir + "/tiny.csv", "time_s,voltage_v,current_a\n0,16.0,0.1\n0.1,16.0,0.1\n");
+    const auto tiny = run("fit-ocv " + q(dir + "/tiny.csv") + " -c " + cfg);
+    CHECK(tiny.exit_code == 2);
+    CHECK(tiny.err.find("10 valid samples") != std::string::npos);
+    const auto points = run("fit-ocv " + q(dir + "/tiny.csv") + " -c " + cfg + " --points 40");
+    CHECK(points.exit_code == 2);
+    // Nothing is written when the fit fails.
+    const auto none = run("fit-ocv " + q(dir + "/tiny.csv") + " -c " + cfg + " -o " + q(dir + "/out.json"));
+    CHECK(none.exit_code == 2);
+    CHECK(clitest::read_file(dir + "/out.json").empty());
+}
