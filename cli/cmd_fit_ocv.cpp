@@ -43,6 +43,7 @@ void print_brief(const host::fit::OcvStitch& s, std::ostream& os) {
     if (tested)
         os << "; test flights " << 1000.0 * s.test_rms_before_v << " mV -> " << 1000.0 * s.test_rms_v << " mV";
     os << "\n";
+    for (const std::string& n : s.notes) os << "  note: " << n << "\n";
 }
 
 std::function<int()> setup(CLI::App& sub) {

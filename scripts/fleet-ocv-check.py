@@ -9,9 +9,10 @@
 2. Scores the tuning and held-out suites (`battsim score --copies N`) three ways: sim-4s.json
    with its bench table (as committed), with the stitched table, and with no table (the model
    curve); only sim-4s.json changes, so the figures are also given for its flights alone.
-3. With the shared data present: stitches the CMU Matrice 100 fleet's odd flights and
-   reports the voltage error on the even ones, before (the config's estimated curve) and
-   after, and what the joint monitor then reads on the even flights.
+3. With the shared data present: fits the dissertation's flights 30 and 32 (which all take
+   off full: nothing to stitch, and the report says so), then stitches the CMU Matrice 100
+   fleet's odd flights and reports the voltage error on the even ones, before (the config's
+   estimated curve) and after, and what the joint monitor then reads on the even flights.
 
     python3 scripts/fleet-ocv-check.py [--copies 4] [--build build] [--data ../shared/data]
 
@@ -124,6 +125,18 @@ def main():
         print("|" + "---|" * len(header))
         for r in rows:
             print("| " + " | ".join(r) + " |")
+
+        pbms = os.path.join(a.data, "predictive-bms", "flights")
+        if os.path.isdir(pbms):
+            p = json.loads(run([battsim, "fit-ocv", os.path.join(pbms, "30.csv"), os.path.join(pbms, "32.csv"), "--test",
+                                os.path.join(pbms, "29.csv"), os.path.join(pbms, "34.csv"), "-c",
+                                os.path.join(ROOT, "configs", "sim-4s.json"), "--json"]))
+            r = p["rms_v_per_cell"]
+            print(f"\nDissertation flights (all take off full), table fitted on 30 and 32 from sim-4s.json's: error per cell "
+                  f"{1000 * r['config_curve']:.1f} -> {1000 * r['fitted']:.1f} mV, on 29 and 34 "
+                  f"{1000 * r['test_config_curve']:.1f} -> {1000 * r['test_fitted']:.1f} mV; notes:")
+            for n in p["notes"]:
+                print("  " + n)
 
         flights = os.path.join(a.data, "cmu-m100", "flights")
         if not os.path.isdir(flights):

@@ -94,9 +94,19 @@ TEST_CASE("OCV stitch: partial flights recover the plant's rest curve", "[fit][s
     const LoadedConfig out = fit::with_stitched_table(config, s);
     REQUIRE(out.monitor.joint.ocv.points == 21);
     CHECK(out.monitor.joint.ocv.cell_voltage_v[20] == Approx(s.table_v[20]).margin(1e-6));
+    CHECK(s.notes.empty());  // a fleet that stitches: nothing to warn of
     const nlohmann::json j = fit::to_json(s);
     CHECK(j["schema"] == "battsim.ocv_stitch");
     CHECK(j["flights"].size() == 9u);
+}
+
+TEST_CASE("OCV stitch: flights that all start at one charge say the table is not identified", "[fit][sim]") {
+    // The full pack's flight twice: no slices to stitch, so the table's shape could be anything
+    // the sag's model lets it be, and the report says so.
+    const fit::OcvStitch s =
+        fit::stitch_ocv({fleet().logs[0], fleet().logs[0]}, {}, ReaderOptions{}, default_config(), fit::OcvStitchOptions{});
+    REQUIRE_FALSE(s.notes.empty());
+    CHECK(s.notes[0].find("start within 0 %") != std::string::npos);
 }
 
 TEST_CASE("OCV stitch: options and logs it cannot use", "[fit]") {

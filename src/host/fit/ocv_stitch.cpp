@@ -517,6 +517,30 @@ int fit(std::vector<Flight>& flights, const std::vector<double>& prior, bool fix
     return it;
 }
 
+// What a user must know before trusting the table.
+void add_notes(OcvStitch& s, const std::vector<Flight>& flights) {
+    double lo = 1e9, hi = -1e9;
+    for (const Flight& f : flights)
+        if (!f.test) {
+            lo = std::min(lo, f.s0);
+            hi = std::max(hi, f.s0);
+        }
+    auto mv = [](double v) { return std::to_string(static_cast<int>(std::lround(v * 1000.0))) + " mV"; };
+    if (hi - lo < 0.15)
+        s.notes.push_back("the flights start within " + std::to_string(static_cast<int>(std::lround((hi - lo) * 100.0))) +
+                          " % of charge of each other: nothing stitches their slices, so the table's shape cannot be told "
+                          "from the sag's model; fit flights that take off at different charges");
+    if (s.rms_v >= s.rms_before_v)
+        s.notes.push_back("the table fits these flights no better than the config's curve (" + mv(s.rms_v) + " against " +
+                          mv(s.rms_before_v) + " per cell): keep the config's");
+    if (s.test_rms_v > 0.0 && s.test_rms_v >= s.test_rms_before_v)
+        s.notes.push_back("on the test flights the table is no better than the config's curve (" + mv(s.test_rms_v) +
+                          " against " + mv(s.test_rms_before_v) + " per cell)");
+    if (s.soc_min < -0.02)
+        s.notes.push_back("the flights span " + std::to_string(s.soc_max - s.soc_min).substr(0, 4) +
+                          " of the config's capacity: the packs hold more than it says, or the starts are misplaced");
+}
+
 }  // namespace
 
 OcvStitch stitch_ocv(const std::vector<std::string>& logs, const std::vector<std::string>& test_logs,
@@ -636,6 +660,7 @@ OcvStitch stitch_ocv(const std::vector<std::string>& logs, const std::vector<std
     s.rms_v = pooled_rms(flights, after, s.capacity_ah, false);
     s.test_rms_before_v = pooled_rms(on_prior, before, s.capacity_ah, true);
     s.test_rms_v = pooled_rms(flights, after, s.capacity_ah, true);
+    add_notes(s, flights);
     for (size_t n = 0; n < traces.size(); ++n) {
         OcvStitchFlight out;
         out.log = traces[n].path;
@@ -694,6 +719,7 @@ nlohmann::json to_json(const OcvStitch& s) {
                  for (const auto& c : s.slow_time_candidates) a.push_back({{"slow_time_s", c.first}, {"rms_v_per_cell", c.second}});
                  return a;
              }()},
+            {"notes", s.notes},
             {"flights", flights}};
 }
 

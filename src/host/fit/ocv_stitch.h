@@ -78,6 +78,7 @@ struct OcvStitch {
     double fast_time_s = 0, slow_time_s = 0;  // the polarisation's low-passes (slow: chosen)
     std::vector<std::pair<double, double>> slow_time_candidates;  // (slow time s, rms V per cell)
     std::vector<OcvStitchFlight> flights;
+    std::vector<std::string> notes;  // what the fit could not tell, in words for the user
 };
 
 // Reads every log (throws InputError like replay_log) and fits. Throws std::invalid_argument
