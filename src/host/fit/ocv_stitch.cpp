@@ -537,8 +537,8 @@ void add_notes(OcvStitch& s, const std::vector<Flight>& flights) {
         s.notes.push_back("on the test flights the table is no better than the config's curve (" + mv(s.test_rms_v) +
                           " against " + mv(s.test_rms_before_v) + " per cell)");
     if (s.soc_min < -0.02)
-        s.notes.push_back("the flights span " + std::to_string(s.soc_max - s.soc_min).substr(0, 4) +
-                          " of the config's capacity: the packs hold more than it says, or the starts are misplaced");
+        s.notes.push_back("the flights span " + std::to_string(static_cast<int>(std::lround((s.soc_max - s.soc_min) * 100.0))) +
+                          " % of the config's capacity: the packs hold more than it says, or the starts are misplaced");
 }
 
 }  // namespace
@@ -568,23 +568,24 @@ OcvStitch stitch_ocv(const std::vector<std::string>& logs, const std::vector<std
     for (int j = o.points - 2; j >= 0; --j)  // and never above the next point
         s.prior_v[static_cast<size_t>(j)] = std::min(s.prior_v[static_cast<size_t>(j)], s.prior_v[static_cast<size_t>(j) + 1]);
 
+    // A log with fewer than 10 valid samples says nothing of the curve: left out, and said.
     std::vector<Trace> traces;
     std::vector<bool> is_test;
-    for (const std::string& p : logs) {
-        traces.push_back(load_trace(p, reader, config));
-        is_test.push_back(false);
-    }
-    for (const std::string& p : test_logs) {
-        traces.push_back(load_trace(p, reader, config));
-        is_test.push_back(true);
-    }
-    size_t fitted = 0;
-    for (size_t n = 0; n < traces.size(); ++n) {
+    auto load = [&](const std::string& path, bool test) {
+        Trace t = load_trace(path, reader, config);
         size_t valid = 0;
-        for (const TracePoint& p : traces[n].points) valid += p.valid;
-        fitted += !is_test[n] && valid >= 10;
-    }
-    if (fitted == 0) throw std::invalid_argument("no log to fit holds 10 valid samples");
+        for (const TracePoint& p : t.points) valid += p.valid;
+        if (valid < 10) {
+            s.notes.push_back(path + ": " + std::to_string(valid) + " valid samples, left out");
+            return;
+        }
+        traces.push_back(std::move(t));
+        is_test.push_back(test);
+    };
+    for (const std::string& p : logs) load(p, false);
+    for (const std::string& p : test_logs) load(p, true);
+    if (std::find(is_test.begin(), is_test.end(), false) == is_test.end())
+        throw std::invalid_argument("no log to fit holds 10 valid samples");
 
     // One fit per candidate slow time constant; the one whose fit leaves the smallest error wins.
     const double r_config = mc.battery.internal_resistance_ohm / s.cells;
