@@ -6,6 +6,8 @@
 
 #include "command.h"
 #include "common_options.h"
+#include "host/batch/batch.h"
+#include "host/config_reader.h"
 #include "host/fit/ocv_stitch.h"
 #include "host/io/atomic_file.h"
 
@@ -15,6 +17,8 @@ namespace {
 
 struct FitOcvArgs {
     std::vector<std::string> logs, test_logs;
+    std::string manifest;
+    unsigned test_every = 0;
     std::string output, report;
     bool json = false;
     host::fit::OcvStitchOptions options;
@@ -48,8 +52,13 @@ void print_brief(const host::fit::OcvStitch& s, std::ostream& os) {
 
 std::function<int()> setup(CLI::App& sub) {
     auto a = std::make_shared<FitOcvArgs>();
-    sub.add_option("LOG", a->logs, "Flight logs of one pack model (starting at different states of charge)")->required();
+    sub.add_option("LOG", a->logs, "Flight logs of one pack model (starting at different states of charge)");
     sub.add_option("--test", a->test_logs, "Logs evaluated with the fitted table, not fitted");
+    sub.add_option("-m,--manifest", a->manifest,
+                   "A fleet manifest (as for battsim batch): its logs, each read with its own settings; LOGs given "
+                   "too take the settings of the entry naming the same file");
+    sub.add_option("--test-every", a->test_every, "Hold out every Kth of the logs (the 2nd, (K+1)th, ...) as test logs")
+        ->check(CLI::Range(2u, 1000000u));
     sub.add_option("-o,--output", a->output, "Write the config with the fitted table here (JSON)");
     sub.add_option("--report", a->report, "Write the fit report here (JSON, schema battsim.ocv_stitch)");
     sub.add_flag("--json", a->json, "Print the report on standard output");
@@ -86,14 +95,52 @@ std::function<int()> setup(CLI::App& sub) {
         const char* const command = "battsim fit-ocv";
         host::ReaderOptions reader;
         host::LoadedConfig config;
+        if (a->logs.empty() && a->manifest.empty()) {
+            std::cerr << command << ": expected logs or --manifest FILE\n";
+            return kExitUsage;
+        }
         if (int rc = resolve_input(a->input, reader, config, command)) return rc;
+        std::vector<host::fit::OcvStitchLog> logs;
+        if (a->manifest.empty()) {
+            for (const std::string& p : a->logs) logs.push_back({p, reader, false});
+        } else {
+            // The manifest's reading settings per log; the command line's config (else the
+            // manifest's default one, loaded by the plan) is the one pack model fitted.
+            host::BatchPlanRequest plan;
+            plan.paths = a->logs;
+            plan.manifest = a->manifest;
+            std::vector<host::BatchItem> items;
+            try {
+                plan.command_line = host::settings_from_strings(setting_strings(a->input));
+                items = host::plan_batch(plan);
+            } catch (const host::ConfigError& e) {
+                std::cerr << command << ": config: " << e.what() << "\n";
+                return kExitConfigError;
+            } catch (const host::InputError& e) {
+                std::cerr << command << ": " << e.what() << "\n";
+                return kExitInputError;
+            } catch (const std::invalid_argument& e) {
+                std::cerr << command << ": " << e.what() << "\n";
+                return kExitUsage;
+            }
+            for (const host::BatchItem& it : items) {
+                if (!it.error.empty()) {
+                    std::cerr << command << ": " << it.path << ": " << it.error << "\n";
+                    return kExitInputError;
+                }
+                logs.push_back({it.path, it.replay.reader, false});
+            }
+            if (a->input.config.empty() && !items.empty()) config = items.front().replay.config;
+        }
+        if (a->test_every > 0)
+            for (size_t k = 0; k < logs.size(); ++k) logs[k].test = k % a->test_every == 1 % a->test_every;
+        for (const std::string& p : a->test_logs) logs.push_back({p, reader, true});
         host::fit::OcvStitch s;
-        if (int rc = run_job(command, [&] { s = host::fit::stitch_ocv(a->logs, a->test_logs, reader, config, a->options); }))
-            return rc;
+        if (int rc = run_job(command, [&] { s = host::fit::stitch_ocv(logs, config, a->options); })) return rc;
         if (!a->output.empty()) {
             host::LoadedConfig out = host::fit::with_stitched_table(config, s);
             out.description += (out.description.empty() ? "" : "; ") + std::string("joint OCV table fitted by battsim fit-ocv on ") +
-                               std::to_string(a->logs.size()) + " flight(s)";
+                               std::to_string(logs.size()) + " flight(s)";
             if (int rc = run_job(command, [&] { host::write_file_atomic(a->output, host::config_to_json(out).dump(2) + "\n"); }))
                 return rc;
         }

@@ -52,6 +52,47 @@ TEST_CASE("fit-ocv stitches a table from real fleet flights and it holds on held
     CHECK(summary["flight"]["capacity_ah"]["final"].get<double>() > 0.0);
 }
 
+TEST_CASE("fit-ocv reads a fleet manifest and holds out every other log", "[cli][data]") {
+    const std::string dir = clitest::temp_dir();
+    // The fleet's own reading settings come from the manifest, not the command line.
+    nlohmann::json m = {{"schema", "battsim.manifest"},
+                        {"version", 1},
+                        {"base_dir", kData + "/cmu-m100/flights"},
+                        {"defaults",
+                         {{"config", kSource + "/configs/dji-tb47d-6s.json"},
+                          {"format", "csv"},
+                          {"columns",
+                           {{"time", "time"},
+                            {"time_unit", "s"},
+                            {"voltage", "battery_voltage"},
+                            {"current", "battery_current"},
+                            {"current_unit", "A"}}}}},
+                        {"logs", nlohmann::json::array()}};
+    for (int id = 1; id <= 16; ++id) m["logs"].push_back({{"path", std::to_string(id) + ".csv"}});
+    clitest::write_file(dir + "/fleet.json", m.dump(2));
+    const auto j = clitest::run_json("fit-ocv -m " + q(dir + "/fleet.json") + " --test-every 2 --json");
+    REQUIRE(j["flights"].size() == 16u);
+    for (size_t k = 0; k < 16; ++k) CHECK(j["flights"][k]["test"].get<bool>() == (k % 2 == 1));
+    // The same split given as files and --test with the columns on the command line: the same fit.
+    const auto same = clitest::run_json("fit-ocv" + flights({1, 3, 5, 7, 9, 11, 13, 15}) + " --test" +
+                                        flights({2, 4, 6, 8, 10, 12, 14, 16}) + " -c " +
+                                        q(kSource + "/configs/dji-tb47d-6s.json") + kCmu + " --json");
+    std::vector<double> a, b;
+    for (const auto& f : j["flights"])
+        if (!f["test"].get<bool>()) a.push_back(f["start_soc"]["fitted"].get<double>());
+    for (const auto& f : j["flights"])
+        if (f["test"].get<bool>()) a.push_back(f["start_soc"]["fitted"].get<double>());
+    for (const auto& f : same["flights"]) b.push_back(f["start_soc"]["fitted"].get<double>());
+    CHECK(a == b);
+    CHECK(j["ocv_cell_voltage_v"]["fitted"] == same["ocv_cell_voltage_v"]["fitted"]);
+    // A manifest naming a missing log fails as bad input.
+    m["logs"].push_back({{"path", "no-such-flight.csv"}});
+    clitest::write_file(dir + "/broken.json", m.dump(2));
+    const auto broken = run("fit-ocv -m " + q(dir + "/broken.json"));
+    CHECK(broken.exit_code == 3);
+    CHECK(broken.err.find("no-such-flight.csv") != std::string::npos);
+}
+
 TEST_CASE("fit-ocv reports bad input and bad options with their exit codes", "[cli]") {
     const std::string dir = clitest::temp_dir();
     const std::string cfg = q(kSource + "/configs/sim-4s.json");
@@ -68,6 +109,8 @@ TEST_CASE("fit-ocv reports bad input and bad options with their exit codes", "[c
     CHECK(tiny.err.find("10 valid samples") != std::string::npos);
     const auto points = run("fit-ocv " + q(dir + "/tiny.csv") + " -c " + cfg + " --points 40");
     CHECK(points.exit_code == 2);
+    const auto nothing = run("fit-ocv -c " + cfg);
+    CHECK(nothing.exit_code == 2);
     // Nothing is written when the fit fails.
     const auto none = run("fit-ocv " + q(dir + "/tiny.csv") + " -c " + cfg + " -o " + q(dir + "/out.json"));
     CHECK(none.exit_code == 2);

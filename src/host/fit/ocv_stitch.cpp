@@ -545,6 +545,13 @@ void add_notes(OcvStitch& s, const std::vector<Flight>& flights) {
 
 OcvStitch stitch_ocv(const std::vector<std::string>& logs, const std::vector<std::string>& test_logs,
                      const ReaderOptions& reader, const LoadedConfig& config, const OcvStitchOptions& o) {
+    std::vector<OcvStitchLog> all;
+    for (const std::string& p : logs) all.push_back({p, reader, false});
+    for (const std::string& p : test_logs) all.push_back({p, reader, true});
+    return stitch_ocv(all, config, o);
+}
+
+OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& config, const OcvStitchOptions& o) {
     if (o.points < 2 || o.points > core::kOcvTableMaxPoints)
         throw std::invalid_argument("--points: expected 2.." + std::to_string(core::kOcvTableMaxPoints));
     if (!(o.fast_time_s > 0.0) || !(o.slow_time_s >= 0.0) || !(o.prior_sigma_v > 0.0) || !(o.smooth_sigma_v > 0.0) || !(o.empty_sigma_v > 0.0) || !(o.rest_weight > 0.0) ||
@@ -571,19 +578,17 @@ OcvStitch stitch_ocv(const std::vector<std::string>& logs, const std::vector<std
     // A log with fewer than 10 valid samples says nothing of the curve: left out, and said.
     std::vector<Trace> traces;
     std::vector<bool> is_test;
-    auto load = [&](const std::string& path, bool test) {
-        Trace t = load_trace(path, reader, config);
+    for (const OcvStitchLog& log : logs) {
+        Trace t = load_trace(log.path, log.reader, config);
         size_t valid = 0;
         for (const TracePoint& p : t.points) valid += p.valid;
         if (valid < 10) {
-            s.notes.push_back(path + ": " + std::to_string(valid) + " valid samples, left out");
-            return;
+            s.notes.push_back(log.path + ": " + std::to_string(valid) + " valid samples, left out");
+            continue;
         }
         traces.push_back(std::move(t));
-        is_test.push_back(test);
-    };
-    for (const std::string& p : logs) load(p, false);
-    for (const std::string& p : test_logs) load(p, true);
+        is_test.push_back(log.test);
+    }
     if (std::find(is_test.begin(), is_test.end(), false) == is_test.end())
         throw std::invalid_argument("no log to fit holds 10 valid samples");
 

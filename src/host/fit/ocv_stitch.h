@@ -81,8 +81,17 @@ struct OcvStitch {
     std::vector<std::string> notes;  // what the fit could not tell, in words for the user
 };
 
+// One log and how to read it (a fleet's logs may come in different formats).
+struct OcvStitchLog {
+    std::string path;
+    ReaderOptions reader;
+    bool test = false;  // evaluated with the fitted table, not fitted
+};
+
 // Reads every log (throws InputError like replay_log) and fits. Throws std::invalid_argument
 // for bad options or fewer than one usable fitted log.
+OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& config, const OcvStitchOptions& options);
+// The same with one reader for all.
 OcvStitch stitch_ocv(const std::vector<std::string>& logs, const std::vector<std::string>& test_logs,
                      const ReaderOptions& reader, const LoadedConfig& config, const OcvStitchOptions& options);
 
