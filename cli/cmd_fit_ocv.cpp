@@ -7,7 +7,6 @@
 #include "command.h"
 #include "common_options.h"
 #include "host/batch/batch.h"
-#include "host/config_reader.h"
 #include "host/fit/ocv_stitch.h"
 #include "host/io/atomic_file.h"
 
@@ -110,19 +109,11 @@ std::function<int()> setup(CLI::App& sub) {
             plan.paths = a->logs;
             plan.manifest = a->manifest;
             std::vector<host::BatchItem> items;
-            try {
-                plan.command_line = host::settings_from_strings(setting_strings(a->input));
-                items = host::plan_batch(plan);
-            } catch (const host::ConfigError& e) {
-                std::cerr << command << ": config: " << e.what() << "\n";
-                return kExitConfigError;
-            } catch (const host::InputError& e) {
-                std::cerr << command << ": " << e.what() << "\n";
-                return kExitInputError;
-            } catch (const std::invalid_argument& e) {
-                std::cerr << command << ": " << e.what() << "\n";
-                return kExitUsage;
-            }
+            if (int rc = run_job(command, [&] {
+                    plan.command_line = host::settings_from_strings(setting_strings(a->input));
+                    items = host::plan_batch(plan);
+                }))
+                return rc;
             for (const host::BatchItem& it : items) {
                 if (!it.error.empty()) {
                     std::cerr << command << ": " << it.path << ": " << it.error << "\n";

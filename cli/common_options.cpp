@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "command.h"
+#include "host/config_reader.h"
 #include "host/io/atomic_file.h"
 #include "host/plot/plot.h"
 #include "host/report/summary.h"
@@ -112,6 +113,9 @@ host::LogSettingStrings setting_strings(const InputArgs& a) {
 int run_job(const std::string& command, const std::function<void()>& job) {
     try {
         job();
+    } catch (const host::ConfigError& e) {  // a config a manifest names, say
+        std::cerr << command << ": config: " << e.what() << "\n";
+        return kExitConfigError;
     } catch (const host::InputError& e) {
         std::cerr << command << ": " << e.what() << "\n";
         return kExitInputError;

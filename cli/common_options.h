@@ -46,7 +46,7 @@ int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedC
 // fields (batch, bench).
 host::LogSettingStrings setting_strings(const InputArgs& a);
 // Runs `job`, turning the host library's exceptions into exit codes with a message:
-// bad input 3, bad arguments 2, anything else (outputs) 5.
+// bad input 3, a bad config 4, bad arguments 2, anything else (outputs) 5.
 int run_job(const std::string& command, const std::function<void()>& job);
 // Writes the report JSON to `path` (if given) atomically, then prints it (`json`) or the
 // brief; returns the exit code.
