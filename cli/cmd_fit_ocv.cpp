@@ -9,6 +9,7 @@
 #include "host/batch/batch.h"
 #include "host/fit/ocv_stitch.h"
 #include "host/io/atomic_file.h"
+#include "host/plot/plot.h"
 
 namespace battsim {
 namespace cli {
@@ -18,7 +19,7 @@ struct FitOcvArgs {
     std::vector<std::string> logs, test_logs;
     std::string manifest;
     unsigned test_every = 0;
-    std::string output, report;
+    std::string output, report, plot;
     bool json = false;
     host::fit::OcvStitchOptions options;
     InputArgs input;
@@ -61,6 +62,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("-o,--output", a->output, "Write the config with the fitted table here (JSON)");
     sub.add_option("--report", a->report, "Write the fit report here (JSON, schema battsim.ocv_stitch)");
     sub.add_flag("--json", a->json, "Print the report on standard output");
+    sub.add_option("--plot", a->plot, "Draw the table, the config's curve and each flight's voltage with the sag added back (.png or .svg)");
     sub.add_option("--points", a->options.points, "Table points from empty to full")->check(CLI::Range(2, 21))->capture_default_str();
     sub.add_option("--prior-sigma", a->options.prior_sigma_v,
                    "Per cell, V: how far the table may leave the config's curve where no flight reaches")
@@ -92,6 +94,7 @@ std::function<int()> setup(CLI::App& sub) {
     add_input_options(sub, a->input);
     return [a]() -> int {
         const char* const command = "battsim fit-ocv";
+        if (int rc = check_plot_option(command, a->plot)) return rc;
         host::ReaderOptions reader;
         host::LoadedConfig config;
         if (a->logs.empty() && a->manifest.empty()) {
@@ -135,6 +138,8 @@ std::function<int()> setup(CLI::App& sub) {
             if (int rc = run_job(command, [&] { host::write_file_atomic(a->output, host::config_to_json(out).dump(2) + "\n"); }))
                 return rc;
         }
+        if (!a->plot.empty())
+            if (int rc = run_job(command, [&] { host::plot::plot_ocv_stitch(s, "battsim fit-ocv", a->plot); })) return rc;
         return finish_report(command, host::fit::to_json(s), a->report, a->json, [&](std::ostream& os) { print_brief(s, os); });
     };
 }

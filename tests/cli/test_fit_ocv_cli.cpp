@@ -28,7 +28,9 @@ TEST_CASE("fit-ocv stitches a table from real fleet flights and it holds on held
     const std::string cfg = kSource + "/configs/dji-tb47d-6s.json";
     // Twelve flights to fit (starts from 3.5 to 4.3 V per cell), four held out.
     const auto j = clitest::run_json("fit-ocv" + flights({1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23}) + " --test" +
-                                     flights({2, 4, 6, 8}) + " -c " + q(cfg) + kCmu + " -o " + q(out) + " --json");
+                                     flights({2, 4, 6, 8}) + " -c " + q(cfg) + kCmu + " -o " + q(out) + " --json --plot " +
+                                     q(dir + "/m100.svg"));
+    CHECK(clitest::read_file(dir + "/m100.svg").find("<svg") != std::string::npos);
     CHECK(j["schema"] == "battsim.ocv_stitch");
     CHECK(j["cells"] == 6);
     REQUIRE(j["flights"].size() == 16u);
@@ -109,6 +111,8 @@ TEST_CASE("fit-ocv reports bad input and bad options with their exit codes", "[c
     CHECK(tiny.err.find("10 valid samples") != std::string::npos);
     const auto points = run("fit-ocv " + q(dir + "/tiny.csv") + " -c " + cfg + " --points 40");
     CHECK(points.exit_code == 2);
+    const auto plot = run("fit-ocv " + q(dir + "/tiny.csv") + " -c " + cfg + " --plot " + q(dir + "/p.jpg"));
+    CHECK(plot.exit_code == 2);  // refused before any work
     const auto nothing = run("fit-ocv -c " + cfg);
     CHECK(nothing.exit_code == 2);
     // Nothing is written when the fit fails.

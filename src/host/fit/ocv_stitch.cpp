@@ -673,6 +673,13 @@ OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& 
         out.test = is_test[n];
         out.samples = flights[n].rows.v.size();
         out.charge_ah = flights[n].rows.q_ah.empty() ? 0.0 : flights[n].rows.q_ah.back();
+        const Flight& f = flights[n];
+        const size_t step = std::max<size_t>(1, f.rows.v.size() / 600);
+        for (size_t k = 0; k < f.rows.v.size(); k += step) {
+            const double soc = f.s0 - f.rows.q_ah[k] / s.capacity_ah;
+            out.soc.push_back(soc);
+            out.ocv_v.push_back(f.rows.v[k] + (curve_v(after.knots, soc) - predict(after, f, k, soc)));  // + the sag
+        }
         s.flights.push_back(out);
     }
     for (size_t n = 0; n < flights.size(); ++n) {

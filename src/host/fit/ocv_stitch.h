@@ -59,6 +59,9 @@ struct OcvStitchFlight {
     double start_soc_before = 0, start_soc = 0;  // fitted on the config's curve / on the table
     double rms_before_v = 0, rms_v = 0;          // per cell
     double resistance_before_ohm = 0, resistance_ohm = 0;  // the flight's own ohmic, pack
+    // Per cell, at most about 600 samples: the measured voltage with the fitted sag added
+    // back, against the fitted state of charge; what the flight says of the curve (for plots).
+    std::vector<double> soc, ocv_v;
 };
 
 struct OcvStitch {

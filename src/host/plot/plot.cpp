@@ -524,6 +524,45 @@ void plot_model_fit(const std::vector<ModelTraceSeries>& logs, const std::string
     render(panels, title, path);
 }
 
+void plot_ocv_stitch(const fit::OcvStitch& s, const std::string& title, const std::string& path) {
+    check_plot_path(path);
+    Panel p;
+    p.xlabel = "state of charge (of the config's capacity)";
+    p.ylabel = "voltage per cell (V)";
+    p.y2label = "samples per table point";
+    p.key_above = true;
+    bool fitted_titled = false, test_titled = false;
+    for (const fit::OcvStitchFlight& f : s.flights) {
+        std::string name;
+        if (f.test && !test_titled) name = "test flights, sag added back";
+        if (!f.test && !fitted_titled) name = "fitted flights, sag added back";
+        (f.test ? test_titled : fitted_titled) = true;
+        p.series.push_back(line_series(name, f.soc, f.ocv_v, f.test ? "#6baed6" : "#969696", false, 1.0));
+    }
+    std::vector<double> x;
+    for (size_t j = 0; j < s.table_v.size(); ++j) x.push_back(static_cast<double>(j) / static_cast<double>(s.table_v.size() - 1));
+    Series prior = line_series("config's curve", x, s.prior_v, "#d62728", false, 1.2);
+    prior.style = "lines dashtype 2";
+    p.series.push_back(prior);
+    Series table = line_series("fitted table", x, s.table_v, "black", false, 1.6);
+    table.style = "linespoints pointtype 7 pointsize 0.6";
+    p.series.push_back(table);
+    Series support = line_series("samples per point", x, s.support, "#2ca02c", true, 4.0);
+    support.style = "impulses";
+    p.series.push_back(support);
+    // The left axis follows the table and the flights, not the config's curve's pole.
+    double lo = INFINITY, hi = -INFINITY;
+    for (double v : s.table_v) {
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+    }
+    p.y_min = lo - 0.05;
+    p.y_max = hi + 0.05;
+    p.x_min = std::min(0.0, s.soc_min);
+    p.x_max = std::max(1.0, s.soc_max);
+    render({p}, title + ": OCV per cell against the state of charge, " + std::to_string(s.flights.size()) + " flights", path);
+}
+
 }  // namespace plot
 }  // namespace host
 }  // namespace battsim

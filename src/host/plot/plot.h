@@ -8,6 +8,7 @@
 
 #include "core/monitor.h"
 #include "core/sample.h"
+#include "host/fit/ocv_stitch.h"
 #include "host/fit/trace.h"
 
 namespace battsim {
@@ -68,6 +69,12 @@ struct ModelTraceSeries {
 ModelTraceSeries model_series(const fit::Trace& trace, const std::vector<float>& model_v, const std::string& role);
 // One panel per log (at most 8): measured and model voltage, residual on the right axis.
 void plot_model_fit(const std::vector<ModelTraceSeries>& logs, const std::string& title, const std::string& path);
+
+// --- an OCV table stitched from flights (battsim fit-ocv) --------------------------------------
+// One panel against the state of charge: the config's curve, the fitted table, and each
+// flight's voltage with the fitted sag added back (fitted flights grey, test flights blue);
+// the samples each table point holds on the right axis.
+void plot_ocv_stitch(const fit::OcvStitch& s, const std::string& title, const std::string& path);
 
 // Evenly thins (x, y) to about `max_points` keeping each bucket's minimum and maximum, so
 // spikes survive the thinning.
