@@ -57,7 +57,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("-m,--manifest", a->manifest,
                    "A fleet manifest (as for battsim batch): its logs, each read with its own settings; LOGs given "
                    "too take the settings of the entry naming the same file");
-    sub.add_option("--test-every", a->test_every, "Hold out every Kth of the logs (the 2nd, (K+1)th, ...) as test logs")
+    sub.add_option("--test-every", a->test_every, "Hold out every Kth log, from the 2nd on (the 2nd, (K+2)th, (2K+2)th, ...), as a test log")
         ->check(CLI::Range(2u, 1000000u));
     sub.add_option("-o,--output", a->output, "Write the config with the fitted table here (JSON)");
     sub.add_option("--report", a->report, "Write the fit report here (JSON, schema battsim.ocv_stitch)");
