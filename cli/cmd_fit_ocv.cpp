@@ -84,7 +84,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--rest-weight", a->options.rest_weight, "Weight of a sample at rest (|I| < 1 A) against one in flight")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
-    sub.add_option("--iterations", a->options.iterations, "Most alternations of the shared solve and the per-flight steps")
+    sub.add_option("--iterations", a->options.iterations, "Most rounds of the joint Levenberg-Marquardt step (20 alternating rounds come first)")
         ->check(CLI::Range(1, 100000))
         ->capture_default_str();
     sub.add_flag("!--ignore-table", a->options.prior_from_table,
@@ -133,8 +133,10 @@ std::function<int()> setup(CLI::App& sub) {
         if (int rc = run_job(command, [&] { s = host::fit::stitch_ocv(logs, config, a->options); })) return rc;
         if (!a->output.empty()) {
             host::LoadedConfig out = host::fit::with_stitched_table(config, s);
+            size_t fitted = 0;
+            for (const host::fit::OcvStitchFlight& f : s.flights) fitted += !f.test;
             out.description += (out.description.empty() ? "" : "; ") + std::string("joint OCV table fitted by battsim fit-ocv on ") +
-                               std::to_string(logs.size()) + " flight(s)";
+                               std::to_string(fitted) + " flight(s)";
             if (int rc = run_job(command, [&] { host::write_file_atomic(a->output, host::config_to_json(out).dump(2) + "\n"); }))
                 return rc;
         }

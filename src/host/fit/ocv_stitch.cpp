@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <tuple>
+#include <utility>
 
 #include <Eigen/Dense>
 
@@ -143,6 +145,17 @@ void chain_starts(std::vector<Flight>& flights, double capacity_ah, double slope
     }
 }
 
+// Calls fn(flight index, flight, sample index, state of charge) for every sample of the
+// fitted (not test) flights: the loop every sum over the data shares.
+template <typename Fn>
+void for_each_fitted_sample(const std::vector<Flight>& flights, double capacity_ah, Fn&& fn) {
+    for (size_t fi = 0; fi < flights.size(); ++fi) {
+        const Flight& f = flights[fi];
+        if (f.test) continue;
+        for (size_t n = 0; n < f.rows.v.size(); ++n) fn(fi, f, n, f.s0 - f.rows.q_ah[n] / capacity_ah);
+    }
+}
+
 double huber_weight(double residual, double bound) {
     const double a = std::fabs(residual);
     return a <= bound ? 1.0 : bound / a;
@@ -151,10 +164,9 @@ double huber_weight(double residual, double bound) {
 // The robust scale of the fitted flights' residuals (1.4826 × median |r|), floored at 1 mV.
 double robust_scale(const std::vector<Flight>& flights, const Shared& m, double capacity_ah) {
     std::vector<double> a;
-    for (const Flight& f : flights) {
-        if (f.test) continue;
-        for (size_t n = 0; n < f.rows.v.size(); ++n) a.push_back(std::fabs(residual(m, f, n, capacity_ah)));
-    }
+    for_each_fitted_sample(flights, capacity_ah, [&](size_t, const Flight& f, size_t n, double) {
+        a.push_back(std::fabs(residual(m, f, n, capacity_ah)));
+    });
     if (a.empty()) return 1e-3;
     std::nth_element(a.begin(), a.begin() + static_cast<long>(a.size() / 2), a.end());
     return std::max(1.4826 * a[a.size() / 2], 1e-3);
@@ -201,28 +213,23 @@ void solve_shared(std::vector<Flight>& flights, const std::vector<double>& prior
     Eigen::VectorXd b = Eigen::VectorXd::Zero(np);
     const double bound = o.huber_k * scale;
     const double data_w = 1.0 / (scale * scale);
-    for (size_t fi = 0; fi < flights.size(); ++fi) {
-        const Flight& f = flights[fi];
-        if (f.test) continue;
-        for (size_t n = 0; n < f.rows.v.size(); ++n) {
-            const double soc = f.s0 - f.rows.q_ah[n] / capacity_ah;
-            const double h = huber_weight(residual(m, f, n, capacity_ah), bound) * data_w * f.rows.weight[n];
-            const Segment s = segment(soc, k);
-            double y = f.rows.v[n];
-            // Only the two points, the flight's resistance, the polarisation and the warming are non-zero.
-            int idx[6] = {s.j, s.j + 1, column[fi], pf, ps, pw};
-            double row[6] = {1.0 - s.w, s.w, -f.rows.i[n], -f.rows.fast[n], -f.rows.slow[n], -f.rows.i[n] * f.rows.q_ah[n]};
-            int first = 0;
-            if (fixed_knots) {
-                y -= (1.0 - s.w) * m.knots[s.j] + s.w * m.knots[s.j + 1];
-                first = 2;
-            }
-            for (int p = first; p < 6; ++p) {
-                b(idx[p]) += h * row[p] * y;
-                for (int q = first; q < 6; ++q) a(idx[p], idx[q]) += h * row[p] * row[q];
-            }
+    for_each_fitted_sample(flights, capacity_ah, [&](size_t fi, const Flight& f, size_t n, double soc) {
+        const double h = huber_weight(residual(m, f, n, capacity_ah), bound) * data_w * f.rows.weight[n];
+        const Segment s = segment(soc, k);
+        double y = f.rows.v[n];
+        // Only the two points, the flight's resistance, the polarisation and the warming are non-zero.
+        const int idx[6] = {s.j, s.j + 1, column[fi], pf, ps, pw};
+        const double row[6] = {1.0 - s.w, s.w, -f.rows.i[n], -f.rows.fast[n], -f.rows.slow[n], -f.rows.i[n] * f.rows.q_ah[n]};
+        int first = 0;
+        if (fixed_knots) {
+            y -= (1.0 - s.w) * m.knots[s.j] + s.w * m.knots[s.j + 1];
+            first = 2;
         }
-    }
+        for (int p = first; p < 6; ++p) {
+            b(idx[p]) += h * row[p] * y;
+            for (int q = first; q < 6; ++q) a(idx[p], idx[q]) += h * row[p] * row[q];
+        }
+    });
     if (!fixed_knots) add_table_penalty(a, b, prior, o);
     // A whisper of ridge on the resistances keeps a log without current changes solvable.
     for (int p = nk; p < np; ++p) a(p, p) += 1e-9 * (a(p, p) + 1.0);
@@ -239,7 +246,7 @@ void solve_shared(std::vector<Flight>& flights, const std::vector<double>& prior
 
 // The table must not fall as SOC rises (the monitor inverts it, and a fold lets a flight's
 // start slide to either side): pool adjacent violators, weighted by what holds each point.
-bool make_monotone(std::vector<double>& k, const std::vector<double>& weight) {
+void make_monotone(std::vector<double>& k, const std::vector<double>& weight) {
     struct Block { double sum, w; size_t n; };
     std::vector<Block> blocks;
     for (size_t j = 0; j < k.size(); ++j) {
@@ -254,15 +261,9 @@ bool make_monotone(std::vector<double>& k, const std::vector<double>& weight) {
             blocks.back() = merged;
         }
     }
-    bool changed = false;
     size_t j = 0;
     for (const Block& b : blocks)
-        for (size_t n = 0; n < b.n; ++n, ++j) {
-            const double v = b.sum / b.w;
-            changed = changed || std::fabs(v - k[j]) > 1e-12;
-            k[j] = v;
-        }
-    return changed;
+        for (size_t n = 0; n < b.n; ++n, ++j) k[j] = b.sum / b.w;
 }
 
 // Gauss-Newton on one flight's starting state of charge (and, for a test flight, its
@@ -320,15 +321,12 @@ double pooled_rms(const std::vector<Flight>& flights, const Shared& m, double ca
 // Samples per table point (interpolation weight) of the fitted flights.
 std::vector<double> support(const std::vector<Flight>& flights, double capacity_ah, int points) {
     std::vector<double> w(static_cast<size_t>(points), 0.0);
-    for (const Flight& f : flights) {
-        if (f.test) continue;
-        for (double q : f.rows.q_ah) {
-            const Segment g = segment(f.s0 - q / capacity_ah, points);
-            const double x = std::max(0.0, std::min(1.0, g.w));
-            w[static_cast<size_t>(g.j)] += 1.0 - x;
-            w[static_cast<size_t>(g.j + 1)] += x;
-        }
-    }
+    for_each_fitted_sample(flights, capacity_ah, [&](size_t, const Flight&, size_t, double soc) {
+        const Segment g = segment(soc, points);
+        const double x = std::max(0.0, std::min(1.0, g.w));
+        w[static_cast<size_t>(g.j)] += 1.0 - x;
+        w[static_cast<size_t>(g.j + 1)] += x;
+    });
     return w;
 }
 
@@ -346,14 +344,10 @@ double median_resistance(const std::vector<Flight>& flights) {
 double objective(const std::vector<Flight>& flights, const std::vector<std::vector<double>>& h, const Shared& m,
                  const std::vector<double>& prior, double capacity_ah, double scale, const OcvStitchOptions& o) {
     double sum = 0.0;
-    for (size_t fi = 0; fi < flights.size(); ++fi) {
-        const Flight& f = flights[fi];
-        if (f.test) continue;
-        for (size_t n = 0; n < f.rows.v.size(); ++n) {
-            const double r = residual(m, f, n, capacity_ah);
-            sum += h[fi][n] * r * r;
-        }
-    }
+    for_each_fitted_sample(flights, capacity_ah, [&](size_t fi, const Flight& f, size_t n, double) {
+        const double r = residual(m, f, n, capacity_ah);
+        sum += h[fi][n] * r * r;
+    });
     sum /= scale * scale;
     const size_t k = prior.size();
     for (size_t j = 0; j < k; ++j) {
@@ -378,8 +372,8 @@ void keep_rising(std::vector<double>& knots, const std::vector<Flight>& flights,
 // Levenberg-Marquardt on everything at once: the table, each fitted flight's start and
 // resistance, the shared polarisation and warming. Alternating the linear solve with the
 // per-flight steps creeps along the valley where the table slides along itself while the
-// starts follow (on a simulated fleet it stopped 15 mV off with the truth 2 mV better); the
-// joint step goes down it. The fullest flight's start stays where it is (the gauge).
+// starts follow, and stops short of the bottom; the joint step goes down it. The fullest
+// flight's start stays where it is (the gauge).
 int refine_jointly(std::vector<Flight>& flights, const std::vector<double>& prior, double capacity_ah,
                    const OcvStitchOptions& o, Shared& m) {
     const int k = static_cast<int>(prior.size());
@@ -401,36 +395,28 @@ int refine_jointly(std::vector<Flight>& flights, const std::vector<double>& prio
         const double scale = robust_scale(flights, m, capacity_ah);
         const double bound = o.huber_k * scale;
         std::vector<std::vector<double>> h(flights.size());
-        for (size_t fi = 0; fi < flights.size(); ++fi) {
-            const Flight& f = flights[fi];
-            if (f.test) continue;
-            h[fi].resize(f.rows.v.size());
-            for (size_t n = 0; n < f.rows.v.size(); ++n)
-                h[fi][n] = huber_weight(residual(m, f, n, capacity_ah), bound) * f.rows.weight[n];
-        }
+        for (size_t fi = 0; fi < flights.size(); ++fi) h[fi].resize(flights[fi].rows.v.size());
+        for_each_fitted_sample(flights, capacity_ah, [&](size_t fi, const Flight& f, size_t n, double) {
+            h[fi][n] = huber_weight(residual(m, f, n, capacity_ah), bound) * f.rows.weight[n];
+        });
         Eigen::MatrixXd a = Eigen::MatrixXd::Zero(np, np);
         Eigen::VectorXd b = Eigen::VectorXd::Zero(np);
         const double data_w = 1.0 / (scale * scale);
-        for (size_t fi = 0; fi < flights.size(); ++fi) {
-            const Flight& f = flights[fi];
-            if (f.test) continue;
-            for (size_t n = 0; n < f.rows.v.size(); ++n) {
-                const double soc = f.s0 - f.rows.q_ah[n] / capacity_ah;
-                const Segment g = segment(soc, k);
-                const double res = residual(m, f, n, capacity_ah);
-                const double w = h[fi][n] * data_w;
-                // d(prediction)/d(parameter); a fixed start has no column.
-                int idx[8] = {g.j, g.j + 1, col_s[fi], col_r[fi], pf, ps, pw, -1};
-                double d[8] = {1.0 - g.w, g.w, curve_slope(m.knots, soc), -f.rows.i[n], -f.rows.fast[n], -f.rows.slow[n],
-                               -f.rows.i[n] * f.rows.q_ah[n], 0.0};
-                for (int p = 0; p < 7; ++p) {
-                    if (idx[p] < 0) continue;
-                    b(idx[p]) += w * d[p] * res;
-                    for (int q = 0; q < 7; ++q)
-                        if (idx[q] >= 0) a(idx[p], idx[q]) += w * d[p] * d[q];
-                }
+        for_each_fitted_sample(flights, capacity_ah, [&](size_t fi, const Flight& f, size_t n, double soc) {
+            const Segment g = segment(soc, k);
+            const double res = residual(m, f, n, capacity_ah);
+            const double w = h[fi][n] * data_w;
+            // d(prediction)/d(parameter); a fixed start has no column.
+            const int idx[7] = {g.j, g.j + 1, col_s[fi], col_r[fi], pf, ps, pw};
+            const double d[7] = {1.0 - g.w, g.w, curve_slope(m.knots, soc), -f.rows.i[n], -f.rows.fast[n], -f.rows.slow[n],
+                                 -f.rows.i[n] * f.rows.q_ah[n]};
+            for (int p = 0; p < 7; ++p) {
+                if (idx[p] < 0) continue;
+                b(idx[p]) += w * d[p] * res;
+                for (int q = 0; q < 7; ++q)
+                    if (idx[q] >= 0) a(idx[p], idx[q]) += w * d[p] * d[q];
             }
-        }
+        });
         std::vector<double> towards(prior.size());  // the step's target: prior − table
         for (size_t j = 0; j < prior.size(); ++j) towards[j] = prior[j] - m.knots[j];
         add_table_penalty(a, b, towards, o);
@@ -445,25 +431,28 @@ int refine_jointly(std::vector<Flight>& flights, const std::vector<double>& prio
                 lambda *= 10.0;
                 continue;
             }
-            Shared m2 = m;
-            std::vector<Flight> f2 = flights;
-            for (int j = 0; j < k; ++j) m2.knots[static_cast<size_t>(j)] += x(j);
-            for (size_t f = 0; f < f2.size(); ++f) {
-                if (col_s[f] >= 0) f2[f].s0 = std::max(-0.2, std::min(1.2, f2[f].s0 + x(col_s[f])));
-                if (col_r[f] >= 0) f2[f].r += x(col_r[f]);
+            // Try the step in place (the flights hold all the samples: copying them per try
+            // would cost more than the step); undo it if the objective does not fall.
+            const Shared kept = m;
+            std::vector<std::pair<double, double>> kept_flights;  // (s0, r)
+            for (const Flight& f : flights) kept_flights.push_back({f.s0, f.r});
+            for (int j = 0; j < k; ++j) m.knots[static_cast<size_t>(j)] += x(j);
+            for (size_t f = 0; f < flights.size(); ++f) {
+                if (col_s[f] >= 0) flights[f].s0 = std::max(-0.2, std::min(1.2, flights[f].s0 + x(col_s[f])));
+                if (col_r[f] >= 0) flights[f].r += x(col_r[f]);
             }
-            m2.r_fast += x(pf);
-            m2.r_slow += x(ps);
-            m2.r_warm += x(pw);
-            keep_rising(m2.knots, f2, capacity_ah);
-            const double f1 = objective(f2, h, m2, prior, capacity_ah, scale, o);
+            m.r_fast += x(pf);
+            m.r_slow += x(ps);
+            m.r_warm += x(pw);
+            keep_rising(m.knots, flights, capacity_ah);
+            const double f1 = objective(flights, h, m, prior, capacity_ah, scale, o);
             if (f1 < f0) {
                 decrease = (f0 - f1) / std::max(f0, 1e-30);
-                m = std::move(m2);
-                flights = std::move(f2);
                 lambda = std::max(lambda / 3.0, 1e-9);
                 accepted = true;
             } else {
+                m = kept;
+                for (size_t f = 0; f < flights.size(); ++f) std::tie(flights[f].s0, flights[f].r) = kept_flights[f];
                 lambda *= 5.0;
             }
         }
@@ -483,12 +472,7 @@ int fit(std::vector<Flight>& flights, const std::vector<double>& prior, bool fix
         const double scale = robust_scale(flights, m, capacity_ah);
         const std::vector<double> before = m.knots;
         solve_shared(flights, prior, fixed_knots, capacity_ah, scale, o, m);
-        if (!fixed_knots) {
-            std::vector<double> w = support(flights, capacity_ah, static_cast<int>(prior.size()));
-            for (double& x : w) x += 1.0;  // the prior's share where no flight reaches
-            make_monotone(m.knots, w);
-            for (size_t j = 1; j < m.knots.size(); ++j) m.knots[j] = std::max(m.knots[j], m.knots[j - 1] + 1e-4);
-        }
+        if (!fixed_knots) keep_rising(m.knots, flights, capacity_ah);
         double moved = 0.0;
         for (size_t j = 0; j < before.size(); ++j) moved = std::max(moved, std::fabs(m.knots[j] - before[j]));
         double largest = -1e9, stepped = 0.0;

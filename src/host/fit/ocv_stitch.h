@@ -1,14 +1,14 @@
 // The joint estimator's OCV table stitched together from a fleet's ordinary flights, for
 // packs nobody discharged slowly on a bench. Each flight starts at its own state of charge
 // (packs flown again without a recharge) and covers a slice of the curve; the slices overlap.
-// One table, one ohmic resistance and two polarisation terms are shared by all flights,
-// each flight's starting state of charge is its own, and all are fitted together to the
-// measured voltage:
-//   V/N = OCV(s0 − q/C) − r·I − r_fast·LP(I, fast) − r_slow·LP(I, slow)
-// with q the charge counted since the log's first sample and C the config's capacity. For
-// fixed starting states the model is linear in the table and the resistances, so the fit
-// alternates a linear least-squares solve with a Gauss-Newton step per flight (separable
-// least squares), with robust (Huber) weights: real logs have short sags no curve explains.
+// All flights are fitted together to the measured voltage, per cell:
+//   V/N = OCV(s0 − q/C) − (r + r_w·q)·I − r_fast·LP(I, fast) − r_slow·LP(I, slow)
+// with q the charge counted since the log's first sample and C the config's capacity. The
+// table, the polarisation (r_fast, r_slow) and the warming (r_w) are the fleet's; the start s0
+// and the ohmic r each flight's own. For fixed starts the model is linear in the rest, so the
+// fit first alternates a linear least-squares solve with a Gauss-Newton step per flight, then
+// finishes with Levenberg-Marquardt on everything at once; robust (Huber) weights throughout:
+// real logs have short sags no curve explains.
 //
 // What the data cannot say is taken from the config: where no flight reaches, the table
 // keeps the config's curve (a weak prior, and the correction to it is kept smooth), and the
@@ -39,7 +39,7 @@ struct OcvStitchOptions {
     // the user's choice (the capacity is the charge down to it), and flights rarely get there.
     double empty_sigma_v = 0.01;
     double huber_k = 1.5;           // robust weight beyond this many robust standard deviations
-    int iterations = 100;
+    int iterations = 100;           // most rounds of the joint step (the alternation: at most 20 before it)
     // Weight of a sample at rest (|I| < 1 A) against one in flight: the rests before and
     // after a flight hold the curve itself, the flight holds it behind the sag's model.
     double rest_weight = 10.0;
