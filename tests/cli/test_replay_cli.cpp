@@ -3,6 +3,9 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <map>
+#include <sstream>
+#include <vector>
 
 #include "cli_util.h"
 
@@ -91,6 +94,73 @@ TEST_CASE("replay writes series and summary files atomically", "[cli]") {
     // Same input, same bytes.
     auto r2 = run("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --series " + q(dir + "/s2.csv"));
     CHECK(clitest::read_file(dir + "/s2.csv") == series);
+}
+
+namespace {
+// The series CSV as rows of named fields (no quoting in that format).
+std::vector<std::map<std::string, std::string>> read_series(const std::string& path) {
+    std::istringstream in(clitest::read_file(path));
+    std::string line;
+    std::vector<std::string> names;
+    std::vector<std::map<std::string, std::string>> rows;
+    const auto split = [](const std::string& l) {
+        std::vector<std::string> f;
+        std::string cur;
+        for (char ch : l) {
+            if (ch == ',') {
+                f.push_back(cur);
+                cur.clear();
+            } else {
+                cur += ch;
+            }
+        }
+        f.push_back(cur);
+        return f;
+    };
+    std::getline(in, line);
+    names = split(line);
+    while (std::getline(in, line)) {
+        const auto f = split(line);
+        REQUIRE(f.size() == names.size());
+        std::map<std::string, std::string> row;
+        for (size_t k = 0; k < f.size(); ++k) row[names[k]] = f[k];
+        rows.push_back(row);
+    }
+    return rows;
+}
+}  // namespace
+
+TEST_CASE("replay --series carries the joint estimator's cell findings as the summary reports them", "[cli]") {
+    // A simulated 3S hover with cell 2 at 80 % capacity: the cell check names it, and the
+    // series' last row holds what the summary reports at the end of the flight.
+    const std::string dir = clitest::temp_dir();
+    REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/3s-hover-weak-cell2-capacity-80.json") + " -o " +
+                q(dir + "/w.csv")).exit_code == 0);
+    const std::string args = "replay " + q(dir + "/w.csv") + " -c " + q(kSource + "/configs/generic-3s.json") +
+                             " --estimator joint --series " + q(dir + "/s.csv");
+    const auto j = clitest::run_json(args + " --json");
+    const auto rows = read_series(dir + "/s.csv");
+    REQUIRE(rows.size() > 100);
+    const auto& last = rows.back();
+    CHECK(last.at("outlier_cell") == "2");
+    CHECK(rows.front().at("outlier_cell") == "0");
+    const auto& flight = j["flight"];
+    for (int c = 0; c < 3; ++c) {
+        const std::string n = "cell" + std::to_string(c + 1);
+        CHECK(std::stod(last.at(n + "_capacity_deficit")) == Approx(flight["cell_capacity_deficit"][c].get<double>()).margin(6e-4));
+        CHECK(std::stod(last.at(n + "_capacity_deficit_sigma")) ==
+              Approx(flight["cell_capacity_deficit_sigma"][c].get<double>()).margin(6e-5));
+        CHECK(std::stod(last.at(n + "_resistance_ohm")) == Approx(flight["cell_resistance_ohm"][c].get<double>()).epsilon(1e-5));
+    }
+    CHECK(std::stod(last.at("cell2_capacity_deficit")) > 0.1);
+    CHECK(std::stod(last.at("pack_capacity_deficit")) == Approx(flight["pack_capacity_deficit"]["final"].get<double>()).margin(6e-4));
+    // The healthy pack's flight time is published with the remaining time; empty before.
+    int mismatched = 0;
+    for (const auto& r : rows) mismatched += r.at("expected_time_s").empty() != r.at("remaining_time_s").empty();
+    CHECK(mismatched == 0);
+    CHECK(std::stod(last.at("expected_time_s")) > 0.0);
+    // The rest after the landing gives the capacity from the two rests.
+    CHECK(std::stod(last.at("rest_capacity_ah")) > 0.0);
 }
 
 TEST_CASE("replay reports bad input with file, line and a non-zero exit", "[cli]") {

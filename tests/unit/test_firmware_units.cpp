@@ -234,6 +234,16 @@ TEST_CASE("firmware series formatter writes the host SeriesWriter's bytes", "[fi
                 st.warnings = static_cast<uint8_t>(i % 32);
                 st.cell_count = static_cast<uint8_t>(i % 2 == 0 ? cells : 0);
                 for (int c = 0; c < core::kMaxCells; ++c) st.cell_score[c] = u(rng) / 500.0f;
+                st.expected_time_s = u(rng) * 10.0f;
+                st.remaining_energy_wh = u(rng);
+                st.rest_capacity_ah = u(rng) / 100.0f;
+                st.outlier_cell = static_cast<int8_t>(i % 7 - 1);
+                st.pack_capacity_deficit = u(rng) / 500.0f;
+                for (int c = 0; c < core::kMaxCells; ++c) {
+                    st.cell_resistance_ohm[c] = u(rng) / 1e4f;
+                    st.cell_capacity_deficit[c] = u(rng) / 500.0f;
+                    st.cell_capacity_deficit_sigma[c] = u(rng) / 1000.0f;
+                }
                 if (i == 7) st.soc = -0.0f;  // sign of zero survives both
                 w.add(s, st);
                 fw::format_series_line(s, st, cells, t);

@@ -11,10 +11,16 @@ void format_series_header(int cells, TextBuffer& out) {
         "avg_power_w,flying,sample_valid,warnings");
     for (int c = 1; c <= cells; ++c) out.appendf(",cell%d_v", c);
     for (int c = 1; c <= cells; ++c) out.appendf(",cell%d_score", c);
+    out.append(",expected_time_s,remaining_energy_wh,rest_capacity_ah,outlier_cell,pack_capacity_deficit");
+    for (int c = 1; c <= cells; ++c) out.appendf(",cell%d_resistance_ohm", c);
+    for (int c = 1; c <= cells; ++c) out.appendf(",cell%d_capacity_deficit", c);
+    for (int c = 1; c <= cells; ++c) out.appendf(",cell%d_capacity_deficit_sigma", c);
     out.append_char('\n');
 }
 
 namespace {
+
+float cell_value(const float* values, int c) { return c < core::kMaxCells ? values[c] : 0.0f; }
 
 void put(TextBuffer& out, const char* fmt, float v) {
     out.appendf(fmt, static_cast<double>(v));
@@ -57,6 +63,15 @@ void format_series_line(const core::Sample& sample, const core::MonitorStatus& s
     for (int c = 0; c < cells; ++c) {
         out.appendf(",%.4f", static_cast<double>(c < s.cell_count ? s.cell_score[c] : 0.0f));
     }
+    // The joint estimator's own outputs (zero with the reference estimator).
+    out.append_char(',');
+    if (s.time_valid) out.appendf("%.2f", static_cast<double>(s.expected_time_s));
+    out.appendf(",%.3f,%.5f,%d,%.4f", static_cast<double>(s.remaining_energy_wh), static_cast<double>(s.rest_capacity_ah),
+                s.outlier_cell + 1, static_cast<double>(s.pack_capacity_deficit));
+    for (int c = 0; c < cells; ++c) out.appendf(",%.6f", static_cast<double>(cell_value(s.cell_resistance_ohm, c)));
+    for (int c = 0; c < cells; ++c) out.appendf(",%.4f", static_cast<double>(cell_value(s.cell_capacity_deficit, c)));
+    for (int c = 0; c < cells; ++c)
+        out.appendf(",%.4f", static_cast<double>(cell_value(s.cell_capacity_deficit_sigma, c)));
     out.append_char('\n');
 }
 

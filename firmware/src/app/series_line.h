@@ -11,8 +11,9 @@
 namespace battsim {
 namespace fw {
 
-// Longest line: 18 fixed columns plus 2 × kMaxCells cell columns, well under this.
-constexpr size_t kSeriesLineCapacity = 640;
+// Longest line, the header: 23 fixed columns plus 5 × kMaxCells cell columns (about 920
+// characters with 6 cells); a data line is shorter.
+constexpr size_t kSeriesLineCapacity = 1024;
 
 // The header line with its '\n'; `cells` = cell columns (the first sample's cell count).
 void format_series_header(int cells, TextBuffer& out);

@@ -12,6 +12,10 @@ std::string series_header(int cells) {
         "avg_power_w,flying,sample_valid,warnings";
     for (int c = 1; c <= cells; ++c) h += ",cell" + std::to_string(c) + "_v";
     for (int c = 1; c <= cells; ++c) h += ",cell" + std::to_string(c) + "_score";
+    h += ",expected_time_s,remaining_energy_wh,rest_capacity_ah,outlier_cell,pack_capacity_deficit";
+    for (int c = 1; c <= cells; ++c) h += ",cell" + std::to_string(c) + "_resistance_ohm";
+    for (int c = 1; c <= cells; ++c) h += ",cell" + std::to_string(c) + "_capacity_deficit";
+    for (int c = 1; c <= cells; ++c) h += ",cell" + std::to_string(c) + "_capacity_deficit_sigma";
     return h;
 }
 
@@ -63,6 +67,24 @@ void SeriesWriter::add(const core::Sample& sample, const core::MonitorStatus& s)
         std::snprintf(buf, sizeof buf, ",%.4f", c < s.cell_count ? s.cell_score[c] : 0.0f);
         line_ += buf;
     }
+    // The joint estimator's own outputs (zero with the reference estimator).
+    line_ += ',';
+    if (s.time_valid) {
+        std::snprintf(buf, sizeof buf, "%.2f", s.expected_time_s);
+        line_ += buf;
+    }
+    std::snprintf(buf, sizeof buf, ",%.3f,%.5f,%d,%.4f", s.remaining_energy_wh, s.rest_capacity_ah,
+                  s.outlier_cell + 1, s.pack_capacity_deficit);
+    line_ += buf;
+    const auto cell_column = [&](const char* fmt, const float* values) {
+        for (int c = 0; c < cells_; ++c) {
+            std::snprintf(buf, sizeof buf, fmt, c < core::kMaxCells ? values[c] : 0.0f);
+            line_ += buf;
+        }
+    };
+    cell_column(",%.6f", s.cell_resistance_ohm);
+    cell_column(",%.4f", s.cell_capacity_deficit);
+    cell_column(",%.4f", s.cell_capacity_deficit_sigma);
     line_ += '\n';
     file_->write(line_);
 }
