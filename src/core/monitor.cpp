@@ -191,6 +191,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         joint_.update(sample.time_us, sample.voltage_v, current_a, dt_s, flying);
         const JointEstimator::Status& js = joint_.status();
         status_.capacity_ah = js.capacity_ah;
+        status_.capacity_sigma_ah = js.sigma_capacity_ah;
         status_.resistance_ohm = js.resistance_ohm;
         status_.soc = js.soc;
         status_.remaining_time_s = js.remaining_time_s;

@@ -55,6 +55,7 @@ struct MonitorStatus {
     float adapted_model_voltage_v = 0.0f;  // adapted model
     float soc = 0.0f;                      // 1 − consumed / estimated capacity
     float capacity_ah = 0.0f;              // estimated pack capacity
+    float capacity_sigma_ah = 0.0f;        // joint estimator: its standard error (0 = none)
     float resistance_ohm = 0.0f;           // online resistance estimate
     float usable_capacity_ah = 0.0f;
     float remaining_time_s = 0.0f;

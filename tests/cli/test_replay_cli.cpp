@@ -154,6 +154,10 @@ TEST_CASE("replay --series carries the joint estimator's cell findings as the su
     }
     CHECK(std::stod(last.at("cell2_capacity_deficit")) > 0.1);
     CHECK(std::stod(last.at("pack_capacity_deficit")) == Approx(flight["pack_capacity_deficit"]["final"].get<double>()).margin(6e-4));
+    // The capacity's standard error, per sample and at the end of the flight.
+    CHECK(std::stod(last.at("capacity_sigma_ah")) == Approx(flight["capacity_ah"]["final_sigma"].get<double>()).margin(6e-6));
+    CHECK(flight["capacity_ah"]["final_sigma"].get<double>() > 0.0);
+    CHECK(flight["capacity_ah"]["final_sigma"].get<double>() < 0.1 * flight["capacity_ah"]["final"].get<double>());
     // The healthy pack's flight time is published with the remaining time; empty before.
     int mismatched = 0;
     for (const auto& r : rows) mismatched += r.at("expected_time_s").empty() != r.at("remaining_time_s").empty();

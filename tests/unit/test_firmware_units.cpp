@@ -234,6 +234,7 @@ TEST_CASE("firmware series formatter writes the host SeriesWriter's bytes", "[fi
                 st.warnings = static_cast<uint8_t>(i % 32);
                 st.cell_count = static_cast<uint8_t>(i % 2 == 0 ? cells : 0);
                 for (int c = 0; c < core::kMaxCells; ++c) st.cell_score[c] = u(rng) / 500.0f;
+                st.capacity_sigma_ah = u(rng) / 1000.0f;
                 st.expected_time_s = u(rng) * 10.0f;
                 st.remaining_energy_wh = u(rng);
                 st.rest_capacity_ah = u(rng) / 100.0f;

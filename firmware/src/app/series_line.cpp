@@ -11,7 +11,7 @@ void format_series_header(int cells, TextBuffer& out) {
         "avg_power_w,flying,sample_valid,warnings");
     for (int c = 1; c <= cells; ++c) out.appendf(",cell%d_v", c);
     for (int c = 1; c <= cells; ++c) out.appendf(",cell%d_score", c);
-    out.append(",expected_time_s,remaining_energy_wh,rest_capacity_ah,outlier_cell,pack_capacity_deficit");
+    out.append(",capacity_sigma_ah,expected_time_s,remaining_energy_wh,rest_capacity_ah,outlier_cell,pack_capacity_deficit");
     for (int c = 1; c <= cells; ++c) out.appendf(",cell%d_resistance_ohm", c);
     for (int c = 1; c <= cells; ++c) out.appendf(",cell%d_capacity_deficit", c);
     for (int c = 1; c <= cells; ++c) out.appendf(",cell%d_capacity_deficit_sigma", c);
@@ -64,7 +64,7 @@ void format_series_line(const core::Sample& sample, const core::MonitorStatus& s
         out.appendf(",%.4f", static_cast<double>(c < s.cell_count ? s.cell_score[c] : 0.0f));
     }
     // The joint estimator's own outputs (zero with the reference estimator).
-    out.append_char(',');
+    out.appendf(",%.5f,", static_cast<double>(s.capacity_sigma_ah));
     if (s.time_valid) out.appendf("%.2f", static_cast<double>(s.expected_time_s));
     out.appendf(",%.3f,%.5f,%d,%.4f", static_cast<double>(s.remaining_energy_wh), static_cast<double>(s.rest_capacity_ah),
                 s.outlier_cell + 1, static_cast<double>(s.pack_capacity_deficit));

@@ -231,7 +231,8 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     }
     status_.soc = clampf(es.soc, 0.0f, 1.0f);
     status_.capacity_ah = weakest_cell_ah(health().capacity_ah);
-    status_.sigma_capacity_ah = health().sigma_capacity_ah;
+    // Scaled as the capacity is (the weak cell's deficit taken as known).
+    status_.sigma_capacity_ah = weakest_cell_ah(health().sigma_capacity_ah);
     status_.measured_resistance_ohm = rs.valid ? rs.resistance_now_ohm : 0.0f;
     status_.measured_resistance_sigma_ohm = rs.valid ? rs.sigma_now_ohm : 0.0f;
     status_.polarisation_ohm = es.polarisation_ohm * tracking_.scale;

@@ -190,7 +190,7 @@ public:
         bool started = false;
         float soc = 0.0f;
         float capacity_ah = 0.0f;
-        float sigma_capacity_ah = 0.0f;
+        float sigma_capacity_ah = 0.0f;    // the health filter's standard error, scaled as capacity_ah
         float resistance_ohm = 0.0f;       // ohmic (short-lag) resistance now, the prior folded in
         float effective_resistance_ohm = 0.0f;  // the window mean the filter and the solves use
         float measured_resistance_ohm = 0.0f;  // from the differences alone (0 until valid)

@@ -12,7 +12,7 @@ std::string series_header(int cells) {
         "avg_power_w,flying,sample_valid,warnings";
     for (int c = 1; c <= cells; ++c) h += ",cell" + std::to_string(c) + "_v";
     for (int c = 1; c <= cells; ++c) h += ",cell" + std::to_string(c) + "_score";
-    h += ",expected_time_s,remaining_energy_wh,rest_capacity_ah,outlier_cell,pack_capacity_deficit";
+    h += ",capacity_sigma_ah,expected_time_s,remaining_energy_wh,rest_capacity_ah,outlier_cell,pack_capacity_deficit";
     for (int c = 1; c <= cells; ++c) h += ",cell" + std::to_string(c) + "_resistance_ohm";
     for (int c = 1; c <= cells; ++c) h += ",cell" + std::to_string(c) + "_capacity_deficit";
     for (int c = 1; c <= cells; ++c) h += ",cell" + std::to_string(c) + "_capacity_deficit_sigma";
@@ -68,7 +68,8 @@ void SeriesWriter::add(const core::Sample& sample, const core::MonitorStatus& s)
         line_ += buf;
     }
     // The joint estimator's own outputs (zero with the reference estimator).
-    line_ += ',';
+    std::snprintf(buf, sizeof buf, ",%.5f,", s.capacity_sigma_ah);
+    line_ += buf;
     if (s.time_valid) {
         std::snprintf(buf, sizeof buf, "%.2f", s.expected_time_s);
         line_ += buf;

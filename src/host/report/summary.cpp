@@ -182,6 +182,9 @@ json SummaryAccumulator::to_json(int cells) const {
         flight["capacity_ah"] = {{"mean", mean_or_null(f.capacity_ah, f.n)},
                                  {"first20_mean", mean_or_null(first20.capacity_ah, first20.n)},
                                  {"final", round_sig(last_flying_.capacity_ah)},
+                                 {"final_sigma", last_flying_.capacity_sigma_ah > 0.0f
+                                                     ? json(round_sig(last_flying_.capacity_sigma_ah))
+                                                     : json(nullptr)},
                                  {"after_rest", rest_capacity_ah_ > 0.0f ? json(round_sig(rest_capacity_ah_)) : json(nullptr)}};
         flight["resistance_ohm"] = {{"mean", mean_or_null(f.resistance_ohm, f.n)},
                                     {"first20_mean", mean_or_null(first20.resistance_ohm, first20.n)},
