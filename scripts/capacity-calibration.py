@@ -23,6 +23,8 @@ import argparse, csv, glob, json, os, statistics, subprocess, sys, tempfile
 from concurrent.futures import ThreadPoolExecutor
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from config_edit import m100_summaries  # noqa: E402
 
 
 def run(args, **kw):
@@ -58,20 +60,10 @@ def share(zs, bound):
 
 
 def m100(battsim, config, data, which, tmp):
-    with open(os.path.join(ROOT, "configs", "manifests", "cmu-m100.json")) as f:
-        m = json.load(f)
-    m["defaults"]["config"] = config
-    m["base_dir"] = os.path.join(data, "cmu-m100", "flights")
-    path = os.path.join(tmp, "m100.json")
-    with open(path, "w") as f:
-        json.dump(m, f)
-    out = os.path.join(tmp, "m100-out")
-    run([battsim, "batch", "-m", path, "--estimator", "joint", "--out", out, "--no-progress", "-o",
-         os.path.join(tmp, "m100.md")])
+    summaries = m100_summaries(battsim, ROOT, config, data, tmp)
     caps, sigmas = [], []
     for n in which:
-        with open(os.path.join(out, f"{n}.json")) as f:
-            c = json.load(f)["flight"]["capacity_ah"]
+        c = summaries[n]["flight"]["capacity_ah"]
         caps.append(c["final"])
         sigmas.append(c["final_sigma"])
     q = statistics.quantiles(caps, n=4)

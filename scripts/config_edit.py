@@ -40,3 +40,28 @@ def score_edited(battsim, root, edit, suites, columns, jobs=2):
                 raise RuntimeError(f"battsim score failed on {suite}:\n{r.stderr}")
             with open(out) as f:
                 yield suite, json.load(f)
+
+
+def m100_summaries(battsim, root, config, data, tmp):
+    """Replays the CMU Matrice 100 manifest's flights with `config` (the joint estimator) and
+    returns {flight number: summary JSON}. data: the shared data folder; tmp: a scratch dir."""
+    import subprocess
+    with open(os.path.join(root, "configs", "manifests", "cmu-m100.json")) as f:
+        m = json.load(f)
+    m["defaults"]["config"] = config
+    m["base_dir"] = os.path.join(data, "cmu-m100", "flights")
+    path = os.path.join(tmp, "m100.json")
+    with open(path, "w") as f:
+        json.dump(m, f)
+    out = os.path.join(tmp, "m100-summaries")
+    r = subprocess.run([battsim, "batch", "-m", path, "--estimator", "joint", "--out", out, "--no-progress",
+                        "-o", os.path.join(tmp, "m100-table.md")], capture_output=True, text=True)
+    if r.returncode != 0:
+        raise RuntimeError(f"battsim batch failed on the Matrice 100 flights:\n{r.stderr}")
+    summaries = {}
+    for name in os.listdir(out):
+        with open(os.path.join(out, name)) as f:
+            summaries[int(name[:-len(".json")])] = json.load(f)
+        os.remove(os.path.join(out, name))
+    os.rmdir(out)
+    return summaries

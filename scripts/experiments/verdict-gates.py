@@ -25,7 +25,7 @@ import argparse, collections, json, os, shutil, subprocess, sys, tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
-from config_edit import edit_joint_sections  # noqa: E402
+from config_edit import edit_joint_sections, m100_summaries  # noqa: E402
 
 
 def set_key(path, key, value):
@@ -36,25 +36,15 @@ def set_key(path, key, value):
         json.dump(cfg, f, indent=2)
 
 
-def m100_warnings(battsim, manifest, config, data, tmp, which):
-    """Counts of warnings raised over the manifest's flights numbered in `which`."""
-    with open(manifest) as f:
-        m = json.load(f)
-    m["defaults"]["config"] = config
-    m["base_dir"] = os.path.join(data, "cmu-m100", "flights")
-    path = os.path.join(tmp, "m100.json")
-    with open(path, "w") as f:
-        json.dump(m, f)
-    out = os.path.join(tmp, "summaries")
-    r = subprocess.run([battsim, "batch", "-m", path, "--estimator", "joint", "--out", out, "--no-progress",
-                        "-o", os.path.join(tmp, "table.md")], capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit(f"battsim batch failed:\n{r.stderr}")
+def m100_warnings(battsim, config, data, tmp, which):
+    """Counts of warnings raised over the Matrice 100 flights numbered in `which`."""
+    try:
+        summaries = m100_summaries(battsim, ROOT, config, data, tmp)
+    except RuntimeError as e:
+        sys.exit(str(e))
     counts = collections.Counter()
     for n in which:
-        with open(os.path.join(out, f"{n}.json")) as f:
-            counts.update({w["name"] for w in json.load(f)["warnings"]})
-    shutil.rmtree(out)
+        counts.update({w["name"] for w in summaries[n]["warnings"]})
     return (f"short flight {counts['short_flight']}/{len(which)} (low capacity {counts['low_capacity']}, "
             f"high resistance {counts['high_resistance']})")
 
@@ -96,13 +86,13 @@ def main():
                                f" (undegraded {s['false_warnings_undegraded']['joint']['count']});")
                 m100 = os.path.join(configs, "dji-tb47d-6s.json")  # no `joint` section of its own
                 set_key(m100, a.key, value)
-                row.append("M100 committed config: " + m100_warnings(battsim, manifest, m100, data, tmp, range(1, 141)))
+                row.append("M100 committed config: " + m100_warnings(battsim, m100, data, tmp, range(1, 141)))
                 if a.stitched:
                     table = os.path.join(tmp, "stitched.json")
                     shutil.copy(stitched, table)
                     set_key(table, a.key, value)
                     row.append("; stitched table, even flights: " +
-                               m100_warnings(battsim, manifest, table, data, tmp, range(2, 141, 2)))
+                               m100_warnings(battsim, table, data, tmp, range(2, 141, 2)))
                 print(" ".join(row), flush=True)
 
 
