@@ -176,9 +176,14 @@ void print_brief(const nlohmann::json& s, std::ostream& out) {
         out << "  no flight (current never reached the flying threshold)\n";
         return;
     }
-    out << "  flight " << f["duration_s"] << " s; capacity mean " << f["capacity_ah"]["mean"] << " Ah (first 20 %: "
-        << f["capacity_ah"]["first20_mean"] << "); resistance mean " << f["resistance_ohm"]["mean"]
-        << " ohm; model MAE " << f["voltage_error_v"]["model"]["mean_abs"] << " V\n";
+    const auto& cap = f["capacity_ah"];
+    out << "  flight " << f["duration_s"] << " s; capacity mean " << cap["mean"] << " Ah (first 20 %: "
+        << cap["first20_mean"];
+    // The joint estimator's standard error: a flight that draws little of the pack says little.
+    if (cap.contains("final_sigma") && !cap["final_sigma"].is_null())
+        out << "; at landing " << cap["final"] << " +/- " << cap["final_sigma"];
+    out << "); resistance mean " << f["resistance_ohm"]["mean"] << " ohm; model MAE "
+        << f["voltage_error_v"]["model"]["mean_abs"] << " V\n";
     out << "  remaining time at 20 %: " << f["remaining_time_s"]["at20"] << " s; warnings:";
     if (s["warnings"].empty()) out << " none";
     for (const auto& w : s["warnings"]) out << " " << w["name"].get<std::string>() << "@" << w["first_time_s"] << "s";

@@ -165,6 +165,9 @@ TEST_CASE("replay --series carries the joint estimator's cell findings as the su
     CHECK(std::stod(last.at("expected_time_s")) > 0.0);
     // The rest after the landing gives the capacity from the two rests.
     CHECK(std::stod(last.at("rest_capacity_ah")) > 0.0);
+    // The short human summary says how sure the capacity is.
+    const auto brief = run("replay " + q(dir + "/w.csv") + " -c " + q(kSource + "/configs/generic-3s.json") + " --estimator joint");
+    CHECK_THAT(brief.out, Catch::Contains("; at landing ") && Catch::Contains(" +/- "));
 }
 
 TEST_CASE("replay reports bad input with file, line and a non-zero exit", "[cli]") {
