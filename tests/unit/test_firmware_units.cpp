@@ -236,7 +236,7 @@ TEST_CASE("firmware series formatter writes the host SeriesWriter's bytes", "[fi
                 for (int c = 0; c < core::kMaxCells; ++c) st.cell_score[c] = u(rng) / 500.0f;
                 st.capacity_sigma_ah = u(rng) / 1000.0f;
                 st.expected_time_s = u(rng) * 10.0f;
-                st.remaining_energy_wh = u(rng);
+                st.remaining_energy_wh = i == 9 ? 3.0e38f : u(rng);  // the widest a float prints
                 st.rest_capacity_ah = u(rng) / 100.0f;
                 st.outlier_cell = static_cast<int8_t>(i % 7 - 1);
                 st.pack_capacity_deficit = u(rng) / 500.0f;

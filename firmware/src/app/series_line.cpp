@@ -66,8 +66,10 @@ void format_series_line(const core::Sample& sample, const core::MonitorStatus& s
     // The joint estimator's own outputs (zero with the reference estimator).
     out.appendf(",%.5f,", static_cast<double>(s.capacity_sigma_ah));
     if (s.time_valid) out.appendf("%.2f", static_cast<double>(s.expected_time_s));
-    out.appendf(",%.3f,%.5f,%d,%.4f", static_cast<double>(s.remaining_energy_wh), static_cast<double>(s.rest_capacity_ah),
-                s.outlier_cell + 1, static_cast<double>(s.pack_capacity_deficit));
+    out.appendf(",%.3f", static_cast<double>(s.remaining_energy_wh));
+    out.appendf(",%.5f", static_cast<double>(s.rest_capacity_ah));
+    out.appendf(",%d", s.outlier_cell + 1);
+    out.appendf(",%.4f", static_cast<double>(s.pack_capacity_deficit));
     for (int c = 0; c < cells; ++c) out.appendf(",%.6f", static_cast<double>(cell_value(s.cell_resistance_ohm, c)));
     for (int c = 0; c < cells; ++c) out.appendf(",%.4f", static_cast<double>(cell_value(s.cell_capacity_deficit, c)));
     for (int c = 0; c < cells; ++c)

@@ -74,8 +74,14 @@ void SeriesWriter::add(const core::Sample& sample, const core::MonitorStatus& s)
         std::snprintf(buf, sizeof buf, "%.2f", s.expected_time_s);
         line_ += buf;
     }
-    std::snprintf(buf, sizeof buf, ",%.3f,%.5f,%d,%.4f", s.remaining_energy_wh, s.rest_capacity_ah,
-                  s.outlier_cell + 1, s.pack_capacity_deficit);
+    // One value per call, as put() does: a buffer of 64 holds any one float's digits.
+    std::snprintf(buf, sizeof buf, ",%.3f", s.remaining_energy_wh);
+    line_ += buf;
+    std::snprintf(buf, sizeof buf, ",%.5f", s.rest_capacity_ah);
+    line_ += buf;
+    std::snprintf(buf, sizeof buf, ",%d", s.outlier_cell + 1);
+    line_ += buf;
+    std::snprintf(buf, sizeof buf, ",%.4f", s.pack_capacity_deficit);
     line_ += buf;
     const auto cell_column = [&](const char* fmt, const float* values) {
         for (int c = 0; c < cells_; ++c) {
