@@ -216,6 +216,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("rest_capacity_min_rest_s", jc.rest_capacity_min_rest_s, 0, kBig);
         r.number("rest_capacity_max_current_a", jc.rest_capacity_max_current_a, 0, kBig);
         r.number("rest_capacity_min_soc_drop", jc.rest_capacity_min_soc_drop, 0.01, 1);
+        r.number("capacity_sigma_fraction_of_charge", jc.capacity_sigma_fraction_of_charge, 0, 10);
         r.number("ground_soc_process_scale", jc.ground_soc_process_scale, 0, 100);
         r.number("resistance_settle_s", jc.resistance_settle_s, 0, kBig);
         r.boolean("learn_offset_in_flight", jc.learn_offset_in_flight);
@@ -362,6 +363,7 @@ json config_to_json(const LoadedConfig& c) {
             {"rest_capacity_min_rest_s", jc.rest_capacity_min_rest_s},
             {"rest_capacity_max_current_a", jc.rest_capacity_max_current_a},
             {"rest_capacity_min_soc_drop", jc.rest_capacity_min_soc_drop},
+            {"capacity_sigma_fraction_of_charge", jc.capacity_sigma_fraction_of_charge},
             {"ground_soc_process_scale", jc.ground_soc_process_scale},
             {"resistance_settle_s", jc.resistance_settle_s},
             {"learn_offset_in_flight", jc.learn_offset_in_flight},

@@ -168,6 +168,7 @@ void visit_monitor_config(Config& c, F&& f) {
     f("joint.rest_capacity_min_rest_s", c.joint.rest_capacity_min_rest_s);
     f("joint.rest_capacity_max_current_a", c.joint.rest_capacity_max_current_a);
     f("joint.rest_capacity_min_soc_drop", c.joint.rest_capacity_min_soc_drop);
+    f("joint.capacity_sigma_fraction_of_charge", c.joint.capacity_sigma_fraction_of_charge);
     f("joint.ground_soc_process_scale", c.joint.ground_soc_process_scale);
     f("joint.resistance_settle_s", c.joint.resistance_settle_s);
     f("cell_analysis.lag_s", c.cell_analysis.lag_s);

@@ -1059,3 +1059,51 @@ TEST_CASE("Joint estimator: the verdict's solves and the energy start from the S
         CHECK(short_rest_on.at20.total_time_s == short_rest.at20.total_time_s);
     }
 }
+
+TEST_CASE("Capacity standard error: the filter's and a systematic part in proportion to the charge drawn", "[joint]") {
+    // Twin estimators on the same samples, one reporting the health filter's error alone
+    // (fraction 0) and one with 0.08 of the charge drawn added in quadrature. The charge is
+    // counted here from the plant's current; the estimator counts it less the small offset it
+    // learns on the ground (a few mA here), so the two agree to within a per cent.
+    TremblayParams rated;
+    rated.capacity_ah = 1.5f;
+    rated.internal_resistance_ohm = 0.025f;
+    JointEstimator::Config jc;
+    jc.ocv = lipo_table();
+    jc.capacity_sigma_fraction_of_charge = 0.0f;
+    JointEstimator alone;
+    alone.configure(jc, rated, 4);
+    jc.capacity_sigma_fraction_of_charge = 0.08f;
+    JointEstimator with;
+    with.configure(jc, rated, 4);
+    Plant plant{OcvCurve{}, 1.4f, 0.025f, 0.008f, 6.0f};
+    plant.ocv.configure(lipo_table(), 4, rated);
+    float v = plant.ocv.voltage_v(1.0f);
+    alone.start(v, 0.0f);
+    with.start(v, 0.0f);
+    const float dt = 0.067f;
+    uint64_t t_us = 0;
+    double charge_ah = 0.0;
+    float sigma_at_landing = 0.0f;
+    for (float t = 0.0f; t < 260.0f; t += dt) {
+        const bool flying = t >= 20.0f && t < 200.0f;
+        const float i = flying ? 200.0f / v : 0.2f;
+        v = plant.step(i, dt);
+        alone.update(t_us, v, i, dt, flying);
+        with.update(t_us, v, i, dt, flying);
+        t_us += 67000;
+        charge_ah += static_cast<double>(i) * dt / 3600.0;
+        const float s0 = alone.status().sigma_capacity_ah;
+        const float s = with.status().sigma_capacity_ah;
+        REQUIRE(alone.status().capacity_ah == with.status().capacity_ah);  // the estimate itself is untouched
+        if (t < 200.0f) {
+            const double sys = 0.08 * charge_ah;
+            CHECK(static_cast<double>(s) * s - static_cast<double>(s0) * s0 == Approx(sys * sys).epsilon(1e-2).margin(1e-7));
+            sigma_at_landing = s;
+        } else if (t > 205.0f) {
+            CHECK(s == sigma_at_landing);  // held on the ground, where nothing is learnt
+        }
+    }
+    CHECK(charge_ah > 0.5);  // the systematic part dominates by then: 0.08 × 0.6 Ah ≈ 0.05 Ah
+    CHECK(sigma_at_landing > 0.04f);
+}

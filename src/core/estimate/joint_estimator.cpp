@@ -231,8 +231,14 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     }
     status_.soc = clampf(es.soc, 0.0f, 1.0f);
     status_.capacity_ah = weakest_cell_ah(health().capacity_ah);
-    // Scaled as the capacity is (the weak cell's deficit taken as known).
-    status_.sigma_capacity_ah = weakest_cell_ah(health().sigma_capacity_ah);
+    // Scaled as the capacity is (the weak cell's deficit taken as known), and the systematic
+    // part that grows with the charge drawn (Config); held on the ground after a flight,
+    // where the capacity is not learnt either.
+    if (airborne || !has_flown_) {
+        const float filter_sigma_ah = weakest_cell_ah(health().sigma_capacity_ah);
+        const float systematic_ah = config_.capacity_sigma_fraction_of_charge * charge_total_ah_;
+        status_.sigma_capacity_ah = sqrtf(filter_sigma_ah * filter_sigma_ah + systematic_ah * systematic_ah);
+    }
     status_.measured_resistance_ohm = rs.valid ? rs.resistance_now_ohm : 0.0f;
     status_.measured_resistance_sigma_ohm = rs.valid ? rs.sigma_now_ohm : 0.0f;
     status_.polarisation_ohm = es.polarisation_ohm * tracking_.scale;
