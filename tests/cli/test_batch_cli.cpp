@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -245,4 +246,52 @@ TEST_CASE("batch on the shared dissertation flights matches the committed golden
     g["input"].erase("path");
     o["input"].erase("path");
     CHECK(g == o);
+}
+
+TEST_CASE("batch: the pack table weighs the flights' final capacities against their standard errors", "[cli][batch]") {
+    // Four simulated flights of one healthy 4S pack (four seeds) replayed with the joint
+    // estimator: the pack row's median, spread (interquartile range / 1.349) and median σ
+    // are those of the rows' own finals.
+    const std::string dir = temp_dir();
+    std::string manifest = "path,pack,config\n";
+    for (int k = 1; k <= 4; ++k) {
+        const std::string log = dir + "/f" + std::to_string(k) + ".csv";
+        REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/4s-racing-healthy-a.json") + " -o " + q(log) +
+                    " --seed " + std::to_string(k))
+                    .exit_code == 0);
+        manifest += "f" + std::to_string(k) + ".csv,A," + kSource + "/configs/sim-4s.json\n";
+    }
+    clitest::write_file(dir + "/fleet.csv", manifest);
+    auto r = run("batch -m " + q(dir + "/fleet.csv") + " --estimator joint --format json");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const auto t = nlohmann::json::parse(r.out);
+    std::vector<double> finals, sigmas;
+    for (const auto& row : t["rows"]) {
+        REQUIRE(row["capacity_final_ah"].is_number());
+        REQUIRE(row["capacity_final_sigma_ah"].is_number());
+        finals.push_back(row["capacity_final_ah"].get<double>());
+        sigmas.push_back(row["capacity_final_sigma_ah"].get<double>());
+    }
+    REQUIRE(finals.size() == 4);
+    std::sort(finals.begin(), finals.end());
+    std::sort(sigmas.begin(), sigmas.end());
+    // Quartiles at positions 1.25 and 3.75 of four.
+    const double q1 = finals[0] + 0.25 * (finals[1] - finals[0]);
+    const double q3 = finals[2] + 0.75 * (finals[3] - finals[2]);
+    const double spread = (q3 - q1) / 1.349;
+    CHECK(spread > 0.0);  // the flights differ: the checks below are not 0 = 0
+    const double sigma = 0.5 * (sigmas[1] + sigmas[2]);
+    REQUIRE(t["packs"].size() == 1);
+    const auto& p = t["packs"][0];
+    CHECK(p["capacity_final_median_ah"].get<double>() == Approx(0.5 * (finals[1] + finals[2])));
+    CHECK(p["capacity_final_spread_ah"].get<double>() == Approx(spread).epsilon(1e-5));
+    CHECK(p["capacity_final_sigma_median_ah"].get<double>() == Approx(sigma));
+    CHECK(p["capacity_scatter_ratio"].get<double>() == Approx(spread / sigma).epsilon(1e-5));
+    // The reference estimator reports no σ: no ratio.
+    auto ref = run("batch -m " + q(dir + "/fleet.csv") + " --format json");
+    REQUIRE(ref.exit_code == 0);
+    const auto rt = nlohmann::json::parse(ref.out);
+    CHECK(rt["rows"][0]["capacity_final_sigma_ah"].is_null());
+    CHECK(rt["packs"][0]["capacity_scatter_ratio"].is_null());
 }

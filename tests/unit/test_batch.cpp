@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "host/stats.h"
 #include "host/batch/batch.h"
 #include "host/batch/inputs.h"
 #include "host/batch/manifest.h"
@@ -369,6 +370,42 @@ TEST_CASE("least-squares slope and the pack table", "[batch]") {
     CHECK(packs[0]["resistance_trend_ohm_per_flight"].get<double>() == Approx(0.002));
     CHECK(packs[1]["pack"] == "A");
     CHECK(packs[1]["capacity_trend_ah_per_flight"].is_null());  // one flight: no trend
+    CHECK(packs[0]["capacity_final_median_ah"].is_null());      // no final capacities in these rows
+    CHECK(packs[0]["capacity_scatter_ratio"].is_null());
+}
+
+TEST_CASE("median and robust spread; the pack table's agreement of final capacities with their sigma", "[batch]") {
+    CHECK(std::isnan(battsim::host::median({})));
+    CHECK(battsim::host::median({3.0, 1.0, 2.0}) == 2.0);
+    CHECK(battsim::host::median({4.0, 1.0, 3.0, 2.0}) == 2.5);
+    CHECK(std::isnan(battsim::host::robust_spread({1.0, 2.0, 3.0})));  // fewer than 4
+    // 1..5: quartiles at positions 1.5 and 4.5 → 1.5 and 4.5, IQR 3.
+    CHECK(battsim::host::robust_spread({5.0, 1.0, 4.0, 2.0, 3.0}) == Approx(3.0 / 1.349));
+    // 1..4: positions 1.25 and 3.75 → 1.25 and 3.75, IQR 2.5.
+    CHECK(battsim::host::robust_spread({1.0, 2.0, 3.0, 4.0}) == Approx(2.5 / 1.349));
+
+    // Five flights of one pack, final capacities 1.0 … 1.4 Ah with σ 0.05 … 0.09 (median 0.07):
+    // spread 0.3 / 1.349 = 0.2224 Ah, 3.18 × the median σ. A failed flight and a reference
+    // flight (σ null) count in neither.
+    std::vector<json> rows;
+    for (int k = 0; k < 5; ++k)
+        rows.push_back(json{{"pack", "P"}, {"status", "ok"}, {"capacity_mean_ah", 1.2}, {"resistance_mean_ohm", 0.02},
+                            {"capacity_final_ah", 1.0 + 0.1 * k}, {"capacity_final_sigma_ah", 0.05 + 0.01 * k}});
+    rows.push_back(json{{"pack", "P"}, {"status", "error"}, {"capacity_mean_ah", nullptr}, {"resistance_mean_ohm", nullptr},
+                        {"capacity_final_ah", nullptr}, {"capacity_final_sigma_ah", nullptr}});
+    rows.push_back(json{{"pack", "Q"}, {"status", "ok"}, {"capacity_mean_ah", 1.2}, {"resistance_mean_ohm", 0.02},
+                        {"capacity_final_ah", 1.1}, {"capacity_final_sigma_ah", nullptr}});
+    const auto packs = pack_rows(rows);
+    REQUIRE(packs.size() == 2);
+    CHECK(packs[0]["capacity_final_median_ah"].get<double>() == Approx(1.2));
+    CHECK(packs[0]["capacity_final_spread_ah"].get<double>() == Approx(0.3 / 1.349).epsilon(1e-5));
+    CHECK(packs[0]["capacity_final_sigma_median_ah"].get<double>() == Approx(0.07));
+    CHECK(packs[0]["capacity_scatter_ratio"].get<double>() == Approx(0.3 / 1.349 / 0.07).epsilon(1e-5));
+    CHECK(packs[1]["capacity_final_median_ah"].get<double>() == Approx(1.1));
+    CHECK(packs[1]["capacity_final_spread_ah"].is_null());  // one flight
+    CHECK(packs[1]["capacity_scatter_ratio"].is_null());
+    const std::string md = render_packs(make_table(rows, rows.size(), "0123456789abcdef", ShardSpec()), TableFormat::Markdown);
+    CHECK(md.find("| P | 6 | 1 | 1.200 | 0 | 1.200 | 3.2 |") != std::string::npos);
 }
 
 TEST_CASE("table rendering: Markdown escapes, CSV quotes, JSON round-trips", "[batch]") {

@@ -169,6 +169,8 @@ json make_row(const BatchItem& item, const json& summary) {
     row["flight_duration_s"] = pick("/flight/duration_s");
     row["capacity_mean_ah"] = pick("/flight/capacity_ah/mean");
     row["capacity_first20_ah"] = pick("/flight/capacity_ah/first20_mean");
+    row["capacity_final_ah"] = pick("/flight/capacity_ah/final");
+    row["capacity_final_sigma_ah"] = pick("/flight/capacity_ah/final_sigma");
     row["error_mean_v"] = pick("/flight/voltage_error_v/model/mean");
     row["abs_error_mean_v"] = pick("/flight/voltage_error_v/model/mean_abs");
     row["resistance_mean_ohm"] = pick("/flight/resistance_ohm/mean");
@@ -202,7 +204,8 @@ json make_error_row(const BatchItem& item, const std::string& reason) {
     row["status"] = "error";
     row["error"] = reason;
     row["flight"] = false;
-    for (const char* k : {"flight_duration_s", "capacity_mean_ah", "capacity_first20_ah", "error_mean_v",
+    for (const char* k : {"flight_duration_s", "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah",
+                          "capacity_final_sigma_ah", "error_mean_v",
                           "abs_error_mean_v", "resistance_mean_ohm", "resistance_first20_ohm", "remaining_at20_s"})
         row[k] = nullptr;
     row["cell_scores"] = json::array();

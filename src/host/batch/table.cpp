@@ -1,5 +1,6 @@
 #include "host/batch/table.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -10,6 +11,7 @@
 #include "host/io/json_text.h"
 #include "host/io/sample_reader.h"
 #include "host/report/summary.h"
+#include "host/stats.h"
 
 namespace battsim {
 namespace host {
@@ -21,12 +23,14 @@ namespace {
 // Every row carries these keys, in this order in the CSV.
 const std::vector<std::string> kRowKeys = {
     "index", "test", "log", "pack", "config", "estimator", "status", "error", "flight", "flight_duration_s",
-    "capacity_mean_ah", "capacity_first20_ah", "error_mean_v", "abs_error_mean_v", "resistance_mean_ohm",
+    "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah", "capacity_final_sigma_ah", "error_mean_v", "abs_error_mean_v", "resistance_mean_ohm",
     "resistance_first20_ohm", "cell_scores", "remaining_at20_s", "warnings", "samples", "sensor_fault_samples",
     "notes"};
 
 const std::vector<std::string> kPackKeys = {"pack", "flights", "failed", "capacity_mean_ah",
-                                            "capacity_trend_ah_per_flight", "resistance_mean_ohm",
+                                            "capacity_trend_ah_per_flight", "capacity_final_median_ah",
+                                            "capacity_final_spread_ah", "capacity_final_sigma_median_ah",
+                                            "capacity_scatter_ratio", "resistance_mean_ohm",
                                             "resistance_trend_ohm_per_flight"};
 
 json number_or_null(double v) { return std::isfinite(v) ? json(round_sig(v)) : json(nullptr); }
@@ -112,11 +116,13 @@ std::string render_rows_md(const json& table) {
 
 std::string render_packs_md(const json& packs) {
     std::ostringstream o;
-    o << "| pack | flights | failed | capacity Ah | capacity trend Ah/flight | R Ω | R trend Ω/flight |\n";
-    o << "|---|--:|--:|--:|--:|--:|--:|\n";
+    o << "| pack | flights | failed | capacity Ah | capacity trend Ah/flight | final capacity Ah | final spread / σ "
+         "| R Ω | R trend Ω/flight |\n";
+    o << "|---|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     for (const json& p : packs) {
         o << "| " << md_cell(text(p["pack"])) << " | " << p["flights"].dump() << " | " << p["failed"].dump() << " | "
           << fixed(p["capacity_mean_ah"], 3) << " | " << significant(p["capacity_trend_ah_per_flight"], 3) << " | "
+          << fixed(p["capacity_final_median_ah"], 3) << " | " << fixed(p["capacity_scatter_ratio"], 1) << " | "
           << fixed(p["resistance_mean_ohm"], 4) << " | " << significant(p["resistance_trend_ohm_per_flight"], 3)
           << " |\n";
     }
@@ -164,7 +170,7 @@ double least_squares_slope(const std::vector<double>& x, const std::vector<doubl
 std::vector<json> pack_rows(const std::vector<json>& rows) {
     struct Acc {
         size_t flights = 0, failed = 0;
-        std::vector<double> cap_x, cap_y, res_x, res_y;
+        std::vector<double> cap_x, cap_y, res_x, res_y, final_ah, final_sigma_ah;
     };
     std::vector<std::string> order;
     std::map<std::string, Acc> packs;
@@ -183,6 +189,9 @@ std::vector<json> pack_rows(const std::vector<json>& rows) {
             a.cap_x.push_back(x);
             a.cap_y.push_back(r["capacity_mean_ah"].get<double>());
         }
+        if (r["capacity_final_ah"].is_number()) a.final_ah.push_back(r["capacity_final_ah"].get<double>());
+        if (r["capacity_final_sigma_ah"].is_number())
+            a.final_sigma_ah.push_back(r["capacity_final_sigma_ah"].get<double>());
         if (r["resistance_mean_ohm"].is_number()) {
             a.res_x.push_back(x);
             a.res_y.push_back(r["resistance_mean_ohm"].get<double>());
@@ -203,6 +212,15 @@ std::vector<json> pack_rows(const std::vector<json>& rows) {
         p["failed"] = a.failed;
         p["capacity_mean_ah"] = number_or_null(mean(a.cap_y));
         p["capacity_trend_ah_per_flight"] = number_or_null(least_squares_slope(a.cap_x, a.cap_y));
+        // Do the flights agree within their own standard errors? The spread of the final
+        // capacities against the median σ a flight reports: about 1 when they do; far above,
+        // and the config's curve does not fit the pack (or the flights draw too little of it).
+        const double spread = robust_spread(a.final_ah);
+        const double sigma = median(a.final_sigma_ah);
+        p["capacity_final_median_ah"] = number_or_null(median(a.final_ah));
+        p["capacity_final_spread_ah"] = number_or_null(spread);
+        p["capacity_final_sigma_median_ah"] = number_or_null(sigma);
+        p["capacity_scatter_ratio"] = number_or_null(sigma > 0.0 ? spread / sigma : NAN);
         p["resistance_mean_ohm"] = number_or_null(mean(a.res_y));
         p["resistance_trend_ohm_per_flight"] = number_or_null(least_squares_slope(a.res_x, a.res_y));
         out.push_back(p);

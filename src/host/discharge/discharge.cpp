@@ -8,6 +8,7 @@
 #include "core/estimate/coulomb_counter.h"
 #include "host/plot/plot.h"
 #include "host/report/summary.h"
+#include "host/stats.h"
 
 namespace battsim {
 namespace host {
@@ -19,17 +20,6 @@ struct Raw {
     double time_s, voltage_v, current_a;
 };
 
-double median(std::vector<double> v) {
-    if (v.empty()) return 0;
-    const size_t mid = v.size() / 2;
-    std::nth_element(v.begin(), v.begin() + mid, v.end());
-    double m = v[mid];
-    if (v.size() % 2 == 0) {
-        std::nth_element(v.begin(), v.begin() + mid - 1, v.end());
-        m = 0.5 * (m + v[mid - 1]);
-    }
-    return m;
-}
 
 void locate_zones(DischargeResult& r) {
     Zones& z = r.zones;
@@ -49,7 +39,7 @@ void locate_zones(DischargeResult& r) {
         z.note = "no points between 30 % and 70 % of the capacity";
         return;
     }
-    const double g_nom = median(mid);  // negative while discharging
+    const double g_nom = host::median(mid);  // negative while discharging
     z.nominal_gradient_v_per_ah = g_nom;
     if (!(g_nom < 0)) {
         z.note = "the voltage does not fall over the middle of the discharge";

@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "host/io/sample_reader.h"
+#include "host/stats.h"
 #include "host/sim/det_math.h"
 
 namespace battsim {
@@ -178,20 +179,11 @@ struct Stat {
         if (has) v.push_back(x);
     }
     double median_abs() const {
-        if (v.empty()) return NAN;
         std::vector<double> a;
         for (double x : v) a.push_back(std::fabs(x));
-        std::sort(a.begin(), a.end());
-        const size_t n = a.size();
-        return n % 2 ? a[n / 2] : 0.5 * (a[n / 2 - 1] + a[n / 2]);
+        return host::median(a);
     }
-    double median() const {
-        if (v.empty()) return NAN;
-        std::vector<double> a = v;
-        std::sort(a.begin(), a.end());
-        const size_t n = a.size();
-        return n % 2 ? a[n / 2] : 0.5 * (a[n / 2 - 1] + a[n / 2]);
-    }
+    double median() const { return host::median(v); }
     double max() const {
         double m = NAN;
         for (double x : v) {
