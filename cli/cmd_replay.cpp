@@ -1,11 +1,15 @@
-// battsim replay LOG: one log through the core monitor; series CSV and summary JSON.
+// battsim replay LOG: one log through the core monitor; series CSV and summary JSON; with
+// --charged-mah, the current sensor checked against the charger's count.
 #include <iostream>
+#include <stdexcept>
 
 #include "command.h"
 #include "common_options.h"
 #include "host/io/atomic_file.h"
+#include "host/config_json.h"
 #include "host/plot/plot.h"
 #include "host/replay.h"
+#include "host/report/charger_check.h"
 
 namespace battsim {
 namespace cli {
@@ -19,6 +23,9 @@ struct ReplayArgs {
     bool json = false;
     double realtime = 0;
     bool realtime_flag = false;
+    double charged_mah = 0;
+    double charger_tolerance = 0.03;
+    std::string config_out;
     InputArgs input;
 };
 
@@ -33,6 +40,15 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_flag("--json", a->json, "Print the summary JSON on standard output");
     sub.add_flag("--realtime", a->realtime_flag, "Pace the replay to wall-clock time (the monitor still uses the log's time stamps)");
     sub.add_option("--speed", a->realtime, "With --realtime: speed-up factor (default 1)");
+    auto* charged = sub.add_option("--charged-mah", a->charged_mah,
+                                   "What the charger put back after this log (the pack charged full before it): "
+                                   "checks the current sensor against it (summary `charger_check`)");
+    sub.add_option("--charger-tolerance", a->charger_tolerance,
+                   "With --charged-mah: a count off by more than this fraction is a sensor fault (default 0.03)");
+    sub.add_option("--config-out", a->config_out,
+                   "With --charged-mah: write the config with the suggested current-sensor gain "
+                   "(extensions.current_sensor.gain) here")
+        ->needs(charged);
     add_input_options(sub, a->input);
     return [a]() -> int {
         host::ReplayOptions opt;
@@ -56,9 +72,31 @@ std::function<int()> setup(CLI::App& sub) {
             return kExitOutputError;
         }
         for (const auto& note : summary["input"]["notes"]) std::cerr << "battsim replay: note: " << note.get<std::string>() << "\n";
+        host::LoadedConfig corrected = opt.config;
+        if (a->charged_mah != 0) {
+            host::ChargerCheckOptions co;
+            co.charged_ah = a->charged_mah * 1e-3;
+            co.tolerance = a->charger_tolerance;
+            co.current_gain = opt.config.monitor.extensions.current_sensor.gain;
+            try {
+                summary["charger_check"] = host::charger_check(summary, co);
+            } catch (const std::invalid_argument& e) {
+                std::cerr << "battsim replay: --charged-mah: " << e.what() << "\n";
+                return kExitUsage;
+            }
+            for (const auto& note : summary["charger_check"]["notes"])
+                std::cerr << "battsim replay: charger check: " << note.get<std::string>() << "\n";
+            const auto& gain = summary["charger_check"]["suggested_current_gain"];
+            if (gain.is_number()) corrected.monitor.extensions.current_sensor.gain = static_cast<float>(gain.get<double>());
+        }
+        // Written only with a suggestion: a config carrying a gain fitted to an offset, or
+        // to a pack that was not full, would be wrong on every later flight.
+        const bool refuse_config = !a->config_out.empty() && !summary["charger_check"]["suggested_current_gain"].is_number();
         const std::string text = summary.dump(2) + "\n";
         try {
             if (!a->summary.empty()) host::write_file_atomic(a->summary, text);
+            if (!a->config_out.empty() && !refuse_config)
+                host::write_file_atomic(a->config_out, host::config_to_json(corrected).dump(2) + "\n");
             if (!a->plot.empty()) {
                 const std::string title = "battsim replay: " + a->log + " (config " + summary["config"].get<std::string>() +
                                           ", " + summary["estimator"].get<std::string>() + " estimator)";
@@ -73,6 +111,20 @@ std::function<int()> setup(CLI::App& sub) {
         }
         if (a->json) std::cout << text;
         if (!a->json && a->summary.empty() && a->series.empty() && a->plot.empty()) print_brief(summary, std::cout);
+        if (!a->json && summary.contains("charger_check")) {
+            const auto& c = summary["charger_check"];
+            std::cout << "  charger check: counted " << c["counted_ah"] << " Ah against " << c["charged_ah"]
+                      << " Ah charged (x" << c["ratio"] << "): "
+                      << (c["fault"].is_null() ? "no verdict" : c["fault"].get<bool>() ? "current sensor fault" : "within tolerance");
+            if (c["suggested_current_gain"].is_number())
+                std::cout << "; suggested extensions.current_sensor.gain " << c["suggested_current_gain"];
+            std::cout << "\n";
+        }
+        if (refuse_config) {
+            std::cerr << "battsim replay: --config-out: no gain suggested (see the charger check's notes); "
+                      << a->config_out << " not written\n";
+            return kExitFailure;
+        }
         return kExitOk;
     };
 }

@@ -170,6 +170,56 @@ TEST_CASE("replay --series carries the joint estimator's cell findings as the su
     CHECK_THAT(brief.out, Catch::Contains("; at landing ") && Catch::Contains(" +/- "));
 }
 
+TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes the config that corrects it", "[cli][truth]") {
+    // The simulated racing flight whose current sensor reads 8 % high; the truth holds the
+    // charge the pack gave over the log, which is what a charger puts back.
+    const std::string dir = clitest::temp_dir();
+    REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/4s-racing-fault-current-gain.json") + " -o " +
+                q(dir + "/g.csv")).exit_code == 0);
+    const auto truth = nlohmann::json::parse(clitest::read_file(dir + "/g.truth.json"));
+    const double charged_mah = truth["flight"]["log_charge_ah"].get<double>() * 1000.0;
+    REQUIRE(charged_mah > 500.0);
+    const std::string config = kSource + "/configs/sim-4s.json";
+    const std::string charged = " --charged-mah " + std::to_string(charged_mah);
+    const auto j = clitest::run_json("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --estimator joint" + charged +
+                                     " --config-out " + q(dir + "/fixed.json") + " --json");
+    const auto& c = j["charger_check"];
+    CHECK(c["fault"] == true);
+    CHECK(c["ratio"].get<double>() == Approx(1.08).epsilon(0.003));
+    CHECK(c["suggested_current_gain"].get<double>() == Approx(1.0 / 1.08).epsilon(0.003));
+    CHECK(c["notes"].empty());
+    // The written config corrects the sensor: the count now matches the charger's.
+    const auto again = clitest::run_json("replay " + q(dir + "/g.csv") + " -c " + q(dir + "/fixed.json") +
+                                         " --estimator joint" + charged + " --json");
+    CHECK(again["charger_check"]["fault"] == false);
+    CHECK(again["charger_check"]["ratio"].get<double>() == Approx(1.0).epsilon(0.002));
+    // A clean sensor on a healthy pack is within the bar.
+    REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/4s-racing-healthy-a.json") + " -o " + q(dir + "/h.csv")).exit_code == 0);
+    const auto ht = nlohmann::json::parse(clitest::read_file(dir + "/h.truth.json"));
+    const auto h = clitest::run_json("replay " + q(dir + "/h.csv") + " -c " + q(config) + " --charged-mah " +
+                                     std::to_string(ht["flight"]["log_charge_ah"].get<double>() * 1000.0) + " --json");
+    CHECK(h["charger_check"]["fault"] == false);
+    CHECK(h["charger_check"]["ratio"].get<double>() == Approx(1.0).epsilon(0.005));
+    // The short summary says it; bad values are refused with a message.
+    const auto brief = run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --estimator joint" + charged);
+    CHECK_THAT(brief.out, Catch::Contains("charger check: counted ") && Catch::Contains("current sensor fault"));
+    const auto bad = run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --charged-mah -5");
+    CHECK(bad.exit_code == 2);
+    CHECK_THAT(bad.err, Catch::Contains("--charged-mah: the charged charge must be a positive number of mAh"));
+    CHECK(run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --config-out " + q(dir + "/x.json")).exit_code == 2);
+    // A charger's count that includes a deficit the log never saw (the pack not full at the
+    // start) gets no verdict, and no config is written from it.
+    REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/4s-racing-partial-70.json") + " -o " + q(dir + "/p.csv")).exit_code == 0);
+    const auto pt = nlohmann::json::parse(clitest::read_file(dir + "/p.truth.json"));
+    const double put_back = 1000.0 * (pt["flight"]["log_charge_ah"].get<double>() + pt["pack"]["initial_charge_drawn_ah"].get<double>());
+    const auto partial = run("replay " + q(dir + "/p.csv") + " -c " + q(config) + " --estimator joint --charged-mah " +
+                             std::to_string(put_back) + " --config-out " + q(dir + "/p-fixed.json"));
+    CHECK(partial.exit_code == 1);
+    CHECK_THAT(partial.out, Catch::Contains("no verdict"));
+    CHECK_THAT(partial.err, Catch::Contains("not charged full") && Catch::Contains("not written"));
+    CHECK_FALSE(std::filesystem::exists(dir + "/p-fixed.json"));
+}
+
 TEST_CASE("replay reports bad input with file, line and a non-zero exit", "[cli]") {
     const std::string dir = clitest::temp_dir();
     struct Case {

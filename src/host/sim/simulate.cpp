@@ -236,6 +236,7 @@ SimulationResult simulate(const Scenario& scenario, const SimulateOptions& optio
     tr.log_end_s = log_end;
     tr.landed_by_cutoff = cut_in_flight;
     tr.final_temperature_c = plant.state().temperature_c;
+    tr.log_charge_ah = plant.state().charge_ah;
 
     if (!cut_in_flight) {
         if (!have_cont) save_continuation(n);
@@ -380,7 +381,10 @@ json truth_to_json(const SimulationResult& r) {
                    {"short_flight", t.short_flight()},
                    {"energy_to_cutoff_wh", round_fixed(t.energy_to_cutoff_wh, 4)},
                    {"mean_flight_power_w", round_fixed(t.mean_flight_power_w, 3)},
-                   {"final_temperature_c", round_fixed(t.final_temperature_c, 2)}};
+                   {"final_temperature_c", round_fixed(t.final_temperature_c, 2)},
+                   // What a charger puts back after the log (with pack.initial_charge_drawn_ah):
+                   // the ruler for a current-sensor check against the charger's count.
+                   {"log_charge_ah", round_fixed(t.log_charge_ah, 6)}};
     j["degradation"] = {{"degraded", t.degraded},
                         {"justified_warnings", t.justified_warnings},
                         {"weak_cell", t.weak_cell >= 0 ? json(t.weak_cell + 1) : json(nullptr)},

@@ -54,6 +54,7 @@ struct Truth {
     double pack_r0_reference_ohm = 0;     // Σ R0 at 25 °C, full
     double nominal_pack_r0_reference_ohm = 0;
     double initial_charge_ah = 0;         // already drawn from the weakest cell at power-on
+    double log_charge_ah = 0;             // drawn from power-on to the log's end (a charger puts back this + initial)
     // Cells beyond the bar against the median of the other cells (capacity more
     // than 10 % lower, or R0 more than 10 % higher), 0-based; whatever the scenario
     // declared: the cell-to-cell spread can push a declared 10 % cell inside the bar or

@@ -1,0 +1,59 @@
+#include "host/report/charger_check.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "host/report/summary.h"
+
+namespace battsim {
+namespace host {
+
+using nlohmann::json;
+
+json charger_check(const json& summary, const ChargerCheckOptions& o) {
+    if (!(o.charged_ah > 0.0) || !std::isfinite(o.charged_ah))
+        throw std::invalid_argument("the charged charge must be a positive number of mAh");
+    if (!(o.tolerance > 0.0) || !std::isfinite(o.tolerance))
+        throw std::invalid_argument("the charger tolerance must be a positive fraction");
+    // consumed.ah starts from the charge the monitor read as missing at start (from the
+    // resting voltage); the charger's count covers the log alone when the pack began full.
+    const double consumed_ah = summary.at("consumed").at("ah").get<double>();
+    const json& init = summary.at("initial_state");
+    const double initial_ah = init.at("consumed_mah").is_number() ? init.at("consumed_mah").get<double>() * 1e-3 : 0.0;
+    const double counted_ah = consumed_ah - initial_ah;
+    if (!(counted_ah > 0.0)) throw std::invalid_argument("the log counts no charge drawn: nothing to compare");
+    const double ratio = counted_ah / o.charged_ah;
+    json notes = json::array();
+    // Reading a full pack's resting voltage leaves about 1 % of its charge; more means the
+    // pack was not full, the charger's count holds that deficit too, and the monitor's
+    // estimate of it is too rough to take off (a partly charged pack's deficit read from the
+    // model's curve was 198 mAh against a true 468 on the simulated suite): no verdict.
+    const bool started_full = initial_ah <= 0.05 * o.charged_ah;
+    if (!started_full) {
+        notes.push_back("the monitor read " + std::to_string(static_cast<long>(std::lround(initial_ah * 1e3))) +
+                        " mAh missing at the start: the pack was not charged full before the log, and the charger's "
+                        "count includes that charge; no verdict");
+    }
+    // An offset's charge grows with the time flown, a gain's with the charge: one count
+    // cannot tell them apart, and a gain fitted to an offset is wrong on the next flight.
+    bool sensor_fault = false;
+    for (const json& w : summary.at("warnings")) sensor_fault = sensor_fault || w.value("name", std::string()) == "sensor_fault";
+    if (sensor_fault) {
+        notes.push_back("a sensor fault was raised in flight (a current offset learnt on the ground, or missing "
+                        "samples): an offset's charge reads as gain here; correct it first, no gain suggested");
+    }
+    json j;
+    j["charged_ah"] = round_sig(o.charged_ah);
+    j["counted_ah"] = round_sig(counted_ah);
+    j["ratio"] = round_sig(ratio);
+    j["tolerance"] = o.tolerance;
+    j["current_gain"] = round_sig(o.current_gain);
+    j["suggested_current_gain"] = started_full && !sensor_fault ? json(round_sig(o.current_gain / ratio)) : json(nullptr);
+    j["fault"] = started_full ? json(std::fabs(ratio - 1.0) > o.tolerance) : json(nullptr);
+    j["notes"] = notes;
+    return j;
+}
+
+}  // namespace host
+}  // namespace battsim

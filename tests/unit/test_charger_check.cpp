@@ -1,0 +1,63 @@
+// The current sensor against the charger's count, on hand-made summaries.
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include "host/report/charger_check.h"
+
+using battsim::host::charger_check;
+using battsim::host::ChargerCheckOptions;
+using nlohmann::json;
+
+namespace {
+json summary(double consumed_ah, double initial_mah, json warnings = json::array()) {
+    return json{{"consumed", {{"ah", consumed_ah}, {"wh", 0.0}}},
+                {"initial_state", {{"consumed_mah", initial_mah}}},
+                {"warnings", warnings}};
+}
+}  // namespace
+
+TEST_CASE("Charger check: the count over the charger's, the suggested gain, the bar", "[report][charger]") {
+    ChargerCheckOptions o;
+    o.charged_ah = 1.0;
+    // 1.1 Ah counted from a start 10 mAh short of full: 1.09 Ah over the log, 9 % high.
+    json c = charger_check(summary(1.1, 10.0), o);
+    CHECK(c["counted_ah"].get<double>() == Approx(1.09));
+    CHECK(c["ratio"].get<double>() == Approx(1.09));
+    CHECK(c["fault"] == true);
+    CHECK(c["suggested_current_gain"].get<double>() == Approx(1.0 / 1.09).epsilon(1e-5));
+    CHECK(c["notes"].empty());
+    // A config already correcting by 0.95: the suggestion multiplies it.
+    o.current_gain = 0.95;
+    c = charger_check(summary(1.1, 10.0), o);
+    CHECK(c["suggested_current_gain"].get<double>() == Approx(0.95 / 1.09).epsilon(1e-5));
+    // 2 % off is within the default 3 %; not within 1 %.
+    o.current_gain = 1.0;
+    CHECK(charger_check(summary(1.02, 0.0), o)["fault"] == false);
+    o.tolerance = 0.01;
+    CHECK(charger_check(summary(1.02, 0.0), o)["fault"] == true);
+}
+
+TEST_CASE("Charger check: notes on a pack not full at the start and on an in-flight sensor fault; bad input", "[report][charger]") {
+    ChargerCheckOptions o;
+    o.charged_ah = 1.0;
+    // 100 mAh missing at the start (over 5 % of the charge put back): no verdict.
+    json c = charger_check(summary(1.2, 100.0, json::array({json{{"name", "sensor_fault"}}})), o);
+    REQUIRE(c["notes"].size() == 2);
+    CHECK(c["notes"][0].get<std::string>().find("100 mAh missing at the start") != std::string::npos);
+    CHECK(c["notes"][1].get<std::string>().find("offset") != std::string::npos);
+    CHECK(c["ratio"].get<double>() == Approx(1.1));
+    CHECK(c["fault"].is_null());
+    CHECK(c["suggested_current_gain"].is_null());
+    // Full at the start but a sensor fault in flight: the verdict stands, no gain suggested.
+    c = charger_check(summary(1.2, 10.0, json::array({json{{"name", "sensor_fault"}}})), o);
+    CHECK(c["fault"] == true);
+    CHECK(c["suggested_current_gain"].is_null());
+    // 50 mAh of 1 Ah is on the bar: still judged.
+    CHECK(charger_check(summary(1.05, 50.0), o)["fault"] == false);
+    o.charged_ah = 0.0;
+    CHECK_THROWS_AS(charger_check(summary(1.0, 0.0), o), std::invalid_argument);
+    o.charged_ah = 1.0;
+    CHECK_THROWS_WITH(charger_check(summary(0.01, 10.0), o), Catch::Contains("no charge drawn"));
+    o.tolerance = -1;
+    CHECK_THROWS_AS(charger_check(summary(1.0, 0.0), o), std::invalid_argument);
+}
