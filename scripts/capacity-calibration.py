@@ -23,30 +23,17 @@ the errors within one of it and 95 % within two. Three rulers:
 set to F (0: the health filter's error alone, as before the twenty-sixth session). Standard
 library only (twenty-fifth session, docs/estimator.md).
 """
-import argparse, csv, glob, json, os, shutil, statistics, subprocess, sys, tempfile
+import argparse, csv, json, os, shutil, statistics, sys, tempfile
 from concurrent.futures import ThreadPoolExecutor
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
-from config_edit import edit_joint_sections, m100_summaries  # noqa: E402
-
-
-def run(args, **kw):
-    r = subprocess.run(args, capture_output=True, text=True, **kw)
-    if r.returncode != 0:
-        sys.exit(f"{' '.join(args[:2])} failed:\n{r.stderr}")
-    return r.stdout
+from config_edit import edit_joint_sections, m100_summaries, run_or_exit as run, simulate_copy, suite_scenarios  # noqa: E402
 
 
 def sim_flight(job):
     battsim, tmp, scen, k = job
-    with open(scen) as f:
-        s = json.load(f)
-    cfg = os.path.normpath(os.path.join(os.path.dirname(scen), s["monitor_config"]))
-    tag = os.path.join(tmp, f"{s['name']}@{k}")
-    run([battsim, "simulate", scen, "-o", tag + ".csv", "--seed", str(s["seed"] + 7919 * k)])
-    with open(tag + ".truth.json") as f:
-        truth = json.load(f)
+    s, cfg, tag, truth = simulate_copy(battsim, tmp, scen, k)
     run([battsim, "replay", tag + ".csv", "-c", cfg, "--estimator", "joint", "--series", tag + ".series.csv"])
     with open(tag + ".series.csv") as f:
         rows = [r for r in csv.DictReader(f) if float(r["capacity_sigma_ah"]) > 0.0]
@@ -103,8 +90,7 @@ def main():
             with open(m100_config, "w") as f:
                 json.dump(cfg, f, indent=2)
         for suite in ("scenarios", "scenarios-holdout", "scenarios-rest-polarisation", "scenarios-last-cell"):
-            scens = [p for p in sorted(glob.glob(os.path.join(configs, suite, "*.json")))
-                     if json.load(open(p)).get("schema") == "battsim.scenario"]
+            scens = suite_scenarios(configs, suite)
             jobs = [(battsim, tmp, p, k) for p in scens for k in range(a.copies)]
             with ThreadPoolExecutor(2) as pool:
                 res = list(pool.map(sim_flight, jobs))

@@ -13,28 +13,17 @@ flagged, and for each flagged flight with a suggested gain the ratio again with 
 
 Standard library only (twenty-sixth session; README, `battsim replay`).
 """
-import argparse, glob, json, os, subprocess, sys, tempfile
+import argparse, json, os, sys, tempfile
 from concurrent.futures import ThreadPoolExecutor
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def run(args):
-    r = subprocess.run(args, capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit(f"{' '.join(args[:2])} failed:\n{r.stderr}")
-    return r.stdout
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from config_edit import run_or_exit as run, simulate_copy, suite_scenarios  # noqa: E402
 
 
 def flight(job):
     battsim, tmp, scen, k = job
-    with open(scen) as f:
-        s = json.load(f)
-    cfg = os.path.normpath(os.path.join(os.path.dirname(scen), s["monitor_config"]))
-    tag = os.path.join(tmp, f"{s['name']}@{k}")
-    run([battsim, "simulate", scen, "-o", tag + ".csv", "--seed", str(s["seed"] + 7919 * k)])
-    with open(tag + ".truth.json") as f:
-        truth = json.load(f)
+    s, cfg, tag, truth = simulate_copy(battsim, tmp, scen, k)
     # A partly charged pack: the charger also puts back what was missing at power-on.
     charged = 1000.0 * (truth["flight"]["log_charge_ah"] + truth["pack"]["initial_charge_drawn_ah"])
     args = [battsim, "replay", tag + ".csv", "-c", cfg, "--estimator", "joint", "--charged-mah", f"{charged:.3f}"]
@@ -57,8 +46,7 @@ def main():
         sys.exit(f"{battsim} not found: build first")
     with tempfile.TemporaryDirectory() as tmp:
         scens = [p for suite in ("scenarios", "scenarios-holdout")
-                 for p in sorted(glob.glob(os.path.join(ROOT, "configs", suite, "*.json")))
-                 if json.load(open(p)).get("schema") == "battsim.scenario"]
+                 for p in suite_scenarios(os.path.join(ROOT, "configs"), suite)]
         with ThreadPoolExecutor(2) as pool:
             res = list(pool.map(flight, [(battsim, tmp, p, k) for p in scens for k in range(a.copies)]))
     clean = [r for r in res if not r[1]]

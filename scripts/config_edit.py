@@ -65,3 +65,37 @@ def m100_summaries(battsim, root, config, data, tmp):
         os.remove(os.path.join(out, name))
     os.rmdir(out)
     return summaries
+
+
+def run_or_exit(args, **kw):
+    """Runs a command and returns its stdout; exits with its stderr when it fails."""
+    import subprocess
+    import sys
+    r = subprocess.run(args, capture_output=True, text=True, **kw)
+    if r.returncode != 0:
+        sys.exit(f"{' '.join(args[:2])} failed:\n{r.stderr}")
+    return r.stdout
+
+
+def suite_scenarios(configs, suite):
+    """The scenario files of configs/<suite>, sorted (its README and other JSON left out)."""
+    import glob
+    out = []
+    for p in sorted(glob.glob(os.path.join(configs, suite, "*.json"))):
+        with open(p) as f:
+            if json.load(f).get("schema") == "battsim.scenario":
+                out.append(p)
+    return out
+
+
+def simulate_copy(battsim, tmp, scen, k):
+    """Simulates copy k of a scenario (seed + 7919·k, as `battsim score --copies` does) into
+    tmp; returns (scenario, its monitor config path, the log's path without .csv, truth)."""
+    with open(scen) as f:
+        s = json.load(f)
+    cfg = os.path.normpath(os.path.join(os.path.dirname(scen), s["monitor_config"]))
+    tag = os.path.join(tmp, f"{s['name']}@{k}")
+    run_or_exit([battsim, "simulate", scen, "-o", tag + ".csv", "--seed", str(s["seed"] + 7919 * k)])
+    with open(tag + ".truth.json") as f:
+        truth = json.load(f)
+    return s, cfg, tag, truth

@@ -10,20 +10,13 @@ replayed with configs/sim-4s.json at that bar, with and without the balance-tap 
 
 Standard library only (twenty-sixth session, docs/estimator.md; not adopted).
 """
-import argparse, json, os, shutil, subprocess, sys, tempfile
+import argparse, json, os, shutil, sys, tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
-from config_edit import edit_joint_sections  # noqa: E402
+from config_edit import edit_joint_sections, run_or_exit as run  # noqa: E402
 
 SUITES = ["scenarios", "scenarios-holdout", "scenarios-last-cell", "scenarios-rest-polarisation"]
-
-
-def run(args, cwd=None):
-    r = subprocess.run(args, capture_output=True, text=True, cwd=cwd)
-    if r.returncode != 0:
-        sys.exit(f"{' '.join(args[:2])} failed:\n{r.stderr}")
-    return r.stdout
 
 
 def main():
