@@ -187,7 +187,7 @@ TEST_CASE("batch: manifest and option errors are clear and exit non-zero", "[cli
     clitest::write_file(dir + "/m.json", "{\n  \"schema\": \"battsim.manifest\",\n  \"logs\": [\n    {\"path\": \"g1.csv\", \"pakc\": \"A\"}\n  ]\n}\n");
     auto r = run("batch --manifest " + q(dir + "/m.json"));
     CHECK(r.exit_code == 3);
-    CHECK(r.err == "battsim batch: " + dir + "/m.json:4:24: $.logs[0].pakc: unknown key; expected one of columns, config, "
+    CHECK(r.err == "battsim batch: " + dir + "/m.json:4:24: $.logs[0].pakc: unknown key; expected one of charged_mah, columns, config, "
                                                "current_source, estimator, format, pack, path, test\n");
     clitest::write_file(dir + "/m.csv", "path,pack\ng1.csv,A,extra\n");
     r = run("batch --manifest " + q(dir + "/m.csv"));
@@ -294,4 +294,40 @@ TEST_CASE("batch: the pack table weighs the flights' final capacities against th
     const auto rt = nlohmann::json::parse(ref.out);
     CHECK(rt["rows"][0]["capacity_final_sigma_ah"].is_null());
     CHECK(rt["packs"][0]["capacity_scatter_ratio"].is_null());
+}
+
+TEST_CASE("batch: a manifest's charged_mah checks each log's current sensor as replay --charged-mah does", "[cli][batch]") {
+    const std::string dir = temp_dir();
+    const std::string config = kSource + "/configs/sim-4s.json";
+    std::string manifest = "path,config,charged_mah\n";
+    std::vector<std::string> charged;
+    for (const char* name : {"4s-racing-fault-current-gain", "4s-racing-healthy-b"}) {
+        const std::string log = dir + "/" + name + ".csv";
+        REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/" + name + ".json") + " -o " + q(log)).exit_code == 0);
+        const auto truth = nlohmann::json::parse(read_file(dir + "/" + name + ".truth.json"));
+        charged.push_back(std::to_string(truth["flight"]["log_charge_ah"].get<double>() * 1000.0));
+        manifest += log + "," + config + "," + charged.back() + "\n";
+    }
+    // A log that never flies: the check has no charge to compare, the row fails, the summary stays.
+    std::string idle;
+    for (int k = 0; k < 200; ++k) idle += std::to_string(630 + 67 * k) + ",16.50,4.12,4.13,4.12,4.13,0.00,0.26,\n";
+    clitest::write_file(dir + "/idle.csv", idle);
+    manifest += dir + "/idle.csv," + config + ",500\n";
+    clitest::write_file(dir + "/fleet.csv", manifest);
+    auto r = run("batch -m " + q(dir + "/fleet.csv") + " --estimator joint --format json --out " + q(dir + "/out"));
+    INFO(r.err);
+    CHECK(r.exit_code == 1);  // the idle log's row
+    const auto t = nlohmann::json::parse(r.out);
+    REQUIRE(t["rows"].size() == 3);
+    CHECK(t["rows"][0]["charger_fault"] == true);
+    CHECK(t["rows"][0]["charger_ratio"].get<double>() == Approx(1.08).epsilon(0.003));
+    CHECK(t["rows"][1]["charger_fault"] == false);
+    CHECK(t["rows"][2]["status"] == "error");
+    CHECK_THAT(t["rows"][2]["error"].get<std::string>(), Catch::Contains("charger check: the log counts no charge drawn"));
+    CHECK(exists(dir + "/out/idle.json"));
+    // The summary batch wrote is the one replay writes with the same count.
+    const std::string log = dir + "/4s-racing-fault-current-gain.csv";
+    REQUIRE(run("replay " + q(log) + " -c " + q(config) + " --estimator joint --charged-mah " + charged[0] + " --summary " +
+                q(dir + "/replay.json")).exit_code == 0);
+    CHECK(read_file(dir + "/replay.json") == read_file(dir + "/out/4s-racing-fault-current-gain.json"));
 }

@@ -158,7 +158,7 @@ TEST_CASE("JSON manifest errors name the line, column and what was expected", "[
     };
     const std::string p = t.path("bad.json");
     CHECK(err("{\n  \"schema\": \"battsim.manifest\",\n  \"logs\": [\n    {\"path\": \"a.csv\", \"pak\": \"A\"}\n  ]\n}") ==
-          p + ":4:23: $.logs[0].pak: unknown key; expected one of columns, config, current_source, estimator, format, pack, path, test");
+          p + ":4:23: $.logs[0].pak: unknown key; expected one of charged_mah, columns, config, current_source, estimator, format, pack, path, test");
     CHECK(err("{\"schema\": \"battsim.manifest\",\n \"logs\": [{\"path\": 3}]}") ==
           p + ":2:20: $.logs[0].path: expected a string, found 3");
     CHECK(err("{\"schema\": \"battsim.manifest\", \"logs\": [{\"test\": \"x\"}]}") ==
@@ -179,6 +179,13 @@ TEST_CASE("JSON manifest errors name the line, column and what was expected", "[
     // A stray closer used to stall the position scanner (an endless loop before the message).
     CHECK(err("[}") == p + ":1:2: not valid JSON: syntax error while parsing value - unexpected '}'; expected '[', '{', or a literal");
     CHECK(err("{\"schema\": \"battsim.manifest\", \"version\": 1e400}") == p + ":1:43: not valid JSON: number 1e400 is beyond a double's range");
+    // The charger's count: a positive number, on a log's entry only (not in the defaults).
+    CHECK(err("{\"schema\": \"battsim.manifest\", \"logs\": [{\"path\": \"a\", \"charged_mah\": -3}]}") ==
+          p + ":1:70: $.logs[0].charged_mah: expected a positive number of mAh, found -3");
+    CHECK(err("{\"schema\": \"battsim.manifest\", \"defaults\": {\"charged_mah\": 900}, \"logs\": [{\"path\": \"a\"}]}")
+              .find("$.defaults.charged_mah: unknown key") != std::string::npos);
+    const std::string ok = t.write("ok.json", "{\"schema\": \"battsim.manifest\", \"logs\": [{\"path\": \"a\", \"charged_mah\": 912.5}]}");
+    CHECK(*load_manifest(ok).logs[0].settings.charged_mah == 912.5);
 }
 
 TEST_CASE("CSV manifest: header, comments, quoting and errors with line and field", "[batch]") {
@@ -209,8 +216,11 @@ TEST_CASE("CSV manifest: header, comments, quoting and errors with line and fiel
     const std::string p = t.path("bad.csv");
     CHECK(err("path,pak\n") == p + ":1:2: unknown column \"pak\" in the header; expected some of path, test, pack, config, "
                                    "estimator, format, current_source, time_col, time_unit, voltage_col, current_col, current_unit, "
-                                   "cell_cols, temperature_col, negative_discharge");
+                                   "cell_cols, temperature_col, negative_discharge, charged_mah");
     CHECK(err("pack,test\nA,1\n") == p + ":1: expected a header row with a \"path\" column (the first non-comment line)");
+    CHECK(err("path,charged_mah\na.csv,900mAh\n") == p + ":2:2: charged_mah: expected a positive number of mAh, found \"900mAh\"");
+    CHECK(err("path,charged_mah\na.csv,0\n") == p + ":2:2: charged_mah: expected a positive number of mAh, found \"0\"");
+    CHECK(*load_manifest(t.write("c.csv", "path,charged_mah\na.csv,1043.5\n")).logs[0].settings.charged_mah == 1043.5);
     CHECK(err("path,pack\na.csv\n") == p + ":2:2: expected 2 fields as in the header, found 1");
     CHECK(err("path,current_unit\na.csv,amps\n") == p + ":2:2: current_unit: unknown current unit \"amps\"; expected A or mA");
     CHECK(err("path,negative_discharge\na.csv,maybe\n") ==

@@ -11,6 +11,7 @@
 
 #include "host/config_json.h"
 #include "host/io/atomic_file.h"
+#include "host/report/charger_check.h"
 
 namespace battsim {
 namespace host {
@@ -44,6 +45,11 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
     if (manifest) {
         for (const ManifestEntry& e : manifest->logs) {
             const std::vector<ExpandedPath> files = expand_inputs({e.path});
+            if (e.settings.charged_mah && files.size() != 1) {
+                throw InputError(manifest->path, e.line, e.column,
+                                 "\"charged_mah\" is the charger's count after one log, but \"" + e.path + "\" names " +
+                                     std::to_string(files.size()) + " files; list the file");
+            }
             if (e.settings.test && files.size() > 1) {
                 throw InputError(manifest->path, e.line, e.column,
                                  "\"test\" labels one log, but \"" + e.path + "\" names " + std::to_string(files.size()) +
@@ -83,6 +89,7 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
         item.error = p.input.error;
         item.test = p.settings.test ? *p.settings.test : (item.error.empty() ? item.stem : p.input.path);
         item.pack = p.settings.pack ? *p.settings.pack : std::string();
+        item.charged_mah = p.settings.charged_mah ? *p.settings.charged_mah : 0.0;
         item.replay.reader = p.settings.reader_options();
         if (p.settings.config) {
             auto it = configs.find(*p.settings.config);
@@ -114,6 +121,7 @@ std::string inputs_digest(const std::vector<BatchItem>& items) {
         mix(it.pack);
         mix(it.replay.config.name);
         mix(to_string(it.replay.config.monitor.estimator));
+        if (it.charged_mah > 0) mix("charged " + std::to_string(it.charged_mah));  // lists without it keep their digest
     }
     char buf[17];
     std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
@@ -171,6 +179,8 @@ json make_row(const BatchItem& item, const json& summary) {
     row["capacity_first20_ah"] = pick("/flight/capacity_ah/first20_mean");
     row["capacity_final_ah"] = pick("/flight/capacity_ah/final");
     row["capacity_final_sigma_ah"] = pick("/flight/capacity_ah/final_sigma");
+    row["charger_ratio"] = pick("/charger_check/ratio");
+    row["charger_fault"] = pick("/charger_check/fault");
     row["error_mean_v"] = pick("/flight/voltage_error_v/model/mean");
     row["abs_error_mean_v"] = pick("/flight/voltage_error_v/model/mean_abs");
     row["resistance_mean_ohm"] = pick("/flight/resistance_ohm/mean");
@@ -205,7 +215,7 @@ json make_error_row(const BatchItem& item, const std::string& reason) {
     row["error"] = reason;
     row["flight"] = false;
     for (const char* k : {"flight_duration_s", "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah",
-                          "capacity_final_sigma_ah", "error_mean_v",
+                          "capacity_final_sigma_ah", "charger_ratio", "charger_fault", "error_mean_v",
                           "abs_error_mean_v", "resistance_mean_ohm", "resistance_first20_ohm", "remaining_at20_s"})
         row[k] = nullptr;
     row["cell_scores"] = json::array();
@@ -241,8 +251,20 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
             } else {
                 try {
                     summary = replay_log(item.path, item.replay);
-                    row = make_row(item, summary);
-                    samples = row["samples"].get<uint64_t>();
+                    std::string check_error;
+                    if (item.charged_mah > 0) {
+                        ChargerCheckOptions co;
+                        co.charged_ah = item.charged_mah * 1e-3;
+                        co.current_gain = item.replay.config.monitor.extensions.current_sensor.gain;
+                        try {
+                            summary["charger_check"] = charger_check(summary, co);
+                        } catch (const std::invalid_argument& e) {
+                            check_error = std::string("charger check: ") + e.what();
+                        }
+                    }
+                    // A check that cannot be made fails the row; the replay's summary is kept.
+                    row = check_error.empty() ? make_row(item, summary) : make_error_row(item, check_error);
+                    samples = check_error.empty() ? row["samples"].get<uint64_t>() : 0;
                 } catch (const std::exception& e) {
                     // InputError carries file:line:column; anything else is reported as is.
                     row = make_error_row(item, e.what());

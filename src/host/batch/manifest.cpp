@@ -1,5 +1,6 @@
 #include "host/batch/manifest.h"
 
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -36,6 +37,7 @@ void LogSettings::overlay(const LogSettings& t) {
     take(current_scale_to_a, t.current_scale_to_a);
     take(cell_cols, t.cell_cols);
     take(negative_discharge, t.negative_discharge);
+    take(charged_mah, t.charged_mah);
 }
 
 ReaderOptions LogSettings::reader_options(ReaderOptions r) const {
@@ -180,7 +182,7 @@ public:
     LogSettings settings(const json& obj, const std::string& where, bool entry, const std::string& log_base,
                          std::string* log_path) const {
         std::set<std::string> allowed = {"test", "pack", "config", "estimator", "format", "current_source", "columns"};
-        if (entry) allowed.insert("path");
+        if (entry) allowed.insert({"path", "charged_mah"});  // a charger's count belongs to one log
         check_keys(obj, where, allowed);
         LogSettings s;
         const std::string dir = manifest_dir(path_);
@@ -190,6 +192,12 @@ public:
         }
         if (obj.contains("test")) s.test = label(obj["test"], where + ".test");
         if (obj.contains("pack")) s.pack = label(obj["pack"], where + ".pack");
+        if (obj.contains("charged_mah")) {
+            const json& v = obj["charged_mah"];
+            if (!v.is_number() || !(v.get<double>() > 0.0))
+                fail(where + ".charged_mah", "expected a positive number of mAh, found " + v.dump());
+            s.charged_mah = v.get<double>();
+        }
         if (obj.contains("config")) s.config = path_value(obj["config"], where + ".config", dir);
         if (obj.contains("estimator")) {
             try {
@@ -352,7 +360,8 @@ Manifest parse_manifest_json(const std::string& text, const std::string& path) {
 Manifest parse_manifest_csv(const std::string& text, const std::string& path) {
     static const std::vector<std::string> kColumns = {
         "path",     "test",        "pack",         "config",    "estimator",   "format",          "current_source", "time_col",
-        "time_unit", "voltage_col", "current_col", "current_unit", "cell_cols", "temperature_col", "negative_discharge"};
+        "time_unit", "voltage_col", "current_col", "current_unit", "cell_cols", "temperature_col", "negative_discharge",
+        "charged_mah"};
     Manifest m;
     m.path = path;
     const std::string dir = manifest_dir(path);
@@ -437,6 +446,17 @@ Manifest parse_manifest_csv(const std::string& text, const std::string& path) {
                     bool b = false;
                     if (!parse_bool(v, b)) throw std::invalid_argument("expected true or false, found \"" + v + "\"");
                     s.negative_discharge = b;
+                } else if (name == "charged_mah") {
+                    size_t used = 0;
+                    double mah = 0.0;
+                    try {
+                        mah = std::stod(v, &used);
+                    } catch (const std::exception&) {
+                        used = 0;
+                    }
+                    if (used != v.size() || !(mah > 0.0) || !std::isfinite(mah))
+                        throw std::invalid_argument("expected a positive number of mAh, found \"" + v + "\"");
+                    s.charged_mah = mah;
                 }
             } catch (const std::invalid_argument& ex) {
                 throw InputError(path, ln, col, name + ": " + ex.what());

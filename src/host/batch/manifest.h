@@ -30,6 +30,9 @@ struct LogSettings {
     std::optional<double> time_scale_to_s, current_scale_to_a;
     std::optional<std::vector<std::string>> cell_cols;
     std::optional<bool> negative_discharge;
+    // What the charger put back after this log (a single log's entry only): the current
+    // sensor is checked against it (`charger_check` in the summary).
+    std::optional<double> charged_mah;
 
     // Every field set in `top` replaces ours.
     void overlay(const LogSettings& top);

@@ -23,7 +23,8 @@ namespace {
 // Every row carries these keys, in this order in the CSV.
 const std::vector<std::string> kRowKeys = {
     "index", "test", "log", "pack", "config", "estimator", "status", "error", "flight", "flight_duration_s",
-    "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah", "capacity_final_sigma_ah", "error_mean_v", "abs_error_mean_v", "resistance_mean_ohm",
+    "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah", "capacity_final_sigma_ah", "charger_ratio",
+    "charger_fault", "error_mean_v", "abs_error_mean_v", "resistance_mean_ohm",
     "resistance_first20_ohm", "cell_scores", "remaining_at20_s", "warnings", "samples", "sensor_fault_samples",
     "notes"};
 
