@@ -1,6 +1,5 @@
 #include "host/batch/manifest.h"
 
-#include <cmath>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -12,6 +11,7 @@
 #include "host/batch/inputs.h"
 #include "host/io/json_text.h"
 #include "host/io/line_reader.h"
+#include "host/io/number_text.h"
 
 namespace battsim {
 namespace host {
@@ -447,14 +447,8 @@ Manifest parse_manifest_csv(const std::string& text, const std::string& path) {
                     if (!parse_bool(v, b)) throw std::invalid_argument("expected true or false, found \"" + v + "\"");
                     s.negative_discharge = b;
                 } else if (name == "charged_mah") {
-                    size_t used = 0;
                     double mah = 0.0;
-                    try {
-                        mah = std::stod(v, &used);
-                    } catch (const std::exception&) {
-                        used = 0;
-                    }
-                    if (used != v.size() || !(mah > 0.0) || !std::isfinite(mah))
+                    if (!parse_finite_number(v, &mah) || !(mah > 0.0))
                         throw std::invalid_argument("expected a positive number of mAh, found \"" + v + "\"");
                     s.charged_mah = mah;
                 }

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "host/io/atomic_file.h"
+#include "host/io/number_text.h"
 #include "host/plot/plot.h"
 #include "host/report/summary.h"
 
@@ -15,14 +16,8 @@ namespace fit {
 namespace {
 
 double parse_number(const std::string& what, const std::string& text) {
-    size_t used = 0;
     double v = 0;
-    try {
-        v = std::stod(text, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used != text.size() || !std::isfinite(v))
+    if (!parse_finite_number(text, &v))
         throw std::invalid_argument("--add " + what + ": expected a number after ':', found \"" + text + "\"");
     return v;
 }
