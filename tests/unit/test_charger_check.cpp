@@ -60,4 +60,11 @@ TEST_CASE("Charger check: notes on a pack not full at the start and on an in-fli
     CHECK_THROWS_WITH(charger_check(summary(0.01, 10.0), o), Catch::Contains("no charge drawn"));
     o.tolerance = -1;
     CHECK_THROWS_AS(charger_check(summary(1.0, 0.0), o), std::invalid_argument);
+    // A log without a valid sample: the summary's consumed and initial state are null.
+    o.tolerance = 0.03;
+    const json empty = {{"consumed", nullptr}, {"initial_state", nullptr}, {"warnings", json::array()}};
+    CHECK_THROWS_WITH(charger_check(empty, o), Catch::Contains("no valid sample"));
+    // No initial state read (the monitor never settled one): nothing is taken off.
+    const json unsettled = {{"consumed", {{"ah", 1.0}}}, {"initial_state", nullptr}, {"warnings", json::array()}};
+    CHECK(charger_check(unsettled, o)["counted_ah"].get<double>() == Approx(1.0));
 }

@@ -190,9 +190,11 @@ std::vector<json> pack_rows(const std::vector<json>& rows) {
             a.cap_x.push_back(x);
             a.cap_y.push_back(r["capacity_mean_ah"].get<double>());
         }
-        if (r["capacity_final_ah"].is_number()) a.final_ah.push_back(r["capacity_final_ah"].get<double>());
-        if (r["capacity_final_sigma_ah"].is_number())
-            a.final_sigma_ah.push_back(r["capacity_final_sigma_ah"].get<double>());
+        // Rows made by hand (or by an older battsim) may lack these keys: read, not indexed.
+        const json final_ah = r.value("capacity_final_ah", json());
+        const json final_sigma_ah = r.value("capacity_final_sigma_ah", json());
+        if (final_ah.is_number()) a.final_ah.push_back(final_ah.get<double>());
+        if (final_sigma_ah.is_number()) a.final_sigma_ah.push_back(final_sigma_ah.get<double>());
         if (r["resistance_mean_ohm"].is_number()) {
             a.res_x.push_back(x);
             a.res_y.push_back(r["resistance_mean_ohm"].get<double>());

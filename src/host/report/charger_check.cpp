@@ -18,9 +18,14 @@ json charger_check(const json& summary, const ChargerCheckOptions& o) {
         throw std::invalid_argument("the charger tolerance must be a positive fraction");
     // consumed.ah starts from the charge the monitor read as missing at start (from the
     // resting voltage); the charger's count covers the log alone when the pack began full.
-    const double consumed_ah = summary.at("consumed").at("ah").get<double>();
-    const json& init = summary.at("initial_state");
-    const double initial_ah = init.at("consumed_mah").is_number() ? init.at("consumed_mah").get<double>() * 1e-3 : 0.0;
+    // A log without a valid sample has neither (null in the summary).
+    const json consumed = summary.value("consumed", json());
+    if (!consumed.is_object() || !consumed.value("ah", json()).is_number())
+        throw std::invalid_argument("the log counts no charge drawn (no valid sample): nothing to compare");
+    const double consumed_ah = consumed["ah"].get<double>();
+    const json init = summary.value("initial_state", json());
+    const json init_mah = init.is_object() ? init.value("consumed_mah", json()) : json();
+    const double initial_ah = init_mah.is_number() ? init_mah.get<double>() * 1e-3 : 0.0;
     const double counted_ah = consumed_ah - initial_ah;
     if (!(counted_ah > 0.0)) throw std::invalid_argument("the log counts no charge drawn: nothing to compare");
     const double ratio = counted_ah / o.charged_ah;
@@ -38,7 +43,8 @@ json charger_check(const json& summary, const ChargerCheckOptions& o) {
     // An offset's charge grows with the time flown, a gain's with the charge: one count
     // cannot tell them apart, and a gain fitted to an offset is wrong on the next flight.
     bool sensor_fault = false;
-    for (const json& w : summary.at("warnings")) sensor_fault = sensor_fault || w.value("name", std::string()) == "sensor_fault";
+    for (const json& w : summary.value("warnings", json::array()))
+        sensor_fault = sensor_fault || (w.is_object() && w.value("name", std::string()) == "sensor_fault");
     if (sensor_fault) {
         notes.push_back("a sensor fault was raised in flight (a current offset learnt on the ground, or missing "
                         "samples): an offset's charge reads as gain here; correct it first, no gain suggested");
