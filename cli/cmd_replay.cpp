@@ -44,13 +44,14 @@ std::function<int()> setup(CLI::App& sub) {
                                    "What the charger put back after this log (the pack charged full before it): "
                                    "checks the current sensor against it (summary `charger_check`)");
     sub.add_option("--charger-tolerance", a->charger_tolerance,
-                   "With --charged-mah: a count off by more than this fraction is a sensor fault (default 0.03)");
+                   "With --charged-mah: a count off by more than this fraction is a sensor fault (default 0.03)")
+        ->needs(charged);
     sub.add_option("--config-out", a->config_out,
                    "With --charged-mah: write the config with the suggested current-sensor gain "
                    "(extensions.current_sensor.gain) here")
         ->needs(charged);
     add_input_options(sub, a->input);
-    return [a]() -> int {
+    return [a, charged]() -> int {
         host::ReplayOptions opt;
         if (int rc = resolve_input(a->input, opt.reader, opt.config)) return rc;
         if (int rc = check_plot_option("battsim replay", a->plot)) return rc;
@@ -73,13 +74,11 @@ std::function<int()> setup(CLI::App& sub) {
         }
         for (const auto& note : summary["input"]["notes"]) std::cerr << "battsim replay: note: " << note.get<std::string>() << "\n";
         host::LoadedConfig corrected = opt.config;
-        if (a->charged_mah != 0) {
-            host::ChargerCheckOptions co;
-            co.charged_ah = a->charged_mah * 1e-3;
-            co.tolerance = a->charger_tolerance;
-            co.current_gain = opt.config.monitor.extensions.current_sensor.gain;
+        // Given at all (a zero or negative count is refused below, not taken as "none").
+        const bool check = charged->count() > 0;
+        if (check) {
             try {
-                summary["charger_check"] = host::charger_check(summary, co);
+                host::add_charger_check(summary, a->charged_mah, a->charger_tolerance, opt.config.monitor);
             } catch (const std::invalid_argument& e) {
                 std::cerr << "battsim replay: --charged-mah: " << e.what() << "\n";
                 return kExitUsage;
@@ -91,7 +90,7 @@ std::function<int()> setup(CLI::App& sub) {
         }
         // Written only with a suggestion: a config carrying a gain fitted to an offset, or
         // to a pack that was not full, would be wrong on every later flight.
-        const bool refuse_config = !a->config_out.empty() && !summary["charger_check"]["suggested_current_gain"].is_number();
+        const bool refuse_config = check && !a->config_out.empty() && !summary["charger_check"]["suggested_current_gain"].is_number();
         const std::string text = summary.dump(2) + "\n";
         try {
             if (!a->summary.empty()) host::write_file_atomic(a->summary, text);

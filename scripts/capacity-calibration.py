@@ -28,7 +28,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
-from config_edit import edit_joint_sections, m100_summaries, run_or_exit as run, simulate_copy, suite_scenarios  # noqa: E402
+from config_edit import (battsim_in, edit_joint_sections, m100_summaries, run_or_exit as run,  # noqa: E402
+                         shared_data_dir, simulate_copy, suite_scenarios)
 
 
 def sim_flight(job):
@@ -73,10 +74,8 @@ def main():
     ap.add_argument("--fraction-of-charge", type=float)
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     a = ap.parse_args()
-    battsim = os.path.join(a.build, "battsim")
-    if not os.access(battsim, os.X_OK):
-        sys.exit(f"{battsim} not found: build first")
-    data = os.path.abspath(os.environ.get("BATTSIM_DATA_DIR", os.path.join(ROOT, "..", "shared", "data")))
+    battsim = battsim_in(a.build)
+    data = shared_data_dir(ROOT)
     with tempfile.TemporaryDirectory() as tmp:
         configs = os.path.join(ROOT, "configs")
         if a.fraction_of_charge is not None:

@@ -18,7 +18,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
-from config_edit import run_or_exit as run, simulate_copy, suite_scenarios  # noqa: E402
+from config_edit import battsim_in, run_or_exit as run, simulate_copy, suite_scenarios  # noqa: E402
 
 
 def flight(job):
@@ -41,9 +41,7 @@ def main():
     ap.add_argument("--copies", type=int, default=2)
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     a = ap.parse_args()
-    battsim = os.path.join(a.build, "battsim")
-    if not os.access(battsim, os.X_OK):
-        sys.exit(f"{battsim} not found: build first")
+    battsim = battsim_in(a.build)
     with tempfile.TemporaryDirectory() as tmp:
         scens = [p for suite in ("scenarios", "scenarios-holdout")
                  for p in suite_scenarios(os.path.join(ROOT, "configs"), suite)]

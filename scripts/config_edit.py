@@ -99,3 +99,17 @@ def simulate_copy(battsim, tmp, scen, k):
     with open(tag + ".truth.json") as f:
         truth = json.load(f)
     return s, cfg, tag, truth
+
+
+def battsim_in(build):
+    """The battsim binary in a build directory; exits with a message when it is not built."""
+    import sys
+    battsim = os.path.join(build, "battsim")
+    if not os.access(battsim, os.X_OK):
+        sys.exit(f"{battsim} not found: build first")
+    return battsim
+
+
+def shared_data_dir(root):
+    """The shared measured data: $BATTSIM_DATA_DIR, else ../shared/data beside the repository."""
+    return os.path.abspath(os.environ.get("BATTSIM_DATA_DIR", os.path.join(root, "..", "shared", "data")))

@@ -14,7 +14,7 @@ import argparse, json, os, shutil, sys, tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
-from config_edit import edit_joint_sections, run_or_exit as run  # noqa: E402
+from config_edit import battsim_in, edit_joint_sections, run_or_exit as run, shared_data_dir  # noqa: E402
 
 SUITES = ["scenarios", "scenarios-holdout", "scenarios-last-cell", "scenarios-rest-polarisation"]
 
@@ -25,10 +25,8 @@ def main():
     ap.add_argument("--copies", type=int, default=4)
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     a = ap.parse_args()
-    battsim = os.path.join(a.build, "battsim")
-    if not os.access(battsim, os.X_OK):
-        sys.exit(f"{battsim} not found: build first")
-    data = os.path.abspath(os.environ.get("BATTSIM_DATA_DIR", os.path.join(ROOT, "..", "shared", "data")))
+    battsim = battsim_in(a.build)
+    data = shared_data_dir(ROOT)
     for bar in [float(b) for b in a.bars.split(",")]:
         with tempfile.TemporaryDirectory() as tmp:
             configs = os.path.join(tmp, "configs")

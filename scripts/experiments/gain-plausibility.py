@@ -13,6 +13,8 @@ import argparse, csv, glob, json, os, subprocess, sys, tempfile
 from concurrent.futures import ThreadPoolExecutor
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from config_edit import battsim_in  # noqa: E402
 
 
 def one(args):
@@ -39,9 +41,7 @@ def main():
     ap.add_argument("--copies", type=int, default=4)
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     a = ap.parse_args()
-    battsim = os.path.join(a.build, "battsim")
-    if not os.access(battsim, os.X_OK):
-        sys.exit(f"{battsim} not found: build first")
+    battsim = battsim_in(a.build)
     jobs = []
     with tempfile.TemporaryDirectory() as tmp:
         for suite in a.suites.split(","):

@@ -34,6 +34,8 @@ import argparse, bisect, glob, json, math, os, statistics, subprocess, sys, temp
 from concurrent.futures import ThreadPoolExecutor
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from config_edit import battsim_in, shared_data_dir  # noqa: E402
 LOADED_A = 3.0      # a sample above this is in flight
 REST_A = 1.0        # ... at or below this at rest
 SETTLE_S = 30.0     # the landing rest is read from this long after the last loaded sample
@@ -152,9 +154,7 @@ def main():
     ap.add_argument("--copies", type=int, default=4)
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     a = ap.parse_args()
-    battsim = os.path.join(a.build, "battsim")
-    if not os.access(battsim, os.X_OK):
-        sys.exit(f"{battsim} not found: build first")
+    battsim = battsim_in(a.build)
     variants = [("as read", 0.0), ("offsets", 0.0), ("tail 22 s", 22.0), ("tail 40 s", 40.0)]
     for suite in a.suites.split(","):
         sdir = os.path.join(ROOT, "configs", suite)
@@ -197,7 +197,7 @@ def main():
                 print(f"    margin {margin:.2f}: named with the rests {named}/{outliers} "
                       f"(+{added}), the rests' false alarms {false}")
     table = json.load(open(os.path.join(ROOT, "configs", "sim-4s.json")))["joint"]["ocv_cell_voltage_v"]
-    data = os.environ.get("BATTSIM_DATA_DIR", os.path.join(ROOT, "..", "shared", "data"))
+    data = shared_data_dir(ROOT)
     print("dissertation flights (configs/sim-4s.json's table), deficits of cells 1..4:")
     for n in (29, 30, 32, 34):
         path = os.path.join(data, "predictive-bms", "flights", f"{n}.csv")

@@ -25,7 +25,7 @@ import argparse, collections, json, os, shutil, subprocess, sys, tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
-from config_edit import edit_joint_sections, m100_summaries  # noqa: E402
+from config_edit import edit_joint_sections, m100_summaries, shared_data_dir  # noqa: E402
 
 
 def set_key(path, key, value):
@@ -58,7 +58,7 @@ def main():
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     a = ap.parse_args()
     battsim = os.path.join(a.build, "battsim")
-    data = os.path.abspath(os.environ.get("BATTSIM_DATA_DIR", os.path.join(ROOT, "..", "shared", "data")))
+    data = shared_data_dir(ROOT)
     env = dict(os.environ, BATTSIM_DATA_DIR=data)
     manifest = os.path.join(ROOT, "configs", "manifests", "cmu-m100.json")
     with tempfile.TemporaryDirectory() as work:

@@ -207,6 +207,11 @@ TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes
     CHECK(bad.exit_code == 2);
     CHECK_THAT(bad.err, Catch::Contains("--charged-mah: the charged charge must be a positive number of mAh"));
     CHECK(run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --config-out " + q(dir + "/x.json")).exit_code == 2);
+    // Zero is a count, and a wrong one: refused, not read as "no check".
+    const auto zero = run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --charged-mah 0");
+    CHECK(zero.exit_code == 2);
+    CHECK_THAT(zero.err, Catch::Contains("positive number of mAh"));
+    CHECK(run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --charger-tolerance 0.05").exit_code == 2);
     // A charger's count that includes a deficit the log never saw (the pack not full at the
     // start) gets no verdict, and no config is written from it.
     REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/4s-racing-partial-70.json") + " -o " + q(dir + "/p.csv")).exit_code == 0);

@@ -253,11 +253,9 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
                     summary = replay_log(item.path, item.replay);
                     std::string check_error;
                     if (item.charged_mah > 0) {
-                        ChargerCheckOptions co;
-                        co.charged_ah = item.charged_mah * 1e-3;
-                        co.current_gain = item.replay.config.monitor.extensions.current_sensor.gain;
                         try {
-                            summary["charger_check"] = charger_check(summary, co);
+                            add_charger_check(summary, item.charged_mah, ChargerCheckOptions().tolerance,
+                                              item.replay.config.monitor);
                         } catch (const std::invalid_argument& e) {
                             check_error = std::string("charger check: ") + e.what();
                         }

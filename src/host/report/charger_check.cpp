@@ -61,5 +61,13 @@ json charger_check(const json& summary, const ChargerCheckOptions& o) {
     return j;
 }
 
+void add_charger_check(json& summary, double charged_mah, double tolerance, const core::MonitorConfig& config) {
+    ChargerCheckOptions o;
+    o.charged_ah = charged_mah * 1e-3;
+    o.tolerance = tolerance;
+    o.current_gain = config.extensions.current_sensor.gain;
+    summary["charger_check"] = charger_check(summary, o);
+}
+
 }  // namespace host
 }  // namespace battsim

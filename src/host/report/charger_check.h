@@ -7,6 +7,8 @@
 #pragma once
 #include <nlohmann/json.hpp>
 
+#include "core/config.h"
+
 namespace battsim {
 namespace host {
 
@@ -22,6 +24,10 @@ struct ChargerCheckOptions {
 // suggestion after an in-flight sensor fault. Throws std::invalid_argument when there is
 // nothing to compare (no charge, none counted) or the options are out of range.
 nlohmann::json charger_check(const nlohmann::json& summary, const ChargerCheckOptions& options);
+
+// What `replay --charged-mah` and a manifest's `charged_mah` both do: the check with the
+// config's current-sensor gain, added to the summary as `charger_check`. Throws as above.
+void add_charger_check(nlohmann::json& summary, double charged_mah, double tolerance, const core::MonitorConfig& config);
 
 }  // namespace host
 }  // namespace battsim
