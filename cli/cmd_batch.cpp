@@ -23,6 +23,7 @@ struct BatchArgs {
     std::string format = "md";
     std::string output = "-";
     std::string packs;
+    std::string monitors;
     std::string out_dir;
     std::string shard;
     std::string compare;
@@ -105,6 +106,7 @@ int run(const BatchArgs& a) {
     try {
         host::write_file_atomic(a.output, host::render_table(table, format));
         if (!a.packs.empty()) host::write_file_atomic(a.packs, host::render_packs(table, format));
+        if (!a.monitors.empty()) host::write_file_atomic(a.monitors, host::render_monitors(table, format));
     } catch (const std::runtime_error& e) {
         std::cerr << me << e.what() << "\n";
         return kExitOutputError;
@@ -131,6 +133,8 @@ std::function<int()> setup(CLI::App& sub) {
 
     sub.add_option("-o,--output", a->output, "Write the table here (atomically) instead of standard output");
     sub.add_option("--packs", a->packs, "Also write the per-pack table here, in --format");
+    sub.add_option("--monitors", a->monitors,
+                   "Also write the per-monitor table (charger checks pooled per current sensor) here, in --format");
     sub.add_option("--out", a->out_dir, "Write each log's summary JSON here as <log stem>.json, as it completes");
     sub.add_option("--shard", a->shard, "Replay only shard K of N (K/N, 1-based): inputs whose index mod N is K-1");
     sub.add_option("--compare", a->compare, "Compare each summary with GOLDEN_DIR/<log stem>.json; exit 1 on a change");

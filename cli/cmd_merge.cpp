@@ -16,6 +16,7 @@ struct MergeArgs {
     std::string format = "md";
     std::string output = "-";
     std::string packs;
+    std::string monitors;
 };
 
 int run(const MergeArgs& a) {
@@ -39,6 +40,7 @@ int run(const MergeArgs& a) {
     try {
         host::write_file_atomic(a.output, host::render_table(merged, format));
         if (!a.packs.empty()) host::write_file_atomic(a.packs, host::render_packs(merged, format));
+        if (!a.monitors.empty()) host::write_file_atomic(a.monitors, host::render_monitors(merged, format));
     } catch (const std::runtime_error& e) {
         std::cerr << me << e.what() << "\n";
         return kExitOutputError;
@@ -55,6 +57,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--format", a->format, "Output format: md, csv or json")->capture_default_str();
     sub.add_option("-o,--output", a->output, "Write the table here (atomically) instead of standard output");
     sub.add_option("--packs", a->packs, "Also write the per-pack table here, in --format");
+    sub.add_option("--monitors", a->monitors, "Also write the per-monitor table here, in --format");
     return [a]() { return run(*a); };
 }
 

@@ -87,7 +87,7 @@ TEST_CASE("batch: a bad log becomes an error row, the rest are replayed and kept
     // All good: exit 0.
     auto ok = run("batch " + q(dir + "/g*.csv") + " -c " + q(kConfig) + " --format csv");
     CHECK(ok.exit_code == 0);
-    CHECK(ok.out.rfind("index,test,log,pack,config,estimator,status,", 0) == 0);
+    CHECK(ok.out.rfind("index,test,log,pack,monitor,config,estimator,status,", 0) == 0);
 }
 
 TEST_CASE("batch: output is byte-identical for any --jobs", "[cli][batch]") {
@@ -188,7 +188,7 @@ TEST_CASE("batch: manifest and option errors are clear and exit non-zero", "[cli
     auto r = run("batch --manifest " + q(dir + "/m.json"));
     CHECK(r.exit_code == 3);
     CHECK(r.err == "battsim batch: " + dir + "/m.json:4:24: $.logs[0].pakc: unknown key; expected one of charged_mah, columns, config, "
-                                               "current_source, estimator, format, pack, path, test\n");
+                                               "current_source, estimator, format, monitor, pack, path, test\n");
     clitest::write_file(dir + "/m.csv", "path,pack\ng1.csv,A,extra\n");
     r = run("batch --manifest " + q(dir + "/m.csv"));
     CHECK(r.exit_code == 3);
@@ -330,4 +330,55 @@ TEST_CASE("batch: a manifest's charged_mah checks each log's current sensor as r
     REQUIRE(run("replay " + q(log) + " -c " + q(config) + " --estimator joint --charged-mah " + charged[0] + " --summary " +
                 q(dir + "/replay.json")).exit_code == 0);
     CHECK(read_file(dir + "/replay.json") == read_file(dir + "/out/4s-racing-fault-current-gain.json"));
+}
+
+TEST_CASE("batch: the monitor table pools a drone's charger checks into one gain", "[cli][batch]") {
+    // Two monitors, three flights each on packs of several kinds: quad-A's current sensor
+    // reads 8 % high (the suite's gain fault, on every flight), quad-B's is clean. The
+    // charger's counts are the truth's, one of quad-B's 6 % short (a charge stopped early),
+    // which that flight's own check flags and the pooled one outvotes.
+    const std::string dir = temp_dir();
+    const std::string config = kSource + "/configs/sim-4s.json";
+    std::string manifest = "path,monitor,config,charged_mah\n";
+    const char* kinds[3] = {"4s-racing-healthy-b", "4s-racing-aged", "4s-hover-healthy"};
+    for (int k = 0; k < 3; ++k) {
+        for (const char* monitor : {"quad-A", "quad-B"}) {
+            auto s = nlohmann::json::parse(read_file(kSource + "/configs/scenarios/" + kinds[k] + ".json"));
+            s["monitor_config"] = config;
+            if (std::string(monitor) == "quad-A") s["sensor"]["faults"]["current_gain_error"] = 0.08;
+            const std::string tag = dir + "/" + monitor + "-" + std::to_string(k);
+            clitest::write_file(tag + ".json", s.dump());
+            REQUIRE(run("simulate " + q(tag + ".json") + " -o " + q(tag + ".csv")).exit_code == 0);
+            const auto truth = nlohmann::json::parse(read_file(tag + ".truth.json"));
+            double charged_mah = truth["flight"]["log_charge_ah"].get<double>() * 1000.0;
+            if (std::string(monitor) == "quad-B" && k == 1) charged_mah *= 0.94;
+            manifest += tag + ".csv," + monitor + "," + config + "," + std::to_string(charged_mah) + "\n";
+        }
+    }
+    clitest::write_file(dir + "/fleet.csv", manifest);
+    auto r = run("batch -m " + q(dir + "/fleet.csv") + " --estimator joint --format json --monitors " + q(dir + "/mon.json"));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const auto t = nlohmann::json::parse(r.out);
+    REQUIRE(t["monitors"].size() == 2);
+    const auto& a = t["monitors"][0];
+    const auto& b = t["monitors"][1];
+    CHECK(a["monitor"] == "quad-A");
+    CHECK(a["charger_pooled"] == 3);
+    CHECK(a["charger_flagged"] == 3);
+    CHECK(a["charger_fault"] == true);
+    CHECK(a["charger_ratio_pooled"].get<double>() == Approx(1.08).epsilon(0.003));
+    CHECK(a["suggested_current_gain"].get<double>() == Approx(1.0 / 1.08).epsilon(0.003));
+    // quad-B: the short entry flags its own flight (1/0.94 = 1.064), not the monitor.
+    CHECK(b["charger_flagged"] == 1);
+    CHECK(b["charger_fault"] == false);
+    CHECK(b["charger_ratio_pooled"].get<double>() == Approx(1.0).epsilon(0.003));
+    // The pooled gain is the median of the rows' own suggestions.
+    std::vector<double> s;
+    for (const auto& row : t["rows"])
+        if (row["monitor"] == "quad-A") s.push_back(row["charger_suggested_gain"].get<double>());
+    std::sort(s.begin(), s.end());
+    CHECK(a["suggested_current_gain"].get<double>() == Approx(s[1]));
+    // --monitors wrote the same table, in --format.
+    CHECK(nlohmann::json::parse(read_file(dir + "/mon.json")) == t["monitors"]);
 }

@@ -122,11 +122,11 @@ TEST_CASE("JSON manifest: defaults, entries and relative paths", "[batch]") {
     const std::string m = t.write("m/fleet.json", R"({
   "schema": "battsim.manifest", "version": 1,
   "base_dir": "../logs",
-  "defaults": {"config": "cfg.json", "pack": "A", "format": "csv",
+  "defaults": {"config": "cfg.json", "pack": "A", "monitor": "quad-1", "format": "csv",
                "columns": {"time": "t", "time_unit": "ms", "voltage": "v", "current": "i", "current_unit": "mA"}},
   "logs": [
     {"path": "1.csv", "test": 7},
-    {"path": "/abs/2.csv", "pack": "B", "columns": {"current": "amps", "current_unit": "A", "cells": ["c1", "c2"],
+    {"path": "/abs/2.csv", "pack": "B", "monitor": 2, "columns": {"current": "amps", "current_unit": "A", "cells": ["c1", "c2"],
                                                     "negative_is_discharge": true}}
   ]
 })");
@@ -141,6 +141,8 @@ TEST_CASE("JSON manifest: defaults, entries and relative paths", "[batch]") {
     s.overlay(man.logs[1].settings);
     const ReaderOptions r = s.reader_options();
     CHECK(*s.pack == "B");
+    CHECK(*s.monitor == "2");  // whole numbers are labels too
+    CHECK(*man.defaults.monitor == "quad-1");
     CHECK(r.format == LogFormat::Csv);
     CHECK(r.columns.time == "t");
     CHECK(r.columns.time_scale_to_s == 1e-3);
@@ -158,7 +160,7 @@ TEST_CASE("JSON manifest errors name the line, column and what was expected", "[
     };
     const std::string p = t.path("bad.json");
     CHECK(err("{\n  \"schema\": \"battsim.manifest\",\n  \"logs\": [\n    {\"path\": \"a.csv\", \"pak\": \"A\"}\n  ]\n}") ==
-          p + ":4:23: $.logs[0].pak: unknown key; expected one of charged_mah, columns, config, current_source, estimator, format, pack, path, test");
+          p + ":4:23: $.logs[0].pak: unknown key; expected one of charged_mah, columns, config, current_source, estimator, format, monitor, pack, path, test");
     CHECK(err("{\"schema\": \"battsim.manifest\",\n \"logs\": [{\"path\": 3}]}") ==
           p + ":2:20: $.logs[0].path: expected a string, found 3");
     CHECK(err("{\"schema\": \"battsim.manifest\", \"logs\": [{\"test\": \"x\"}]}") ==
@@ -216,11 +218,12 @@ TEST_CASE("CSV manifest: header, comments, quoting and errors with line and fiel
     const std::string p = t.path("bad.csv");
     CHECK(err("path,pak\n") == p + ":1:2: unknown column \"pak\" in the header; expected some of path, test, pack, config, "
                                    "estimator, format, current_source, time_col, time_unit, voltage_col, current_col, current_unit, "
-                                   "cell_cols, temperature_col, negative_discharge, charged_mah");
+                                   "cell_cols, temperature_col, negative_discharge, charged_mah, monitor");
     CHECK(err("pack,test\nA,1\n") == p + ":1: expected a header row with a \"path\" column (the first non-comment line)");
     CHECK(err("path,charged_mah\na.csv,900mAh\n") == p + ":2:2: charged_mah: expected a positive number of mAh, found \"900mAh\"");
     CHECK(err("path,charged_mah\na.csv,0\n") == p + ":2:2: charged_mah: expected a positive number of mAh, found \"0\"");
     CHECK(*load_manifest(t.write("c.csv", "path,charged_mah\na.csv,1043.5\n")).logs[0].settings.charged_mah == 1043.5);
+    CHECK(*load_manifest(t.write("d.csv", "path,monitor\na.csv,quad 7\n")).logs[0].settings.monitor == "quad 7");
     CHECK(err("path,pack\na.csv\n") == p + ":2:2: expected 2 fields as in the header, found 1");
     CHECK(err("path,current_unit\na.csv,amps\n") == p + ":2:2: current_unit: unknown current unit \"amps\"; expected A or mA");
     CHECK(err("path,negative_discharge\na.csv,maybe\n") ==
@@ -418,6 +421,53 @@ TEST_CASE("median and robust spread; the pack table's agreement of final capacit
     CHECK(md.find("| P | 6 | 1 | 1.200 | 0 | 1.200 | 3.2 |") != std::string::npos);
 }
 
+TEST_CASE("the monitor table pools each monitor's charger checks as the median suggested gain", "[batch]") {
+    auto row = [](json monitor, const char* status, json ratio, json fault, json gain, json suggested) {
+        return json{{"monitor", monitor},         {"status", status},         {"charger_ratio", ratio},
+                    {"charger_fault", fault},     {"charger_current_gain", gain}, {"charger_suggested_gain", suggested}};
+    };
+    // Monitor M: five checked flights suggesting 0.92, 0.93, 0.94, 0.95 and 0.80 (a bad
+    // charger entry, outvoted): median 0.93; quartiles (positions 1.5 and 4.5 of five)
+    // 0.86 and 0.945, spread 0.085 / 1.349. The gain in use is the latest suggesting
+    // flight's, 1.0: the sensor counts 1 / 0.93 = 1.0753 × the charger, a fault at 3 %.
+    // One more flight was flagged for an offset (no suggestion), one has no charger
+    // count, one failed; rows without a monitor stay out.
+    std::vector<json> rows = {row("M", "ok", 1.087, true, 1.0, 0.92),       row("M", "ok", 1.075, true, 1.0, 0.93),
+                              row(nullptr, "ok", 1.2, true, 1.0, 0.83),     row("M", "ok", 1.064, true, 1.0, 0.94),
+                              row("N", "ok", 0.99, false, 0.95, 0.96),      row("M", "ok", 1.12, true, 1.0, nullptr),
+                              row("M", "ok", nullptr, nullptr, nullptr, nullptr), row("M", "error", nullptr, nullptr, nullptr, nullptr),
+                              row("M", "ok", 1.053, true, 1.0, 0.95),       row("M", "ok", 1.25, true, 1.0, 0.80)};
+    const auto monitors = monitor_rows(rows, 0.03);
+    REQUIRE(monitors.size() == 2);
+    const json& m = monitors[0];
+    CHECK(m["monitor"] == "M");
+    CHECK(m["flights"] == 8);
+    CHECK(m["failed"] == 1);
+    CHECK(m["charger_checks"] == 6);
+    CHECK(m["charger_flagged"] == 6);
+    CHECK(m["charger_pooled"] == 5);
+    CHECK(m["suggested_current_gain"].get<double>() == Approx(0.93));
+    CHECK(m["suggested_gain_spread"].get<double>() == Approx(0.085 / 1.349).epsilon(1e-5));
+    CHECK(m["current_gain"].get<double>() == 1.0);
+    CHECK(m["charger_ratio_pooled"].get<double>() == Approx(1.0 / 0.93).epsilon(1e-5));
+    CHECK(m["charger_fault"] == true);
+    // Monitor N: one flight at gain 0.95 asking 0.96: 0.95 / 0.96 = 0.9896, within 3 %.
+    CHECK(monitors[1]["charger_ratio_pooled"].get<double>() == Approx(0.95 / 0.96).epsilon(1e-5));
+    CHECK(monitors[1]["charger_fault"] == false);
+    CHECK(monitors[1]["suggested_gain_spread"].is_null());  // fewer than four
+    // A monitor whose flights suggest nothing has no verdict.
+    const auto none = monitor_rows({row("X", "ok", nullptr, nullptr, nullptr, nullptr)}, 0.03);
+    CHECK(none[0]["charger_fault"].is_null());
+    CHECK(none[0]["suggested_current_gain"].is_null());
+    // In the table: JSON, the CSV alone, and a Markdown section after the rows.
+    const json table = make_table(rows, rows.size(), "0123456789abcdef", ShardSpec());
+    CHECK(table["monitors"].size() == 2);
+    CHECK(render_monitors(table, TableFormat::Csv).rfind("monitor,flights,failed,charger_checks,charger_flagged,", 0) == 0);
+    CHECK(render_monitors(table, TableFormat::Markdown).find("| M | 8 | 1 | 6 | 6 | 5 | 1.0753 | 0.0630 | 1.0000 | 0.9300 | yes |") !=
+          std::string::npos);
+    CHECK(make_table(rows, rows.size(), "0123456789abcdef", ShardSpec{1, 2})["monitors"].is_null());  // a shard's: left to merge
+}
+
 TEST_CASE("table rendering: Markdown escapes, CSV quotes, JSON round-trips", "[batch]") {
     BatchItem it;
     it.index = 0;
@@ -431,8 +481,8 @@ TEST_CASE("table rendering: Markdown escapes, CSV quotes, JSON round-trips", "[b
     CHECK(md.find("| t,1 | a\\|b.csv | P | – |") != std::string::npos);
     CHECK(md.find("error: bad \"x\" line |") != std::string::npos);
     const std::string csv = render_table(table, TableFormat::Csv);
-    CHECK(csv.rfind("index,test,log,pack,config,estimator,status,error,flight,", 0) == 0);
-    CHECK(csv.find("0,\"t,1\",/d/a|b.csv,P,reference-4s-modified,reference,error,\"bad \"\"x\"\"\nline\",false,") != std::string::npos);
+    CHECK(csv.rfind("index,test,log,pack,monitor,config,estimator,status,error,flight,", 0) == 0);
+    CHECK(csv.find("0,\"t,1\",/d/a|b.csv,P,,reference-4s-modified,reference,error,\"bad \"\"x\"\"\nline\",false,") != std::string::npos);
     CHECK(json::parse(render_table(table, TableFormat::Json)) == table);
     CHECK(render_packs(table, TableFormat::Csv).rfind("pack,flights,failed,capacity_mean_ah,", 0) == 0);
     CHECK_THROWS_WITH(parse_table_format("xlsx"), "unknown table format \"xlsx\"; expected md, csv or json");

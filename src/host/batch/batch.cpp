@@ -89,6 +89,7 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
         item.error = p.input.error;
         item.test = p.settings.test ? *p.settings.test : (item.error.empty() ? item.stem : p.input.path);
         item.pack = p.settings.pack ? *p.settings.pack : std::string();
+        item.monitor = p.settings.monitor ? *p.settings.monitor : std::string();
         item.charged_mah = p.settings.charged_mah ? *p.settings.charged_mah : 0.0;
         item.replay.reader = p.settings.reader_options();
         if (p.settings.config) {
@@ -122,6 +123,7 @@ std::string inputs_digest(const std::vector<BatchItem>& items) {
         mix(it.replay.config.name);
         mix(to_string(it.replay.config.monitor.estimator));
         if (it.charged_mah > 0) mix("charged " + std::to_string(it.charged_mah));  // lists without it keep their digest
+        if (!it.monitor.empty()) mix("monitor " + it.monitor);                       // likewise
     }
     char buf[17];
     std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
@@ -162,6 +164,7 @@ json make_row(const BatchItem& item, const json& summary) {
     row["test"] = item.test;
     row["log"] = item.path;
     row["pack"] = item.pack.empty() ? json(nullptr) : json(item.pack);
+    row["monitor"] = item.monitor.empty() ? json(nullptr) : json(item.monitor);
     row["config"] = summary.value("config", item.replay.config.name);
     row["estimator"] = summary.value("estimator", std::string(to_string(item.replay.config.monitor.estimator)));
     row["status"] = "ok";
@@ -181,6 +184,8 @@ json make_row(const BatchItem& item, const json& summary) {
     row["capacity_final_sigma_ah"] = pick("/flight/capacity_ah/final_sigma");
     row["charger_ratio"] = pick("/charger_check/ratio");
     row["charger_fault"] = pick("/charger_check/fault");
+    row["charger_current_gain"] = pick("/charger_check/current_gain");
+    row["charger_suggested_gain"] = pick("/charger_check/suggested_current_gain");
     row["error_mean_v"] = pick("/flight/voltage_error_v/model/mean");
     row["abs_error_mean_v"] = pick("/flight/voltage_error_v/model/mean_abs");
     row["resistance_mean_ohm"] = pick("/flight/resistance_ohm/mean");
@@ -209,13 +214,15 @@ json make_error_row(const BatchItem& item, const std::string& reason) {
     row["test"] = item.test;
     row["log"] = item.path;
     row["pack"] = item.pack.empty() ? json(nullptr) : json(item.pack);
+    row["monitor"] = item.monitor.empty() ? json(nullptr) : json(item.monitor);
     row["config"] = item.replay.config.name;
     row["estimator"] = to_string(item.replay.config.monitor.estimator);
     row["status"] = "error";
     row["error"] = reason;
     row["flight"] = false;
     for (const char* k : {"flight_duration_s", "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah",
-                          "capacity_final_sigma_ah", "charger_ratio", "charger_fault", "error_mean_v",
+                          "capacity_final_sigma_ah", "charger_ratio", "charger_fault", "charger_current_gain",
+                          "charger_suggested_gain", "error_mean_v",
                           "abs_error_mean_v", "resistance_mean_ohm", "resistance_first20_ohm", "remaining_at20_s"})
         row[k] = nullptr;
     row["cell_scores"] = json::array();

@@ -23,6 +23,7 @@ struct BatchItem {
     std::string stem;        // file stem: names the --out summary and the golden file
     std::string test;        // row label (default: the stem)
     std::string pack;        // empty = none
+    std::string monitor;     // empty = none
     double charged_mah = 0;  // the charger's count after this log (0 = none): `charger_check`
     std::string error;       // non-empty: failed before replay (a pattern that matched nothing)
     ReplayOptions replay;    // reader settings and the loaded config

@@ -25,6 +25,7 @@ void LogSettings::overlay(const LogSettings& t) {
     };
     take(test, t.test);
     take(pack, t.pack);
+    take(monitor, t.monitor);
     take(config, t.config);
     take(estimator, t.estimator);
     take(format, t.format);
@@ -181,7 +182,7 @@ public:
 
     LogSettings settings(const json& obj, const std::string& where, bool entry, const std::string& log_base,
                          std::string* log_path) const {
-        std::set<std::string> allowed = {"test", "pack", "config", "estimator", "format", "current_source", "columns"};
+        std::set<std::string> allowed = {"test", "pack", "monitor", "config", "estimator", "format", "current_source", "columns"};
         if (entry) allowed.insert({"path", "charged_mah"});  // a charger's count belongs to one log
         check_keys(obj, where, allowed);
         LogSettings s;
@@ -192,6 +193,7 @@ public:
         }
         if (obj.contains("test")) s.test = label(obj["test"], where + ".test");
         if (obj.contains("pack")) s.pack = label(obj["pack"], where + ".pack");
+        if (obj.contains("monitor")) s.monitor = label(obj["monitor"], where + ".monitor");
         if (obj.contains("charged_mah")) {
             const json& v = obj["charged_mah"];
             if (!v.is_number() || !(v.get<double>() > 0.0))
@@ -361,7 +363,7 @@ Manifest parse_manifest_csv(const std::string& text, const std::string& path) {
     static const std::vector<std::string> kColumns = {
         "path",     "test",        "pack",         "config",    "estimator",   "format",          "current_source", "time_col",
         "time_unit", "voltage_col", "current_col", "current_unit", "cell_cols", "temperature_col", "negative_discharge",
-        "charged_mah"};
+        "charged_mah", "monitor"};
     Manifest m;
     m.path = path;
     const std::string dir = manifest_dir(path);
@@ -418,6 +420,7 @@ Manifest parse_manifest_csv(const std::string& text, const std::string& path) {
                 if (name == "path") e.path = resolve(dir, expand_variables(v));
                 else if (name == "test") s.test = v;
                 else if (name == "pack") s.pack = v;
+                else if (name == "monitor") s.monitor = v;
                 else if (name == "config") s.config = resolve(dir, expand_variables(v));
                 else if (name == "estimator") s.estimator = parse_estimator(v);
                 else if (name == "format") s.format = parse_log_format(v);

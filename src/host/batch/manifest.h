@@ -22,6 +22,9 @@ constexpr int kManifestVersion = 1;
 struct LogSettings {
     std::optional<std::string> test;    // row label; default: the log's file stem
     std::optional<std::string> pack;    // pack id; rows without one stay out of the pack table
+    // The monitor (its current sensor) that logged it; rows without one stay out of the
+    // monitor table, which pools the charger checks of each monitor's flights.
+    std::optional<std::string> monitor;
     std::optional<std::string> config;  // path of a battsim.config JSON, already resolved
     std::optional<core::EstimatorKind> estimator;  // overrides the config's choice
     std::optional<LogFormat> format;

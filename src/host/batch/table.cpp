@@ -10,6 +10,7 @@
 
 #include "host/io/json_text.h"
 #include "host/io/sample_reader.h"
+#include "host/report/charger_check.h"
 #include "host/report/summary.h"
 #include "host/stats.h"
 
@@ -22,9 +23,9 @@ namespace {
 
 // Every row carries these keys, in this order in the CSV.
 const std::vector<std::string> kRowKeys = {
-    "index", "test", "log", "pack", "config", "estimator", "status", "error", "flight", "flight_duration_s",
+    "index", "test", "log", "pack", "monitor", "config", "estimator", "status", "error", "flight", "flight_duration_s",
     "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah", "capacity_final_sigma_ah", "charger_ratio",
-    "charger_fault", "error_mean_v", "abs_error_mean_v", "resistance_mean_ohm",
+    "charger_fault", "charger_current_gain", "charger_suggested_gain", "error_mean_v", "abs_error_mean_v", "resistance_mean_ohm",
     "resistance_first20_ohm", "cell_scores", "remaining_at20_s", "warnings", "samples", "sensor_fault_samples",
     "notes"};
 
@@ -33,6 +34,11 @@ const std::vector<std::string> kPackKeys = {"pack", "flights", "failed", "capaci
                                             "capacity_final_spread_ah", "capacity_final_sigma_median_ah",
                                             "capacity_scatter_ratio", "resistance_mean_ohm",
                                             "resistance_trend_ohm_per_flight"};
+
+const std::vector<std::string> kMonitorKeys = {"monitor", "flights", "failed", "charger_checks", "charger_flagged",
+                                               "charger_pooled", "charger_ratio_pooled", "suggested_gain_spread",
+                                               "current_gain", "suggested_current_gain", "charger_tolerance",
+                                               "charger_fault"};
 
 json number_or_null(double v) { return std::isfinite(v) ? json(round_sig(v)) : json(nullptr); }
 
@@ -126,6 +132,22 @@ std::string render_packs_md(const json& packs) {
           << fixed(p["capacity_final_median_ah"], 3) << " | " << fixed(p["capacity_scatter_ratio"], 1) << " | "
           << fixed(p["resistance_mean_ohm"], 4) << " | " << significant(p["resistance_trend_ohm_per_flight"], 3)
           << " |\n";
+    }
+    return o.str();
+}
+
+std::string render_monitors_md(const json& monitors) {
+    std::ostringstream o;
+    o << "| monitor | flights | failed | charger checks | flagged | pooled | count / charger | spread of the gains "
+         "| gain | suggested gain | fault |\n";
+    o << "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|---|\n";
+    for (const json& m : monitors) {
+        const json& fault = m["charger_fault"];
+        o << "| " << md_cell(text(m["monitor"])) << " | " << m["flights"].dump() << " | " << m["failed"].dump() << " | "
+          << m["charger_checks"].dump() << " | " << m["charger_flagged"].dump() << " | " << m["charger_pooled"].dump()
+          << " | " << fixed(m["charger_ratio_pooled"], 4) << " | " << fixed(m["suggested_gain_spread"], 4) << " | "
+          << fixed(m["current_gain"], 4) << " | " << fixed(m["suggested_current_gain"], 4) << " | "
+          << (fault.is_boolean() ? (fault.get<bool>() ? "yes" : "no") : "–") << " |\n";
     }
     return o.str();
 }
@@ -231,6 +253,63 @@ std::vector<json> pack_rows(const std::vector<json>& rows) {
     return out;
 }
 
+std::vector<json> monitor_rows(const std::vector<json>& rows, double tolerance) {
+    struct Acc {
+        size_t flights = 0, failed = 0, checks = 0, flagged = 0;
+        std::vector<double> suggested;
+        double current_gain = NAN;  // of the latest flight that suggests one
+    };
+    std::vector<std::string> order;
+    std::map<std::string, Acc> monitors;
+    for (const json& r : rows) {
+        const json id_value = r.value("monitor", json());
+        if (!id_value.is_string()) continue;
+        const std::string id = id_value.get<std::string>();
+        auto it = monitors.find(id);
+        if (it == monitors.end()) {
+            order.push_back(id);
+            it = monitors.emplace(id, Acc()).first;
+        }
+        Acc& a = it->second;
+        ++a.flights;
+        if (r["status"] != "ok") ++a.failed;
+        if (r.value("charger_ratio", json()).is_number()) ++a.checks;
+        if (r.value("charger_fault", json()) == true) ++a.flagged;
+        // Only flights that suggest a gain are pooled: a pack full at the start and no
+        // in-flight sensor fault (an offset's charge is not a gain).
+        const json suggested = r.value("charger_suggested_gain", json());
+        const json gain = r.value("charger_current_gain", json());
+        if (suggested.is_number() && gain.is_number()) {
+            a.suggested.push_back(suggested.get<double>());
+            a.current_gain = gain.get<double>();
+        }
+    }
+    std::vector<json> out;
+    for (const std::string& id : order) {
+        const Acc& a = monitors[id];
+        json m;
+        m["monitor"] = id;
+        m["flights"] = a.flights;
+        m["failed"] = a.failed;
+        m["charger_checks"] = a.checks;
+        m["charger_flagged"] = a.flagged;
+        m["charger_pooled"] = a.suggested.size();
+        // The gain every pooled flight asks for, as one median: a charger's own count is good
+        // to a percent or two per charge, and one bad entry (a pack not quite full) is outvoted.
+        // The ratio is what the sensor counts with the gain in use against the charger.
+        const double suggested = median(a.suggested);
+        const double ratio = suggested > 0.0 ? a.current_gain / suggested : NAN;
+        m["charger_ratio_pooled"] = number_or_null(ratio);
+        m["suggested_gain_spread"] = number_or_null(robust_spread(a.suggested));
+        m["current_gain"] = number_or_null(a.current_gain);
+        m["suggested_current_gain"] = number_or_null(suggested);
+        m["charger_tolerance"] = number_or_null(tolerance);
+        m["charger_fault"] = std::isfinite(ratio) ? json(std::fabs(ratio - 1.0) > tolerance) : json(nullptr);
+        out.push_back(m);
+    }
+    return out;
+}
+
 json make_table(std::vector<json> rows, size_t inputs, const std::string& digest, const ShardSpec& shard) {
     json t;
     t["schema"] = kBatchSchema;
@@ -240,6 +319,7 @@ json make_table(std::vector<json> rows, size_t inputs, const std::string& digest
     t["shard"] = shard.active() ? json{{"index", shard.index}, {"count", shard.count}} : json(nullptr);
     // A shard's pack table would cover part of each pack's flights: left to merge.
     t["packs"] = shard.active() ? json(nullptr) : json(pack_rows(rows));
+    t["monitors"] = shard.active() ? json(nullptr) : json(monitor_rows(rows, ChargerCheckOptions().tolerance));
     t["rows"] = std::move(rows);
     return t;
 }
@@ -264,6 +344,12 @@ std::string render_table(const json& table, TableFormat format) {
         out += "\nPer pack (trend: least-squares slope over the pack's flights in input order):\n\n";
         out += render_packs_md(table["packs"]);
     }
+    const json monitors = table.value("monitors", json());
+    if (monitors.is_array() && !monitors.empty()) {
+        out += "\nPer monitor (its current sensor against the charger: the gain its flights' checks suggest, pooled as their "
+               "median):\n\n";
+        out += render_monitors_md(monitors);
+    }
     return out;
 }
 
@@ -275,6 +361,17 @@ std::string render_packs(const json& table, TableFormat format) {
         case TableFormat::Markdown: break;
     }
     return render_packs_md(packs);
+}
+
+std::string render_monitors(const json& table, TableFormat format) {
+    const json monitors = table.value("monitors", json());
+    const json list = monitors.is_array() ? monitors : json::array();
+    switch (format) {
+        case TableFormat::Json: return list.dump(2) + "\n";
+        case TableFormat::Csv: return render_csv(list, kMonitorKeys);
+        case TableFormat::Markdown: break;
+    }
+    return render_monitors_md(list);
 }
 
 json read_table_file(const std::string& path) {

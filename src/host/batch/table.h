@@ -1,5 +1,5 @@
 // The batch table (schema battsim.batch): one row per log in the columns of the
-// dissertation's appendix, plus a per-pack table. The JSON form is what `batch --format
+// dissertation's appendix, plus per-pack and per-monitor tables. The JSON form is what `batch --format
 // json` writes and `merge` reads; Markdown and CSV are rendered from it, so a merged
 // table and a single run's table come out of the same code byte for byte.
 #pragma once
@@ -23,7 +23,7 @@ TableFormat parse_table_format(const std::string& name);
 
 // The table document. `rows` are this run's rows (a shard's only, when sharded) in
 // index order; `inputs`/`digest` describe the full list. Unsharded tables also carry
-// the per-pack table.
+// the per-pack and per-monitor tables.
 nlohmann::json make_table(std::vector<nlohmann::json> rows, std::size_t inputs, const std::string& digest,
                           const ShardSpec& shard);
 
@@ -32,6 +32,12 @@ nlohmann::json make_table(std::vector<nlohmann::json> rows, std::size_t inputs, 
 // against the flight's number within the pack (1, 2, … in input order), per flight.
 std::vector<nlohmann::json> pack_rows(const std::vector<nlohmann::json>& rows);
 
+// Per monitor (the manifest's `monitor`), in order of its first row: flights, failed, how
+// many flights were checked against the charger and flagged, and the gain the checks that
+// suggest one ask for, pooled as their median (with their spread, the gain in use, the
+// count over the charger's at that gain, and a fault beyond `tolerance`).
+std::vector<nlohmann::json> monitor_rows(const std::vector<nlohmann::json>& rows, double tolerance);
+
 // Least-squares slope of y over x; NaN with fewer than two distinct x.
 double least_squares_slope(const std::vector<double>& x, const std::vector<double>& y);
 
@@ -39,6 +45,8 @@ double least_squares_slope(const std::vector<double>& x, const std::vector<doubl
 std::string render_table(const nlohmann::json& table, TableFormat format);
 // The pack table alone.
 std::string render_packs(const nlohmann::json& table, TableFormat format);
+// The monitor table alone.
+std::string render_monitors(const nlohmann::json& table, TableFormat format);
 
 std::size_t failed_rows(const nlohmann::json& table);
 
