@@ -23,7 +23,8 @@ std::function<int()> setup(CLI::App& sub) {
         ->check(CLI::IsMember({"reference", "joint"}));
     return [a]() -> int {
         try {
-            host::export_firmware_config(a->firmware, a->output, a->estimator);
+            for (const std::string& note : host::export_firmware_config(a->firmware, a->output, a->estimator))
+                std::cerr << "battsim export-config: note: " << note << "\n";
         } catch (const host::ConfigError& e) {
             std::cerr << "battsim export-config: " << e.what() << "\n";
             return kExitConfigError;

@@ -73,6 +73,8 @@ std::function<int()> setup(CLI::App& sub) {
             return kExitOutputError;
         }
         for (const auto& note : summary["input"]["notes"]) std::cerr << "battsim replay: note: " << note.get<std::string>() << "\n";
+        for (const auto& note : summary.value("config_notes", nlohmann::json::array()))
+            std::cerr << "battsim replay: note: " << note.get<std::string>() << "\n";
         host::LoadedConfig corrected = opt.config;
         // Given at all (a zero or negative count is refused below, not taken as "none").
         const bool check = charged->count() > 0;

@@ -2,6 +2,7 @@
 // keys are errors, so a typo never silently falls back to a default.
 #pragma once
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -23,6 +24,11 @@ LoadedConfig load_config_file(const std::string& path);
 nlohmann::json config_to_json(const LoadedConfig& config);
 // The defaults (reference 4S pack, hand-modified parameters).
 LoadedConfig default_config();
+
+// What a valid config still does badly, as sentences for the user (empty: nothing): the
+// joint estimator without an OCV table. `replay` puts them in the summary's
+// `config_notes`; `export-config` prints them.
+std::vector<std::string> config_notes(const core::MonitorConfig& config);
 
 }  // namespace host
 }  // namespace battsim

@@ -114,7 +114,7 @@ std::string firmware_config_header(const LoadedConfig& config, const std::string
     return h;
 }
 
-void export_firmware_config(const std::string& json_path, const std::string& out_path, const std::string& estimator) {
+std::vector<std::string> export_firmware_config(const std::string& json_path, const std::string& out_path, const std::string& estimator) {
     LoadedConfig config = load_config_file(json_path);
     std::string source = json_path;
     const std::string::size_type slash = source.find_last_of('/');
@@ -128,6 +128,7 @@ void export_firmware_config(const std::string& json_path, const std::string& out
     }
     if (!estimator.empty()) source += " with --estimator " + estimator;
     write_file_atomic(out_path, firmware_config_header(config, source));
+    return config_notes(config.monitor);
 }
 
 }  // namespace host

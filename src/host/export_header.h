@@ -228,8 +228,9 @@ std::string firmware_config_header(const LoadedConfig& config, const std::string
 // Loads `json_path` (throws ConfigError) and writes the header to `out_path` atomically
 // ("-" = standard output; throws std::runtime_error when it cannot write). `estimator`
 // ("reference" or "joint") overrides the config's, as `battsim replay --estimator` does;
-// empty keeps it (anything else: std::invalid_argument).
-void export_firmware_config(const std::string& json_path, const std::string& out_path,
+// empty keeps it (anything else: std::invalid_argument). Returns the config's notes
+// (config_notes) for the user.
+std::vector<std::string> export_firmware_config(const std::string& json_path, const std::string& out_path,
                             const std::string& estimator = "");
 
 }  // namespace host

@@ -57,6 +57,9 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
                   {"has_temperature", info.has_temperature}, {"notes", info.notes}};
     j["config"] = options.config.name;
     j["estimator"] = options.config.monitor.estimator == core::EstimatorKind::Joint ? "joint" : "reference";
+    // Only when one applies: summaries of configs without notes keep their keys.
+    const std::vector<std::string> notes = config_notes(options.config.monitor);
+    if (!notes.empty()) j["config_notes"] = notes;
     nlohmann::json body = summary.to_json(info.cell_count);
     for (auto it = body.begin(); it != body.end(); ++it) j[it.key()] = it.value();
     // The joint cell check's step measurements at the end of the log (take-off, landing, the

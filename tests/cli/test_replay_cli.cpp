@@ -80,6 +80,31 @@ TEST_CASE("replay --estimator joint reports the cell step check's measurements",
     CHECK_FALSE(clitest::run_json("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --json")["flight"].contains("cell_steps"));
 }
 
+TEST_CASE("the joint estimator without an OCV table is run, and said to be unreliable", "[cli]") {
+    // reference-modified.json has no table (its Tremblay curve stands in); sim-4s.json has one.
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/ok.csv", raw_log());
+    const std::string log = q(dir + "/ok.csv");
+    auto r = run("replay " + log + " -c " + q(kConfig) + " --estimator joint --json");
+    REQUIRE(r.exit_code == 0);
+    const auto j = nlohmann::json::parse(r.out);
+    REQUIRE(j["config_notes"].size() == 1);
+    CHECK_THAT(j["config_notes"][0].get<std::string>(), Catch::StartsWith("the joint estimator has no OCV table"));
+    CHECK_THAT(r.err, Catch::Contains("battsim replay: note: the joint estimator has no OCV table"));
+    // With a table, or with the reference estimator (which reads no table), nothing to say.
+    for (const std::string& args : {"-c " + q(kSource + "/configs/sim-4s.json") + " --estimator joint", "-c " + q(kConfig)}) {
+        auto ok = run("replay " + log + " " + args + " --json");
+        REQUIRE(ok.exit_code == 0);
+        CHECK_FALSE(nlohmann::json::parse(ok.out).contains("config_notes"));
+        CHECK(ok.err.find("no OCV table") == std::string::npos);
+    }
+    // The firmware's header is written all the same, with the note.
+    auto e = run("export-config --firmware " + q(kConfig) + " --estimator joint -o " + q(dir + "/h.h"));
+    CHECK(e.exit_code == 0);
+    CHECK_THAT(e.err, Catch::Contains("battsim export-config: note: the joint estimator has no OCV table"));
+    CHECK(std::filesystem::exists(dir + "/h.h"));
+}
+
 TEST_CASE("replay writes series and summary files atomically", "[cli]") {
     const std::string dir = clitest::temp_dir();
     clitest::write_file(dir + "/ok.csv", raw_log());

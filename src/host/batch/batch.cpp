@@ -204,7 +204,8 @@ json make_row(const BatchItem& item, const json& summary) {
     const json faults = pick("/sensor_fault_samples");
     row["sensor_fault_samples"] = faults.is_number_unsigned() ? faults.get<uint64_t>() : 0;
     const json notes = pick("/input/notes");
-    row["notes"] = notes.is_array() ? notes.size() : 0;
+    const json config_notes = pick("/config_notes");
+    row["notes"] = (notes.is_array() ? notes.size() : 0) + (config_notes.is_array() ? config_notes.size() : 0);
     return row;
 }
 
