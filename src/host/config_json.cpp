@@ -425,8 +425,27 @@ json config_to_json(const LoadedConfig& c) {
     return j;
 }
 
-std::vector<std::string> config_notes(const core::MonitorConfig& config) {
+std::vector<std::string> config_notes(const core::MonitorConfig& config, const LogFacts& log) {
     std::vector<std::string> notes;
+    // A config for another pack runs without complaint (a 4S log with a 6S config read a
+    // 0.5 Ah pack and a model error of 256 V), so say what the log shows.
+    const int cells = config.cells_in_series;
+    if (log.cells > 0 && log.cells != cells) {
+        notes.push_back("the log has " + std::to_string(log.cells) + " cell voltages but the config " +
+                        std::to_string(cells) + " cells in series (cells_in_series): does the config match this pack?");
+    }
+    // No LiPo, LiHV or Li-ion cell rests outside this range unless it is damaged.
+    constexpr double kRestMinV = 2.9, kRestMaxV = 4.45;
+    if (cells > 0 && std::isfinite(log.resting_voltage_v)) {
+        const double per_cell_v = log.resting_voltage_v / cells;
+        if (per_cell_v < kRestMinV || per_cell_v > kRestMaxV) {
+            char buf[160];
+            std::snprintf(buf, sizeof buf, "the pack rests at %.2f V, %.3f V per cell for the config's %d cells in series",
+                          log.resting_voltage_v, per_cell_v, cells);
+            notes.push_back(std::string(buf) +
+                            ", outside any lithium cell's resting range (2.9-4.45 V): does the config match this pack?");
+        }
+    }
     // Without a table the joint estimator reads the state of charge off the Tremblay curve,
     // a fit of a discharge under load, not a rest curve: on the dissertation's flights with
     // configs/reference-modified.json its final capacities read 2.55–3.08 Ah for packs of

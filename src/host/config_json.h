@@ -1,6 +1,7 @@
 // Monitor configuration from and to JSON (schema "battsim.config", version 1). Unknown
 // keys are errors, so a typo never silently falls back to a default.
 #pragma once
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -26,9 +27,14 @@ nlohmann::json config_to_json(const LoadedConfig& config);
 LoadedConfig default_config();
 
 // What a valid config still does badly, as sentences for the user (empty: nothing): the
-// joint estimator without an OCV table. `replay` puts them in the summary's
-// `config_notes`; `export-config` prints them.
-std::vector<std::string> config_notes(const core::MonitorConfig& config);
+// joint estimator without an OCV table; and, given what a log shows (its cell columns, 0 =
+// none; its first voltage at rest, NaN = not at rest), a config for another pack. `replay`
+// puts them in the summary's `config_notes`; `export-config` prints them.
+struct LogFacts {
+    int cells = 0;
+    double resting_voltage_v = NAN;
+};
+std::vector<std::string> config_notes(const core::MonitorConfig& config, const LogFacts& log = LogFacts());
 
 }  // namespace host
 }  // namespace battsim

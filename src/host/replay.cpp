@@ -1,6 +1,7 @@
 #include "host/replay.h"
 
 #include <chrono>
+#include <cmath>
 #include <memory>
 #include <thread>
 
@@ -23,6 +24,7 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     int series_cells = 0;
 
     core::Sample sample;
+    LogFacts facts;  // for the config's notes: its first voltage, when the pack was at rest
     bool first = true;
     uint64_t t0_us = 0;
     const auto wall0 = std::chrono::steady_clock::now();
@@ -34,6 +36,9 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
                 series = std::make_unique<SeriesWriter>(options.series_path, series_cells);
             }
             first = false;
+            if (std::isfinite(sample.voltage_v) && sample.voltage_v > 0.0f &&
+                std::fabs(sample.current_a) <= options.config.monitor.initial.max_resting_current_a)
+                facts.resting_voltage_v = sample.voltage_v;
         }
         if (options.realtime_speed > 0) {
             // Pace only the output; the monitor still sees the log's time stamps.
@@ -58,7 +63,8 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     j["config"] = options.config.name;
     j["estimator"] = options.config.monitor.estimator == core::EstimatorKind::Joint ? "joint" : "reference";
     // Only when one applies: summaries of configs without notes keep their keys.
-    const std::vector<std::string> notes = config_notes(options.config.monitor);
+    facts.cells = info.cell_count;
+    const std::vector<std::string> notes = config_notes(options.config.monitor, facts);
     if (!notes.empty()) j["config_notes"] = notes;
     nlohmann::json body = summary.to_json(info.cell_count);
     for (auto it = body.begin(); it != body.end(); ++it) j[it.key()] = it.value();

@@ -80,7 +80,7 @@ TEST_CASE("replay --estimator joint reports the cell step check's measurements",
     CHECK_FALSE(clitest::run_json("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --json")["flight"].contains("cell_steps"));
 }
 
-TEST_CASE("the joint estimator without an OCV table is run, and said to be unreliable", "[cli]") {
+TEST_CASE("replay notes what the config makes unreliable: no OCV table for the joint estimator, another pack", "[cli]") {
     // reference-modified.json has no table (its Tremblay curve stands in); sim-4s.json has one.
     const std::string dir = clitest::temp_dir();
     clitest::write_file(dir + "/ok.csv", raw_log());
@@ -98,6 +98,14 @@ TEST_CASE("the joint estimator without an OCV table is run, and said to be unrel
         CHECK_FALSE(nlohmann::json::parse(ok.out).contains("config_notes"));
         CHECK(ok.err.find("no OCV table") == std::string::npos);
     }
+    // A config for another pack: the bundled 4S example with the 6S config.
+    auto six = run("replay " + q(kSource + "/logs/example-4s.csv") + " -c " + q(kSource + "/configs/generic-6s.json") + " --json");
+    REQUIRE(six.exit_code == 0);
+    const auto n6 = nlohmann::json::parse(six.out)["config_notes"];
+    REQUIRE(n6.size() == 2);
+    CHECK_THAT(n6[0].get<std::string>(), Catch::StartsWith("the log has 4 cell voltages but the config 6 cells in series"));
+    CHECK_THAT(n6[1].get<std::string>(), Catch::StartsWith("the pack rests at 16.80 V, 2.800 V per cell"));
+    CHECK_THAT(six.err, Catch::Contains("battsim replay: note: the log has 4 cell voltages"));
     // The firmware's header is written all the same, with the note.
     auto e = run("export-config --firmware " + q(kConfig) + " --estimator joint -o " + q(dir + "/h.h"));
     CHECK(e.exit_code == 0);

@@ -159,3 +159,28 @@ TEST_CASE("JsonLocator: paths to positions, and text that does not parse cannot 
     for (int i = 0; i < 40; ++i) path += "[0]";
     CHECK(d.offset(path) == 32);
 }
+
+TEST_CASE("config_notes: the joint estimator without a table, and a config for another pack", "[config]") {
+    using battsim::host::config_notes;
+    using battsim::host::LogFacts;
+    battsim::core::MonitorConfig c;  // 4 cells in series, reference estimator, no table
+    CHECK(config_notes(c).empty());
+    c.estimator = battsim::core::EstimatorKind::Joint;
+    REQUIRE(config_notes(c).size() == 1);
+    CHECK(config_notes(c)[0].rfind("the joint estimator has no OCV table", 0) == 0);
+    c.joint.ocv.points = 2;  // any table
+    CHECK(config_notes(c).empty());
+    // 4 cells at rest at 16.0 V: 4.0 V each, fine; the log's own 4 cell columns agree.
+    CHECK(config_notes(c, LogFacts{4, 16.0}).empty());
+    CHECK(config_notes(c, LogFacts{0, NAN}).empty());  // nothing known about the log
+    // A 6S log: six cell columns, and 24.0 V is 6.0 V per configured cell.
+    const auto six = config_notes(c, LogFacts{6, 24.0});
+    REQUIRE(six.size() == 2);
+    CHECK(six[0] == "the log has 6 cell voltages but the config 4 cells in series (cells_in_series): does the config match "
+                    "this pack?");
+    CHECK(six[1] == "the pack rests at 24.00 V, 6.000 V per cell for the config's 4 cells in series, outside any lithium "
+                    "cell's resting range (2.9-4.45 V): does the config match this pack?");
+    // A 3S log without cell columns: 11.4 V is 2.85 V per configured cell, below 2.9.
+    CHECK(config_notes(c, LogFacts{0, 11.4}).size() == 1);
+    CHECK(config_notes(c, LogFacts{0, 11.6}).empty());  // 2.9 V per cell: a deeply discharged 4S pack
+}
