@@ -1,15 +1,67 @@
 #include "host/replay.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <thread>
 
 #include "host/report/series_writer.h"
 #include "host/report/summary.h"
+#include "host/stats.h"
 
 namespace battsim {
 namespace host {
+
+namespace {
+
+// Two misreadings no reader can tell from the data alone, and no number shows: a log that
+// counts discharge as negative flies nothing, and a time column in milliseconds read as
+// seconds spreads a flight over days. Both read on without complaint, so say so.
+class InputShape {
+public:
+    void add(const core::Sample& s) {
+        if (have_ && s.time_us > last_us_) intervals_s_.push_back(static_cast<double>(s.time_us - last_us_) * 1e-6);
+        last_us_ = s.time_us;
+        have_ = true;
+        if (std::isfinite(s.current_a)) {
+            min_a_ = std::min(min_a_, static_cast<double>(s.current_a));
+            max_a_ = std::max(max_a_, static_cast<double>(s.current_a));
+        }
+    }
+    std::vector<std::string> notes(bool flew, double takeoff_a) const {
+        std::vector<std::string> out;
+        char buf[320];
+        if (!flew && max_a_ < takeoff_a && min_a_ <= -takeoff_a) {
+            std::snprintf(buf, sizeof buf,
+                          "the current never reaches the take-off threshold (%.3g A) but falls to %.3g A: if this log "
+                          "counts discharge as negative, replay it with --negative-discharge (manifest: "
+                          "\"negative_is_discharge\": true)",
+                          takeoff_a, min_a_);
+            out.push_back(buf);
+        }
+        // Battery logs are written a few times a second to once every few seconds.
+        const double dt_s = median(intervals_s_);
+        if (dt_s > kSlowestIntervalS) {
+            std::snprintf(buf, sizeof buf,
+                          "the samples are %.4g s apart (median): if the time column counts milliseconds, give "
+                          "--time-unit ms (or --time-col with a column in seconds)",
+                          dt_s);
+            out.push_back(buf);
+        }
+        return out;
+    }
+
+private:
+    static constexpr double kSlowestIntervalS = 10.0;
+    std::vector<double> intervals_s_;
+    uint64_t last_us_ = 0;
+    bool have_ = false;
+    double min_a_ = INFINITY, max_a_ = -INFINITY;
+};
+
+}  // namespace
 
 nlohmann::json replay_log(const std::string& path, const ReplayOptions& options, const SampleObserver& observer) {
     ReaderOptions reader_options = options.reader;
@@ -24,6 +76,7 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     int series_cells = 0;
 
     core::Sample sample;
+    InputShape shape;
     LogFacts facts;  // for the config's notes: its first voltage, when the pack was at rest
     bool first = true;
     uint64_t t0_us = 0;
@@ -46,6 +99,7 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
                                          (sample.time_us - t0_us) / options.realtime_speed));
             std::this_thread::sleep_until(due);
         }
+        shape.add(sample);
         const core::MonitorStatus& status = monitor->update(sample);
         summary.add(status);
         if (series) series->add(sample, status);
@@ -58,15 +112,18 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     j["schema"] = kSummarySchema;
     j["schema_version"] = kSummaryVersion;
     j["battsim_version"] = BATTSIM_VERSION;
+    nlohmann::json body = summary.to_json(info.cell_count);
+    std::vector<std::string> input_notes = info.notes;
+    const bool flew = body["flight"].is_object();
+    for (const std::string& n : shape.notes(flew, options.config.monitor.flying.min_flying_current_a)) input_notes.push_back(n);
     j["input"] = {{"path", path}, {"format", to_string(info.format)}, {"cells", info.cell_count},
-                  {"has_temperature", info.has_temperature}, {"notes", info.notes}};
+                  {"has_temperature", info.has_temperature}, {"notes", input_notes}};
     j["config"] = options.config.name;
     j["estimator"] = options.config.monitor.estimator == core::EstimatorKind::Joint ? "joint" : "reference";
     // Only when one applies: summaries of configs without notes keep their keys.
     facts.cells = info.cell_count;
     const std::vector<std::string> notes = config_notes(options.config.monitor, facts);
     if (!notes.empty()) j["config_notes"] = notes;
-    nlohmann::json body = summary.to_json(info.cell_count);
     for (auto it = body.begin(); it != body.end(); ++it) j[it.key()] = it.value();
     // The joint cell check's step measurements at the end of the log (take-off, landing, the
     // bursts' clean edges): how many, and each cell's ΔV/ΔI with its standard error.

@@ -113,6 +113,39 @@ TEST_CASE("replay notes what the config makes unreliable: no OCV table for the j
     CHECK(std::filesystem::exists(dir + "/h.h"));
 }
 
+TEST_CASE("replay notes a current of the other sign and a time column in milliseconds", "[cli]") {
+    // 10 s at rest, then 10 s at 20 A, every 67 ms: as a CSV with the discharge negative, and
+    // with the milliseconds in the seconds column.
+    const std::string dir = clitest::temp_dir();
+    std::string neg = "time_s,voltage_v,current_a\n", ms = neg, ok = neg;
+    for (int k = 0; k < 300; ++k) {
+        const bool load = k >= 150;
+        const std::string v = load ? "15.90" : "16.50", a = load ? "20" : "0.25";
+        const std::string t_s = std::to_string(0.63 + 0.067 * k), t_ms = std::to_string(630 + 67 * k);
+        neg += t_s + "," + v + ",-" + a + "\n";
+        ms += t_ms + "," + v + "," + a + "\n";
+        ok += t_s + "," + v + "," + a + "\n";
+    }
+    clitest::write_file(dir + "/neg.csv", neg);
+    clitest::write_file(dir + "/ms.csv", ms);
+    clitest::write_file(dir + "/ok.csv", ok);
+    auto notes = [&](const std::string& name, const std::string& extra) {
+        auto r = run("replay " + q(dir + "/" + name) + " -c " + q(kConfig) + extra + " --json");
+        REQUIRE(r.exit_code == 0);
+        return nlohmann::json::parse(r.out)["input"]["notes"];
+    };
+    const auto n = notes("neg.csv", "");
+    REQUIRE(n.size() == 1);
+    CHECK(n[0] == "the current never reaches the take-off threshold (1 A) but falls to -20 A: if this log counts discharge "
+                  "as negative, replay it with --negative-discharge (manifest: \"negative_is_discharge\": true)");
+    CHECK(notes("neg.csv", " --negative-discharge").empty());  // as told: it flies
+    const auto m = notes("ms.csv", "");
+    REQUIRE(m.size() == 1);
+    CHECK(m[0] == "the samples are 67 s apart (median): if the time column counts milliseconds, give --time-unit ms (or "
+                  "--time-col with a column in seconds)");
+    CHECK(notes("ok.csv", "").empty());
+}
+
 TEST_CASE("replay writes series and summary files atomically", "[cli]") {
     const std::string dir = clitest::temp_dir();
     clitest::write_file(dir + "/ok.csv", raw_log());
