@@ -190,118 +190,112 @@ double least_squares_slope(const std::vector<double>& x, const std::vector<doubl
     return sxx > 0 ? sxy / sxx : NAN;
 }
 
-std::vector<json> pack_rows(const std::vector<json>& rows) {
-    struct Acc {
-        size_t flights = 0, failed = 0;
-        std::vector<double> cap_x, cap_y, res_x, res_y, final_ah, final_sigma_ah;
-    };
-    std::vector<std::string> order;
-    std::map<std::string, Acc> packs;
+namespace {
+
+// Rows grouped by the text under `key` (rows without one left out), each group's rows in input
+// order and the groups in order of their first row.
+std::vector<std::pair<std::string, std::vector<const json*>>> group_rows(const std::vector<json>& rows, const char* key) {
+    std::vector<std::pair<std::string, std::vector<const json*>>> groups;
+    std::map<std::string, size_t> index;
     for (const json& r : rows) {
-        if (!r["pack"].is_string()) continue;
-        const std::string id = r["pack"].get<std::string>();
-        auto it = packs.find(id);
-        if (it == packs.end()) {
-            order.push_back(id);
-            it = packs.emplace(id, Acc()).first;
-        }
-        Acc& a = it->second;
-        const double x = static_cast<double>(++a.flights);  // flight number within the pack
-        if (r["status"] != "ok") ++a.failed;
-        if (r["capacity_mean_ah"].is_number()) {
-            a.cap_x.push_back(x);
-            a.cap_y.push_back(r["capacity_mean_ah"].get<double>());
-        }
-        // Rows made by hand (or by an older battsim) may lack these keys: read, not indexed.
-        const json final_ah = r.value("capacity_final_ah", json());
-        const json final_sigma_ah = r.value("capacity_final_sigma_ah", json());
-        if (final_ah.is_number()) a.final_ah.push_back(final_ah.get<double>());
-        if (final_sigma_ah.is_number()) a.final_sigma_ah.push_back(final_sigma_ah.get<double>());
-        if (r["resistance_mean_ohm"].is_number()) {
-            a.res_x.push_back(x);
-            a.res_y.push_back(r["resistance_mean_ohm"].get<double>());
-        }
+        const json id = r.value(key, json());
+        if (!id.is_string()) continue;
+        auto it = index.emplace(id.get<std::string>(), groups.size()).first;
+        if (it->second == groups.size()) groups.emplace_back(it->first, std::vector<const json*>());
+        groups[it->second].second.push_back(&r);
     }
-    auto mean = [](const std::vector<double>& v) {
-        if (v.empty()) return static_cast<double>(NAN);
-        double s = 0;
-        for (double d : v) s += d;
-        return s / v.size();
-    };
+    return groups;
+}
+
+double mean_of(const std::vector<double>& v) {
+    if (v.empty()) return NAN;
+    double s = 0;
+    for (double d : v) s += d;
+    return s / v.size();
+}
+
+}  // namespace
+
+std::vector<json> pack_rows(const std::vector<json>& rows) {
     std::vector<json> out;
-    for (const std::string& id : order) {
-        const Acc& a = packs[id];
+    for (const auto& group : group_rows(rows, "pack")) {
+        size_t failed = 0;
+        std::vector<double> cap_x, cap_y, res_x, res_y, final_ah, final_sigma_ah;
+        for (size_t k = 0; k < group.second.size(); ++k) {
+            const json& r = *group.second[k];
+            const double x = static_cast<double>(k + 1);  // flight number within the pack
+            if (r["status"] != "ok") ++failed;
+            if (r["capacity_mean_ah"].is_number()) {
+                cap_x.push_back(x);
+                cap_y.push_back(r["capacity_mean_ah"].get<double>());
+            }
+            // Rows made by hand (or by an older battsim) may lack these keys: read, not indexed.
+            const json f_ah = r.value("capacity_final_ah", json());
+            const json f_sigma_ah = r.value("capacity_final_sigma_ah", json());
+            if (f_ah.is_number()) final_ah.push_back(f_ah.get<double>());
+            if (f_sigma_ah.is_number()) final_sigma_ah.push_back(f_sigma_ah.get<double>());
+            if (r["resistance_mean_ohm"].is_number()) {
+                res_x.push_back(x);
+                res_y.push_back(r["resistance_mean_ohm"].get<double>());
+            }
+        }
         json p;
-        p["pack"] = id;
-        p["flights"] = a.flights;
-        p["failed"] = a.failed;
-        p["capacity_mean_ah"] = number_or_null(mean(a.cap_y));
-        p["capacity_trend_ah_per_flight"] = number_or_null(least_squares_slope(a.cap_x, a.cap_y));
+        p["pack"] = group.first;
+        p["flights"] = group.second.size();
+        p["failed"] = failed;
+        p["capacity_mean_ah"] = number_or_null(mean_of(cap_y));
+        p["capacity_trend_ah_per_flight"] = number_or_null(least_squares_slope(cap_x, cap_y));
         // Do the flights agree within their own standard errors? The spread of the final
         // capacities against the median σ a flight reports: about 1 when they do; far above,
         // and the config's curve does not fit the pack (or the flights draw too little of it).
-        const double spread = robust_spread(a.final_ah);
-        const double sigma = median(a.final_sigma_ah);
-        p["capacity_final_median_ah"] = number_or_null(median(a.final_ah));
+        const double spread = robust_spread(final_ah);
+        const double sigma = median(final_sigma_ah);
+        p["capacity_final_median_ah"] = number_or_null(median(final_ah));
         p["capacity_final_spread_ah"] = number_or_null(spread);
         p["capacity_final_sigma_median_ah"] = number_or_null(sigma);
         p["capacity_scatter_ratio"] = number_or_null(sigma > 0.0 ? spread / sigma : NAN);
-        p["resistance_mean_ohm"] = number_or_null(mean(a.res_y));
-        p["resistance_trend_ohm_per_flight"] = number_or_null(least_squares_slope(a.res_x, a.res_y));
+        p["resistance_mean_ohm"] = number_or_null(mean_of(res_y));
+        p["resistance_trend_ohm_per_flight"] = number_or_null(least_squares_slope(res_x, res_y));
         out.push_back(p);
     }
     return out;
 }
 
 std::vector<json> monitor_rows(const std::vector<json>& rows, double tolerance) {
-    struct Acc {
-        size_t flights = 0, failed = 0, checks = 0, flagged = 0;
-        std::vector<double> suggested;
-        double current_gain = NAN;  // of the latest flight that suggests one
-    };
-    std::vector<std::string> order;
-    std::map<std::string, Acc> monitors;
-    for (const json& r : rows) {
-        const json id_value = r.value("monitor", json());
-        if (!id_value.is_string()) continue;
-        const std::string id = id_value.get<std::string>();
-        auto it = monitors.find(id);
-        if (it == monitors.end()) {
-            order.push_back(id);
-            it = monitors.emplace(id, Acc()).first;
-        }
-        Acc& a = it->second;
-        ++a.flights;
-        if (r["status"] != "ok") ++a.failed;
-        if (r.value("charger_ratio", json()).is_number()) ++a.checks;
-        if (r.value("charger_fault", json()) == true) ++a.flagged;
-        // Only flights that suggest a gain are pooled: a pack full at the start and no
-        // in-flight sensor fault (an offset's charge is not a gain).
-        const json suggested = r.value("charger_suggested_gain", json());
-        const json gain = r.value("charger_current_gain", json());
-        if (suggested.is_number() && gain.is_number()) {
-            a.suggested.push_back(suggested.get<double>());
-            a.current_gain = gain.get<double>();
-        }
-    }
     std::vector<json> out;
-    for (const std::string& id : order) {
-        const Acc& a = monitors[id];
+    for (const auto& group : group_rows(rows, "monitor")) {
+        size_t failed = 0, checks = 0, flagged = 0;
+        std::vector<double> suggestions;
+        double current_gain = NAN;  // of the latest flight that suggests one
+        for (const json* row : group.second) {
+            const json& r = *row;
+            if (r["status"] != "ok") ++failed;
+            if (r.value("charger_ratio", json()).is_number()) ++checks;
+            if (r.value("charger_fault", json()) == true) ++flagged;
+            // Only flights that suggest a gain are pooled: a pack full at the start and no
+            // in-flight sensor fault (an offset's charge is not a gain).
+            const json suggested = r.value("charger_suggested_gain", json());
+            const json gain = r.value("charger_current_gain", json());
+            if (suggested.is_number() && gain.is_number()) {
+                suggestions.push_back(suggested.get<double>());
+                current_gain = gain.get<double>();
+            }
+        }
         json m;
-        m["monitor"] = id;
-        m["flights"] = a.flights;
-        m["failed"] = a.failed;
-        m["charger_checks"] = a.checks;
-        m["charger_flagged"] = a.flagged;
-        m["charger_pooled"] = a.suggested.size();
+        m["monitor"] = group.first;
+        m["flights"] = group.second.size();
+        m["failed"] = failed;
+        m["charger_checks"] = checks;
+        m["charger_flagged"] = flagged;
+        m["charger_pooled"] = suggestions.size();
         // The gain every pooled flight asks for, as one median: a charger's own count is good
         // to a percent or two per charge, and one bad entry (a pack not quite full) is outvoted.
         // The ratio is what the sensor counts with the gain in use against the charger.
-        const double suggested = median(a.suggested);
-        const double ratio = suggested > 0.0 ? a.current_gain / suggested : NAN;
+        const double suggested = median(suggestions);
+        const double ratio = suggested > 0.0 ? current_gain / suggested : NAN;
         m["charger_ratio_pooled"] = number_or_null(ratio);
-        m["suggested_gain_spread"] = number_or_null(robust_spread(a.suggested));
-        m["current_gain"] = number_or_null(a.current_gain);
+        m["suggested_gain_spread"] = number_or_null(robust_spread(suggestions));
+        m["current_gain"] = number_or_null(current_gain);
         m["suggested_current_gain"] = number_or_null(suggested);
         m["charger_tolerance"] = number_or_null(tolerance);
         m["charger_fault"] = std::isfinite(ratio) ? json(std::fabs(ratio - 1.0) > tolerance) : json(nullptr);
