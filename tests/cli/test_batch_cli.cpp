@@ -332,27 +332,30 @@ TEST_CASE("batch: a manifest's charged_mah checks each log's current sensor as r
     CHECK(read_file(dir + "/replay.json") == read_file(dir + "/out/4s-racing-fault-current-gain.json"));
 }
 
-TEST_CASE("batch: the monitor table pools a drone's charger checks into one gain", "[cli][batch]") {
-    // Two monitors, three flights each on packs of several kinds: quad-A's current sensor
-    // reads 8 % high (the suite's gain fault, on every flight), quad-B's is clean. The
-    // charger's counts are the truth's, one of quad-B's 6 % short (a charge stopped early),
-    // which that flight's own check flags and the pooled one outvotes.
+TEST_CASE("batch: the monitor table pools a drone's charger checks into one gain, and compares it with the fleet", "[cli][batch]") {
+    // Three monitors fly the same four packs (of several kinds): quad-A's current sensor
+    // reads 8 % high (the suite's gain fault, on every flight), quad-B's and quad-C's are
+    // clean. The charger's counts are the truth's, one of quad-B's 6 % short (a charge stopped
+    // early), which that flight's own check flags and the pooled one outvotes.
     const std::string dir = temp_dir();
     const std::string config = kSource + "/configs/sim-4s.json";
-    std::string manifest = "path,monitor,config,charged_mah\n";
-    const char* kinds[3] = {"4s-racing-healthy-b", "4s-racing-aged", "4s-hover-healthy"};
-    for (int k = 0; k < 3; ++k) {
-        for (const char* monitor : {"quad-A", "quad-B"}) {
+    std::string manifest = "path,pack,monitor,config,charged_mah\n";
+    const char* kinds[4] = {"4s-racing-healthy-b", "4s-racing-aged", "4s-hover-healthy", "4s-racing-capacity-75"};
+    int seed = 0;
+    for (int k = 0; k < 4; ++k) {
+        for (const std::string monitor : {"quad-A", "quad-B", "quad-C"}) {
             auto s = nlohmann::json::parse(read_file(kSource + "/configs/scenarios/" + kinds[k] + ".json"));
             s["monitor_config"] = config;
-            if (std::string(monitor) == "quad-A") s["sensor"]["faults"]["current_gain_error"] = 0.08;
+            if (monitor == "quad-A") s["sensor"]["faults"]["current_gain_error"] = 0.08;
             const std::string tag = dir + "/" + monitor + "-" + std::to_string(k);
             clitest::write_file(tag + ".json", s.dump());
-            REQUIRE(run("simulate " + q(tag + ".json") + " -o " + q(tag + ".csv")).exit_code == 0);
+            REQUIRE(run("simulate " + q(tag + ".json") + " -o " + q(tag + ".csv") + " --seed " + std::to_string(++seed))
+                        .exit_code == 0);
             const auto truth = nlohmann::json::parse(read_file(tag + ".truth.json"));
             double charged_mah = truth["flight"]["log_charge_ah"].get<double>() * 1000.0;
-            if (std::string(monitor) == "quad-B" && k == 1) charged_mah *= 0.94;
-            manifest += tag + ".csv," + monitor + "," + config + "," + std::to_string(charged_mah) + "\n";
+            if (monitor == "quad-B" && k == 1) charged_mah *= 0.94;
+            manifest += tag + ".csv,pack-" + std::to_string(k) + "," + monitor + "," + config + "," +
+                        std::to_string(charged_mah) + "\n";
         }
     }
     clitest::write_file(dir + "/fleet.csv", manifest);
@@ -360,12 +363,13 @@ TEST_CASE("batch: the monitor table pools a drone's charger checks into one gain
     INFO(r.err);
     REQUIRE(r.exit_code == 0);
     const auto t = nlohmann::json::parse(r.out);
-    REQUIRE(t["monitors"].size() == 2);
+    REQUIRE(t["monitors"].size() == 3);
     const auto& a = t["monitors"][0];
     const auto& b = t["monitors"][1];
+    const auto& c = t["monitors"][2];
     CHECK(a["monitor"] == "quad-A");
-    CHECK(a["charger_pooled"] == 3);
-    CHECK(a["charger_flagged"] == 3);
+    CHECK(a["charger_pooled"] == 4);
+    CHECK(a["charger_flagged"] == 4);
     CHECK(a["charger_fault"] == true);
     CHECK(a["charger_ratio_pooled"].get<double>() == Approx(1.08).epsilon(0.003));
     CHECK(a["suggested_current_gain"].get<double>() == Approx(1.0 / 1.08).epsilon(0.003));
@@ -378,7 +382,16 @@ TEST_CASE("batch: the monitor table pools a drone's charger checks into one gain
     for (const auto& row : t["rows"])
         if (row["monitor"] == "quad-A") s.push_back(row["charger_suggested_gain"].get<double>());
     std::sort(s.begin(), s.end());
-    CHECK(a["suggested_current_gain"].get<double>() == Approx(s[1]));
+    CHECK(a["suggested_current_gain"].get<double>() == Approx(0.5 * (s[1] + s[2])));
+    // Without the charger: on the packs they share, quad-A reads capacities high and
+    // resistances low against the other two, which read alike.
+    CHECK(a["fleet_flights"] == 4);
+    CHECK(a["fleet_capacity_effect"].get<double>() > 0.03);
+    CHECK(a["fleet_resistance_effect"].get<double>() < -0.03);
+    CHECK(a["fleet_gain_error"].get<double>() == Approx(0.08).margin(0.03));
+    CHECK(a["fleet_gain_fault"] == true);
+    CHECK(b["fleet_gain_fault"] == false);
+    CHECK(c["fleet_gain_fault"] == false);
     // --monitors wrote the same table, in --format.
     CHECK(nlohmann::json::parse(read_file(dir + "/mon.json")) == t["monitors"]);
 }

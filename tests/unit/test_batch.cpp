@@ -468,6 +468,57 @@ TEST_CASE("the monitor table pools each monitor's charger checks as the median s
     CHECK(make_table(rows, rows.size(), "0123456789abcdef", ShardSpec{1, 2})["monitors"].is_null());  // a shard's: left to merge
 }
 
+TEST_CASE("the monitor table compares each monitor with the fleet on the packs they share", "[batch]") {
+    // Four monitors fly the same four packs. Monitor A's current sensor reads 8 % high: every
+    // capacity 1.08 times, every resistance 1 / 1.08 times. The packs differ (capacity 1.0 …
+    // 1.6 Ah, resistance 20 … 35 mΩ) and every flight scatters by ±1 % (fixed pattern), which
+    // the fit must not take for a monitor. The monitors' terms are centred on their median.
+    const char* monitors[4] = {"A", "B", "C", "D"};
+    const double scatter[16] = {0.01, -0.01, 0.004, -0.006, -0.008, 0.012, 0.0, 0.003,
+                                0.006, -0.004, -0.011, 0.009, 0.002, -0.003, 0.01, -0.007};
+    std::vector<json> rows;
+    for (int p = 0; p < 4; ++p) {
+        for (int m = 0; m < 4; ++m) {
+            const double gain = m == 0 ? 1.08 : 1.0, e = scatter[4 * p + m];
+            rows.push_back(json{{"pack", "P" + std::to_string(p)}, {"monitor", monitors[m]}, {"status", "ok"},
+                                {"capacity_final_ah", (1.0 + 0.2 * p) * gain * (1.0 + e)},
+                                {"resistance_final_ohm", (0.020 + 0.005 * p) / gain * (1.0 - e)}});
+        }
+    }
+    // A fifth monitor flew a pack nobody else flew: nothing to compare it with.
+    rows.push_back(json{{"pack", "Q"}, {"monitor", "E"}, {"status", "ok"}, {"capacity_final_ah", 1.3},
+                        {"resistance_final_ohm", 0.03}});
+    const auto t = monitor_rows(rows, 0.03);
+    REQUIRE(t.size() == 5);
+    const json& a = t[0];
+    CHECK(a["fleet_flights"] == 4);
+    CHECK(a["fleet_capacity_effect"].get<double>() == Approx(0.08).margin(0.012));
+    CHECK(a["fleet_resistance_effect"].get<double>() == Approx(1.0 / 1.08 - 1.0).margin(0.012));
+    CHECK(a["fleet_gain_error"].get<double>() == Approx(0.08).margin(0.01));
+    CHECK(a["fleet_gain_error_sigma"].get<double>() > 0.0);
+    CHECK(a["fleet_gain_error_sigma"].get<double>() < 0.01);
+    CHECK(a["fleet_gain_fault"] == true);
+    for (int m = 1; m < 4; ++m) {
+        INFO(monitors[m]);
+        CHECK(std::fabs(t[m]["fleet_gain_error"].get<double>()) < 0.012);
+        CHECK(t[m]["fleet_gain_fault"] == false);
+    }
+    CHECK(t[4]["fleet_flights"] == 0);
+    CHECK(t[4]["fleet_gain_error"].is_null());
+    CHECK(t[4]["fleet_gain_fault"].is_null());
+    // Two monitors alone cannot say which one is off: no verdict.
+    std::vector<json> two;
+    for (const json& r : rows)
+        if (r["monitor"] == "A" || r["monitor"] == "B") two.push_back(r);
+    const auto t2 = monitor_rows(two, 0.03);
+    CHECK(t2[0]["fleet_gain_error"].is_null());
+    CHECK(t2[0]["fleet_gain_fault"].is_null());
+    // Markdown: the fleet's reading beside the charger's.
+    const std::string md = render_monitors(make_table(rows, rows.size(), "0123456789abcdef", ShardSpec()), TableFormat::Markdown);
+    CHECK(md.find("| A | 4 | 0 | 0 | 0 | 0 | – | – | – | – | – | +") != std::string::npos);
+    CHECK(md.find("% | yes |") != std::string::npos);
+}
+
 TEST_CASE("table rendering: Markdown escapes, CSV quotes, JSON round-trips", "[batch]") {
     BatchItem it;
     it.index = 0;

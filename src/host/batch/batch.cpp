@@ -190,6 +190,7 @@ json make_row(const BatchItem& item, const json& summary) {
     row["abs_error_mean_v"] = pick("/flight/voltage_error_v/model/mean_abs");
     row["resistance_mean_ohm"] = pick("/flight/resistance_ohm/mean");
     row["resistance_first20_ohm"] = pick("/flight/resistance_ohm/first20_mean");
+    row["resistance_final_ohm"] = pick("/flight/resistance_ohm/final");
     const json scores = pick("/flight/cell_scores");
     row["cell_scores"] = scores.is_array() ? scores : json::array();
     row["remaining_at20_s"] = pick("/flight/remaining_time_s/at20");
@@ -224,7 +225,8 @@ json make_error_row(const BatchItem& item, const std::string& reason) {
     for (const char* k : {"flight_duration_s", "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah",
                           "capacity_final_sigma_ah", "charger_ratio", "charger_fault", "charger_current_gain",
                           "charger_suggested_gain", "error_mean_v",
-                          "abs_error_mean_v", "resistance_mean_ohm", "resistance_first20_ohm", "remaining_at20_s"})
+                          "abs_error_mean_v", "resistance_mean_ohm", "resistance_first20_ohm", "resistance_final_ohm",
+                          "remaining_at20_s"})
         row[k] = nullptr;
     row["cell_scores"] = json::array();
     row["warnings"] = json::array();

@@ -26,7 +26,7 @@ const std::vector<std::string> kRowKeys = {
     "index", "test", "log", "pack", "monitor", "config", "estimator", "status", "error", "flight", "flight_duration_s",
     "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah", "capacity_final_sigma_ah", "charger_ratio",
     "charger_fault", "charger_current_gain", "charger_suggested_gain", "error_mean_v", "abs_error_mean_v", "resistance_mean_ohm",
-    "resistance_first20_ohm", "cell_scores", "remaining_at20_s", "warnings", "samples", "sensor_fault_samples",
+    "resistance_first20_ohm", "resistance_final_ohm", "cell_scores", "remaining_at20_s", "warnings", "samples", "sensor_fault_samples",
     "notes"};
 
 const std::vector<std::string> kPackKeys = {"pack", "flights", "failed", "capacity_mean_ah",
@@ -38,7 +38,10 @@ const std::vector<std::string> kPackKeys = {"pack", "flights", "failed", "capaci
 const std::vector<std::string> kMonitorKeys = {"monitor", "flights", "failed", "charger_checks", "charger_flagged",
                                                "charger_pooled", "charger_ratio_pooled", "suggested_gain_spread",
                                                "current_gain", "suggested_current_gain", "charger_tolerance",
-                                               "charger_fault"};
+                                               "charger_fault", "fleet_flights", "fleet_capacity_effect",
+                                               "fleet_capacity_effect_sigma", "fleet_resistance_effect",
+                                               "fleet_resistance_effect_sigma", "fleet_gain_error",
+                                               "fleet_gain_error_sigma", "fleet_gain_fault"};
 
 json number_or_null(double v) { return std::isfinite(v) ? json(round_sig(v)) : json(nullptr); }
 
@@ -139,15 +142,26 @@ std::string render_packs_md(const json& packs) {
 std::string render_monitors_md(const json& monitors) {
     std::ostringstream o;
     o << "| monitor | flights | failed | charger checks | flagged | pooled | count / charger | spread of the gains "
-         "| gain | suggested gain | fault |\n";
-    o << "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|---|\n";
+         "| gain | suggested gain | fault | gain error against the fleet | fleet fault |\n";
+    o << "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|---|--:|---|\n";
     for (const json& m : monitors) {
         const json& fault = m["charger_fault"];
+        auto yes_no = [](const json& b) { return b.is_boolean() ? (b.get<bool>() ? "yes" : "no") : "–"; };
         o << "| " << md_cell(text(m["monitor"])) << " | " << m["flights"].dump() << " | " << m["failed"].dump() << " | "
           << m["charger_checks"].dump() << " | " << m["charger_flagged"].dump() << " | " << m["charger_pooled"].dump()
           << " | " << fixed(m["charger_ratio_pooled"], 4) << " | " << fixed(m["suggested_gain_spread"], 4) << " | "
           << fixed(m["current_gain"], 4) << " | " << fixed(m["suggested_current_gain"], 4) << " | "
-          << (fault.is_boolean() ? (fault.get<bool>() ? "yes" : "no") : "–") << " |\n";
+          << yes_no(fault) << " | ";
+        const json& g = m["fleet_gain_error"];
+        const json& gs = m["fleet_gain_error_sigma"];
+        if (g.is_number() && gs.is_number()) {
+            char buf[64];
+            std::snprintf(buf, sizeof buf, "%+.1f ± %.1f %%", 100.0 * g.get<double>(), 100.0 * gs.get<double>());
+            o << buf;
+        } else {
+            o << "–";
+        }
+        o << " | " << yes_no(m["fleet_gain_fault"]) << " |\n";
     }
     return o.str();
 }
@@ -214,8 +228,109 @@ double mean_of(const std::vector<double>& v) {
     return s / v.size();
 }
 
+// How each monitor reads the packs it shares with other monitors: ln(value) = pack + monitor
+// + noise, fitted by least squares (alternating means until they settle), the monitors'
+// terms centred on their median within each group of monitors linked by shared packs (most
+// monitors of a fleet are taken to be right). A pack's own capacity and resistance go into
+// its term, so what a monitor's term holds is its current sensor, or the conditions its drone
+// flies in. Its standard error: the fit's residual σ × √(1/n + 1/m), n its rows and m the
+// other monitors' rows on the same packs. None in a group of fewer than three monitors: with
+// two, which one is off cannot be told.
+struct FleetEffect {
+    size_t n = 0;
+    double effect = NAN, sigma = NAN;
+};
+std::map<std::string, FleetEffect> fleet_effects(const std::vector<json>& rows, const char* key) {
+    std::map<std::string, size_t> pack_ix, monitor_ix;
+    std::vector<std::string> monitor_names;
+    struct Obs {
+        size_t pack, monitor;
+        double y;
+    };
+    std::vector<Obs> obs;
+    for (const json& r : rows) {
+        const json pack = r.value("pack", json()), monitor = r.value("monitor", json()), v = r.value(key, json());
+        if (!pack.is_string() || !monitor.is_string() || !v.is_number() || !(v.get<double>() > 0.0) || r.value("status", json()) != "ok") continue;
+        const size_t p = pack_ix.emplace(pack.get<std::string>(), pack_ix.size()).first->second;
+        auto mi = monitor_ix.emplace(monitor.get<std::string>(), monitor_ix.size());
+        if (mi.second) monitor_names.push_back(monitor.get<std::string>());
+        obs.push_back({p, mi.first->second, std::log(v.get<double>())});
+    }
+    const size_t np = pack_ix.size(), nm = monitor_ix.size();
+    // Groups linked by shared packs (union-find over packs 0..np−1 and monitors np..).
+    std::vector<size_t> parent(np + nm);
+    for (size_t k = 0; k < parent.size(); ++k) parent[k] = k;
+    auto root = [&parent](size_t k) {
+        while (parent[k] != k) k = parent[k] = parent[parent[k]];
+        return k;
+    };
+    for (const Obs& o : obs) parent[root(o.pack)] = root(np + o.monitor);
+    std::vector<double> pack(np, 0.0), mon(nm, 0.0);
+    for (int it = 0; it < 1000; ++it) {
+        std::vector<double> ps(np, 0.0), pn(np, 0.0), ms(nm, 0.0), mn(nm, 0.0);
+        for (const Obs& o : obs) {
+            ps[o.pack] += o.y - mon[o.monitor];
+            pn[o.pack] += 1.0;
+        }
+        for (size_t p = 0; p < np; ++p) pack[p] = ps[p] / pn[p];
+        double change = 0.0;
+        for (const Obs& o : obs) {
+            ms[o.monitor] += o.y - pack[o.pack];
+            mn[o.monitor] += 1.0;
+        }
+        for (size_t m = 0; m < nm; ++m) {
+            const double v = ms[m] / mn[m];
+            change = std::max(change, std::fabs(v - mon[m]));
+            mon[m] = v;
+        }
+        if (change < 1e-12) break;
+    }
+    // Centre each group's monitors on their median (its packs take the shift: the fit stays).
+    std::map<size_t, std::vector<size_t>> groups;
+    for (size_t m = 0; m < nm; ++m) groups[root(np + m)].push_back(m);
+    std::map<size_t, double> centres;
+    std::vector<bool> judged(nm, false);
+    for (const auto& g : groups) {
+        std::vector<double> terms;
+        for (size_t m : g.second) terms.push_back(mon[m]);
+        const double centre = centres[g.first] = median(terms);
+        for (size_t m : g.second) {
+            mon[m] -= centre;
+            judged[m] = g.second.size() >= 3;
+        }
+    }
+    for (size_t p = 0; p < np; ++p) pack[p] += centres[root(p)];
+    double rss = 0.0;
+    for (const Obs& o : obs) rss += (o.y - pack[o.pack] - mon[o.monitor]) * (o.y - pack[o.pack] - mon[o.monitor]);
+    const double dof = static_cast<double>(obs.size()) - static_cast<double>(np + nm) + static_cast<double>(groups.size());
+    const double s = dof >= 1.0 ? std::sqrt(rss / dof) : NAN;
+    std::vector<double> own(nm, 0.0), others(nm, 0.0);
+    std::vector<std::vector<double>> per_pack(np, std::vector<double>(nm, 0.0));
+    for (const Obs& o : obs) per_pack[o.pack][o.monitor] += 1.0;
+    for (size_t p = 0; p < np; ++p) {
+        double total = 0.0;
+        for (size_t m = 0; m < nm; ++m) total += per_pack[p][m];
+        for (size_t m = 0; m < nm; ++m) {
+            if (per_pack[p][m] == 0.0) continue;
+            own[m] += per_pack[p][m];
+            others[m] += total - per_pack[p][m];
+        }
+    }
+    std::map<std::string, FleetEffect> out;
+    for (size_t m = 0; m < nm; ++m) {
+        FleetEffect& e = out[monitor_names[m]];
+        e.n = static_cast<size_t>(others[m] > 0.0 ? own[m] : 0.0);
+        if (!judged[m] || !(others[m] > 0.0)) continue;
+        e.effect = mon[m];
+        e.sigma = s * std::sqrt(1.0 / own[m] + 1.0 / others[m]);
+    }
+    return out;
+}
+
 }  // namespace
 
+// Rows made by hand (or by an older battsim) may lack keys: the tables read them with
+// value(), never by indexing (const operator[] on a missing key is undefined).
 std::vector<json> pack_rows(const std::vector<json>& rows) {
     std::vector<json> out;
     for (const auto& group : group_rows(rows, "pack")) {
@@ -224,19 +339,19 @@ std::vector<json> pack_rows(const std::vector<json>& rows) {
         for (size_t k = 0; k < group.second.size(); ++k) {
             const json& r = *group.second[k];
             const double x = static_cast<double>(k + 1);  // flight number within the pack
-            if (r["status"] != "ok") ++failed;
-            if (r["capacity_mean_ah"].is_number()) {
+            if (r.value("status", json()) != "ok") ++failed;
+            const json cap = r.value("capacity_mean_ah", json()), res = r.value("resistance_mean_ohm", json());
+            if (cap.is_number()) {
                 cap_x.push_back(x);
-                cap_y.push_back(r["capacity_mean_ah"].get<double>());
+                cap_y.push_back(cap.get<double>());
             }
-            // Rows made by hand (or by an older battsim) may lack these keys: read, not indexed.
             const json f_ah = r.value("capacity_final_ah", json());
             const json f_sigma_ah = r.value("capacity_final_sigma_ah", json());
             if (f_ah.is_number()) final_ah.push_back(f_ah.get<double>());
             if (f_sigma_ah.is_number()) final_sigma_ah.push_back(f_sigma_ah.get<double>());
-            if (r["resistance_mean_ohm"].is_number()) {
+            if (res.is_number()) {
                 res_x.push_back(x);
-                res_y.push_back(r["resistance_mean_ohm"].get<double>());
+                res_y.push_back(res.get<double>());
             }
         }
         json p;
@@ -262,6 +377,10 @@ std::vector<json> pack_rows(const std::vector<json>& rows) {
 }
 
 std::vector<json> monitor_rows(const std::vector<json>& rows, double tolerance) {
+    const std::map<std::string, FleetEffect> capacity = fleet_effects(rows, "capacity_final_ah");
+    // The resistance at the end of the flight: measured throughout, where the flight's mean
+    // still holds the configured value of its first seconds.
+    const std::map<std::string, FleetEffect> resistance = fleet_effects(rows, "resistance_final_ohm");
     std::vector<json> out;
     for (const auto& group : group_rows(rows, "monitor")) {
         size_t failed = 0, checks = 0, flagged = 0;
@@ -269,7 +388,7 @@ std::vector<json> monitor_rows(const std::vector<json>& rows, double tolerance) 
         double current_gain = NAN;  // of the latest flight that suggests one
         for (const json* row : group.second) {
             const json& r = *row;
-            if (r["status"] != "ok") ++failed;
+            if (r.value("status", json()) != "ok") ++failed;
             if (r.value("charger_ratio", json()).is_number()) ++checks;
             if (r.value("charger_fault", json()) == true) ++flagged;
             // Only flights that suggest a gain are pooled: a pack full at the start and no
@@ -299,6 +418,31 @@ std::vector<json> monitor_rows(const std::vector<json>& rows, double tolerance) 
         m["suggested_current_gain"] = number_or_null(suggested);
         m["charger_tolerance"] = number_or_null(tolerance);
         m["charger_fault"] = std::isfinite(ratio) ? json(std::fabs(ratio - 1.0) > tolerance) : json(nullptr);
+        // Without a charger: the same packs flown on other monitors. A current-sensor gain g
+        // reads every capacity (1 + g) times and every resistance (ΔV/ΔI) 1 / (1 + g) times,
+        // so the capacity's term and minus the resistance's each read ln(1 + g): weighted by
+        // their inverse variances (the resistance scatters with each flight's temperature), and
+        // they must agree within 3 σ of their difference (a drone flown in the cold reads more
+        // resistance too, but barely less capacity). A fault is beyond the tolerance and 3 σ.
+        const auto c = capacity.find(group.first), r = resistance.find(group.first);
+        const FleetEffect ce = c != capacity.end() ? c->second : FleetEffect(), re = r != resistance.end() ? r->second : FleetEffect();
+        m["fleet_flights"] = std::min(ce.n, re.n);
+        m["fleet_capacity_effect"] = number_or_null(std::expm1(ce.effect));
+        m["fleet_capacity_effect_sigma"] = number_or_null(ce.sigma);
+        m["fleet_resistance_effect"] = number_or_null(std::expm1(re.effect));
+        m["fleet_resistance_effect_sigma"] = number_or_null(re.sigma);
+        double ln_gain = 0.5 * (ce.effect - re.effect), ln_sigma = 0.5 * std::hypot(ce.sigma, re.sigma);
+        if (ce.sigma > 0.0 && re.sigma > 0.0) {  // else a fit without scatter: the plain mean
+            const double wc = 1.0 / (ce.sigma * ce.sigma), wr = 1.0 / (re.sigma * re.sigma);
+            ln_gain = (wc * ce.effect - wr * re.effect) / (wc + wr);
+            ln_sigma = 1.0 / std::sqrt(wc + wr);
+        }
+        m["fleet_gain_error"] = number_or_null(std::expm1(ln_gain));
+        m["fleet_gain_error_sigma"] = number_or_null(ln_sigma);
+        const bool agree = std::fabs(ce.effect + re.effect) <= 3.0 * std::hypot(ce.sigma, re.sigma);
+        m["fleet_gain_fault"] = std::isfinite(ln_gain) && std::isfinite(ln_sigma)
+                                    ? json(std::fabs(std::expm1(ln_gain)) > tolerance && std::fabs(ln_gain) > 3.0 * ln_sigma && agree)
+                                    : json(nullptr);
         out.push_back(m);
     }
     return out;
