@@ -384,11 +384,12 @@ TEST_CASE("batch: the monitor table pools a drone's charger checks into one gain
     std::sort(s.begin(), s.end());
     CHECK(a["suggested_current_gain"].get<double>() == Approx(0.5 * (s[1] + s[2])));
     // Without the charger: on the packs they share, quad-A reads capacities high and
-    // resistances low against the other two, which read alike.
+    // resistances low against the other two, which read alike (+7.3 % when written).
     CHECK(a["fleet_flights"] == 4);
     CHECK(a["fleet_capacity_effect"].get<double>() > 0.03);
     CHECK(a["fleet_resistance_effect"].get<double>() < -0.03);
-    CHECK(a["fleet_gain_error"].get<double>() == Approx(0.08).margin(0.03));
+    CHECK(a["fleet_capacity_source"] == "after_rest");  // the suite's flights rest 60 s after landing
+    CHECK(a["fleet_gain_error"].get<double>() == Approx(0.08).margin(0.015));
     CHECK(a["fleet_gain_fault"] == true);
     CHECK(b["fleet_gain_fault"] == false);
     CHECK(c["fleet_gain_fault"] == false);

@@ -498,6 +498,7 @@ TEST_CASE("the monitor table compares each monitor with the fleet on the packs t
     CHECK(a["fleet_gain_error_sigma"].get<double>() > 0.0);
     CHECK(a["fleet_gain_error_sigma"].get<double>() < 0.01);
     CHECK(a["fleet_gain_fault"] == true);
+    CHECK(a["fleet_capacity_source"] == "final");  // no rests in these rows
     for (int m = 1; m < 4; ++m) {
         INFO(monitors[m]);
         CHECK(std::fabs(t[m]["fleet_gain_error"].get<double>()) < 0.012);
@@ -506,6 +507,16 @@ TEST_CASE("the monitor table compares each monitor with the fleet on the packs t
     CHECK(t[4]["fleet_flights"] == 0);
     CHECK(t[4]["fleet_gain_error"].is_null());
     CHECK(t[4]["fleet_gain_fault"].is_null());
+    // With the capacity read off the rests as well, that is the one compared (here A's rests
+    // read the gain without scatter, its in-flight capacity not at all).
+    std::vector<json> rested = rows;
+    for (json& r : rested) {
+        r["capacity_after_rest_ah"] = r["capacity_final_ah"];
+        if (r["monitor"] == "A") r["capacity_final_ah"] = r["capacity_final_ah"].get<double>() / 1.08;
+    }
+    const auto tr = monitor_rows(rested, 0.03);
+    CHECK(tr[0]["fleet_capacity_source"] == "after_rest");
+    CHECK(tr[0]["fleet_capacity_effect"].get<double>() == Approx(a["fleet_capacity_effect"].get<double>()));
     // Two monitors alone cannot say which one is off: no verdict.
     std::vector<json> two;
     for (const json& r : rows)

@@ -182,6 +182,7 @@ json make_row(const BatchItem& item, const json& summary) {
     row["capacity_first20_ah"] = pick("/flight/capacity_ah/first20_mean");
     row["capacity_final_ah"] = pick("/flight/capacity_ah/final");
     row["capacity_final_sigma_ah"] = pick("/flight/capacity_ah/final_sigma");
+    row["capacity_after_rest_ah"] = pick("/flight/capacity_ah/after_rest");
     row["charger_ratio"] = pick("/charger_check/ratio");
     row["charger_fault"] = pick("/charger_check/fault");
     row["charger_current_gain"] = pick("/charger_check/current_gain");
@@ -223,7 +224,7 @@ json make_error_row(const BatchItem& item, const std::string& reason) {
     row["error"] = reason;
     row["flight"] = false;
     for (const char* k : {"flight_duration_s", "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah",
-                          "capacity_final_sigma_ah", "charger_ratio", "charger_fault", "charger_current_gain",
+                          "capacity_final_sigma_ah", "capacity_after_rest_ah", "charger_ratio", "charger_fault", "charger_current_gain",
                           "charger_suggested_gain", "error_mean_v",
                           "abs_error_mean_v", "resistance_mean_ohm", "resistance_first20_ohm", "resistance_final_ohm",
                           "remaining_at20_s"})

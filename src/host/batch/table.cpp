@@ -24,7 +24,7 @@ namespace {
 // Every row carries these keys, in this order in the CSV.
 const std::vector<std::string> kRowKeys = {
     "index", "test", "log", "pack", "monitor", "config", "estimator", "status", "error", "flight", "flight_duration_s",
-    "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah", "capacity_final_sigma_ah", "charger_ratio",
+    "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah", "capacity_final_sigma_ah", "capacity_after_rest_ah", "charger_ratio",
     "charger_fault", "charger_current_gain", "charger_suggested_gain", "error_mean_v", "abs_error_mean_v", "resistance_mean_ohm",
     "resistance_first20_ohm", "resistance_final_ohm", "cell_scores", "remaining_at20_s", "warnings", "samples", "sensor_fault_samples",
     "notes"};
@@ -38,7 +38,7 @@ const std::vector<std::string> kPackKeys = {"pack", "flights", "failed", "capaci
 const std::vector<std::string> kMonitorKeys = {"monitor", "flights", "failed", "charger_checks", "charger_flagged",
                                                "charger_pooled", "charger_ratio_pooled", "suggested_gain_spread",
                                                "current_gain", "suggested_current_gain", "charger_tolerance",
-                                               "charger_fault", "fleet_flights", "fleet_capacity_effect",
+                                               "charger_fault", "fleet_flights", "fleet_capacity_source", "fleet_capacity_effect",
                                                "fleet_capacity_effect_sigma", "fleet_resistance_effect",
                                                "fleet_resistance_effect_sigma", "fleet_gain_error",
                                                "fleet_gain_error_sigma", "fleet_gain_fault"};
@@ -377,7 +377,12 @@ std::vector<json> pack_rows(const std::vector<json>& rows) {
 }
 
 std::vector<json> monitor_rows(const std::vector<json>& rows, double tolerance) {
-    const std::map<std::string, FleetEffect> capacity = fleet_effects(rows, "capacity_final_ah");
+    // The capacity read off the rests before and after a flight scales with the sensor's gain
+    // exactly (the charge it counts over the fall in state of charge the OCV curve reads, no
+    // prior pulling it back); the in-flight estimate stands in for monitors whose flights
+    // have no rest after landing.
+    const std::map<std::string, FleetEffect> rest_capacity = fleet_effects(rows, "capacity_after_rest_ah");
+    const std::map<std::string, FleetEffect> final_capacity = fleet_effects(rows, "capacity_final_ah");
     // The resistance at the end of the flight: measured throughout, where the flight's mean
     // still holds the configured value of its first seconds.
     const std::map<std::string, FleetEffect> resistance = fleet_effects(rows, "resistance_final_ohm");
@@ -424,9 +429,14 @@ std::vector<json> monitor_rows(const std::vector<json>& rows, double tolerance) 
         // their inverse variances (the resistance scatters with each flight's temperature), and
         // they must agree within 3 σ of their difference (a drone flown in the cold reads more
         // resistance too, but barely less capacity). A fault is beyond the tolerance and 3 σ.
-        const auto c = capacity.find(group.first), r = resistance.find(group.first);
-        const FleetEffect ce = c != capacity.end() ? c->second : FleetEffect(), re = r != resistance.end() ? r->second : FleetEffect();
+        auto effect_of = [&group](const std::map<std::string, FleetEffect>& effects) {
+            const auto it = effects.find(group.first);
+            return it != effects.end() ? it->second : FleetEffect();
+        };
+        const FleetEffect rest = effect_of(rest_capacity);
+        const FleetEffect ce = std::isfinite(rest.sigma) ? rest : effect_of(final_capacity), re = effect_of(resistance);
         m["fleet_flights"] = std::min(ce.n, re.n);
+        m["fleet_capacity_source"] = std::isfinite(rest.sigma) ? json("after_rest") : std::isfinite(ce.sigma) ? json("final") : json(nullptr);
         m["fleet_capacity_effect"] = number_or_null(std::expm1(ce.effect));
         m["fleet_capacity_effect_sigma"] = number_or_null(ce.sigma);
         m["fleet_resistance_effect"] = number_or_null(std::expm1(re.effect));
