@@ -10,6 +10,7 @@
 #include <fstream>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "host/io/dataflash_reader.h"
@@ -40,6 +41,7 @@ struct ReadResult {
     std::vector<std::string> notes;
     int cell_count = 0;
     bool has_temperature = false;
+    SourceInfo info;  // as it stands after next() returned false
 };
 
 ReadResult read_all(Kind k, const std::string& path) {
@@ -50,6 +52,7 @@ ReadResult read_all(Kind k, const std::string& path) {
     res.notes = r->info().notes;
     res.cell_count = r->info().cell_count;
     res.has_temperature = r->info().has_temperature;
+    res.info = r->info();
     return res;
 }
 
@@ -70,6 +73,8 @@ bool any_note(const ReadResult& r, const std::string& needle) {
 }
 
 std::string data_path(const char* rel) { return std::string(BATTSIM_DATA_DIR) + rel; }
+
+double param(const ReadResult& r, const std::string& name) { return log_parameter(r.info, name); }
 
 double seconds(const core::Sample& s) { return static_cast<double>(s.time_us) / 1e6; }
 
@@ -223,6 +228,24 @@ std::string ulog_flags(uint8_t incompat0 = 0) {
     p += std::string(24, '\0');
     return ulog_msg('B', p);
 }
+// Parameter ('P') and default parameter ('Q') messages; `value` is the 4 raw value bytes.
+std::string ulog_key(const std::string& key) { return std::string(1, static_cast<char>(key.size())) + key; }
+std::string ulog_param_f(const std::string& name, float v) {
+    std::string p = ulog_key("float " + name);
+    put_f(p, v);
+    return ulog_msg('P', p);
+}
+std::string ulog_param_i(const std::string& name, int32_t v) {
+    std::string p = ulog_key("int32_t " + name);
+    put(p, static_cast<uint32_t>(v), 4);
+    return ulog_msg('P', p);
+}
+std::string ulog_default_i(const std::string& name, int32_t v) {
+    std::string p(1, '\x03');  // default_types: system and current configuration
+    p += ulog_key("int32_t " + name);
+    put(p, static_cast<uint32_t>(v), 4);
+    return ulog_msg('Q', p);
+}
 std::string ulog_good_prefix() {
     return ulog_header() + ulog_flags() + ulog_msg('F', kBatteryFormat) + ulog_sub(0, 3);
 }
@@ -336,6 +359,44 @@ TEST_CASE("PX4 ULog test.ulg: battery_status multi_id 0", "[io-logs][data]") {
     CHECK(any_note(r, "carry no per-cell information"));
 }
 
+TEST_CASE("DataFlash text logs: PARM parameters", "[io-logs][data]") {
+    const auto u = read_all(Kind::DfText, data_path("/ardupilot/underpowered.log"));
+    CHECK(u.info.parameters.size() == 271);  // 271 PARM lines, no name repeated
+    CHECK(u.info.parameters.front().first == "SYSID_SW_MREV");
+    CHECK(param(u, "BATT_CAPACITY") == 4000.0);
+    CHECK(param(u, "LOW_VOLT") == Approx(9.4));
+    const auto o = read_all(Kind::DfText, data_path("/ardupilot/robert_lefebvre_octo_PM.log"));
+    CHECK(o.info.parameters.size() == 271);
+    CHECK(param(o, "BATT_CAPACITY") == 1760.0);
+    CHECK(param(o, "LOW_VOLT") == Approx(10.5));
+}
+
+TEST_CASE("DataFlash binary log171.bin: PARM parameters", "[io-logs][data]") {
+    // Read independently with a short Python script walking the FMT/PARM messages: 491 PARM
+    // messages, 491 distinct names.
+    const auto r = read_all(Kind::DfBinary, data_path("/ardupilot/log171.bin"));
+    CHECK(r.info.parameters.size() == 491);
+    CHECK(param(r, "BATT_CAPACITY") == 5200.0);
+    CHECK(param(r, "FS_BATT_VOLTAGE") == Approx(14.0));
+    CHECK(param(r, "FS_BATT_MAH") == 520.0);
+    CHECK(param(r, "BATT_MONITOR") == 5.0);
+    CHECK(r.notes.empty());
+}
+
+TEST_CASE("PX4 ULog test.ulg: parameters", "[io-logs][data]") {
+    // Values read independently with a short Python script walking the ULog messages (867 'P',
+    // 80 'Q'); BAT1_CAPACITY and BAT1_R_INTERNAL are -1 (PX4: unset). The 'Q' default of
+    // BAT1_N_CELLS is 0 and must not win over the 'P' value 4.
+    const auto r = read_all(Kind::Ulog, data_path("/px4/test.ulg"));
+    CHECK(r.info.parameters.size() == 867);
+    CHECK(param(r, "BAT1_CAPACITY") == -1.0);
+    CHECK(param(r, "BAT1_N_CELLS") == 4.0);
+    CHECK(param(r, "BAT1_V_EMPTY") == 3.5);
+    CHECK(param(r, "BAT1_V_CHARGED") == Approx(4.05).epsilon(1e-6));  // float 4.05
+    CHECK(param(r, "BAT1_R_INTERNAL") == -1.0);
+    CHECK_FALSE(any_note(r, "parameter"));
+}
+
 // =================================================================================================
 // DataFlash binary, built byte by byte
 
@@ -375,6 +436,43 @@ TEST_CASE("DataFlash binary malformed: file truncated mid-message keeps what cam
     const auto r = read_all(Kind::DfBinary, d.write("trunc.bin", bytes));
     CHECK(r.samples.size() == 3);
     CHECK(any_note(r, "file ends inside a CURR message"));
+}
+
+namespace {
+const int kParmId = 64;
+// PARM as newer firmware logs it: Value found by label, not position.
+std::string df_parm_fmt() { return df_fmt(kParmId, "PARM", "QNff", "TimeUS,Name,Value,Default"); }
+std::string df_parm(uint64_t time_us, const std::string& name, float value) {
+    std::string m = "\xA3\x95";
+    m += static_cast<char>(kParmId);
+    put(m, time_us, 8);
+    m += padded(name, 16);
+    put_f(m, value);
+    put_f(m, 0);
+    return m;
+}
+}  // namespace
+
+TEST_CASE("DataFlash binary: PARM parameters by label, first value kept", "[io-logs]") {
+    LogTempDir d;
+    const std::string bytes = df_parm_fmt() + df_parm(10, "BATT_CAPACITY", 5200) + df_curr_fmt() +
+                              df_curr(1000, 1650, 120) + df_parm(20, "BATT_LOW_VOLT_16", 14.0f) +  // 16 chars, no NUL
+                              df_parm(30, "BATT_CAPACITY", 3000) +
+                              df_parm(40, "FS_BATT_MAH", std::numeric_limits<float>::quiet_NaN()) +
+                              df_curr(1100, 1649, 130);
+    const auto r = read_all(Kind::DfBinary, d.write("parm.bin", bytes));
+    REQUIRE(r.samples.size() == 2);
+    REQUIRE(r.info.parameters.size() == 2);
+    CHECK(r.info.parameters[0].first == "BATT_CAPACITY");
+    CHECK(r.info.parameters[0].second == 5200.0);
+    CHECK(r.info.parameters[1].first == "BATT_LOW_VOLT_16");
+    CHECK(r.info.parameters[1].second == 14.0);
+    CHECK(std::isnan(param(r, "FS_BATT_MAH")));
+    CHECK(any_note(r, "FS_BATT_MAH.Value: expected a finite number, found nan"));
+    // Same log without any PARM FMT: no parameters, no notes about them.
+    const auto plain = read_all(Kind::DfBinary, d.write("plain.bin", df_three_curr()));
+    CHECK(plain.info.parameters.empty());
+    CHECK(std::isnan(param(plain, "BATT_CAPACITY")));
 }
 
 TEST_CASE("DataFlash binary malformed: wrong magic", "[io-logs]") {
@@ -536,6 +634,46 @@ TEST_CASE("DataFlash text: untimed CURR takes the latest boot time of a neighbou
     CHECK(any_note(r, "latest boot time"));
 }
 
+TEST_CASE("DataFlash text: PARM parameters, first value kept", "[io-logs]") {
+    LogTempDir d;
+    const std::string t = std::string(kTextFmts) + "FMT, 129, 23, PARM, Nf, Name,Value\n" +
+                          "PARM, BATT_CAPACITY, 4000.000000\n" + "CURR, 0, 0, 1499, 200, 4940, 1.0\n" +
+                          "PARM, LOW_VOLT, 10.500000\n" + "PARM, BATT_CAPACITY, 3300.000000\n" +
+                          "CURR, 0, 0, 1498, 210, 4940, 2.0\n";
+    const auto r = read_all(Kind::DfText, d.write("parm.log", t));
+    CHECK(r.samples.size() == 2);
+    REQUIRE(r.info.parameters.size() == 2);
+    CHECK(r.info.parameters[0] == std::make_pair(std::string("BATT_CAPACITY"), 4000.0));
+    CHECK(r.info.parameters[1] == std::make_pair(std::string("LOW_VOLT"), 10.5));
+    CHECK(std::isnan(param(r, "NO_SUCH_PARAM")));
+    CHECK(std::isnan(log_parameter(SourceInfo(), "BATT_CAPACITY")));
+    CHECK_FALSE(any_note(r, "PARM"));
+}
+
+TEST_CASE("DataFlash text malformed: PARM with a non-numeric Value is skipped with a note", "[io-logs]") {
+    LogTempDir d;
+    const std::string t = std::string(kTextFmts) + "FMT, 129, 23, PARM, Nf, Name,Value\n" +
+                          "PARM, BATT_CAPACITY, 4000\n" + "PARM, LOW_VOLT, abc\n" + "PARM, FS_BATT_MAH, nan\n" +
+                          "PARM, ARMING_CHECK, 1\n" + "CURR, 0, 0, 1499, 200, 4940, 1.0\n" +
+                          "CURR, 0, 0, 1498, 210, 4940, 2.0\n";
+    const auto r = read_all(Kind::DfText, d.write("parmbad.log", t));
+    CHECK(r.samples.size() == 2);
+    REQUIRE(r.info.parameters.size() == 2);
+    CHECK(param(r, "BATT_CAPACITY") == 4000.0);
+    CHECK(param(r, "ARMING_CHECK") == 1.0);
+    CHECK(std::isnan(param(r, "LOW_VOLT")));
+    CHECK(std::isnan(param(r, "FS_BATT_MAH")));
+    CHECK(any_note(r, "line 6 column 3: PARM LOW_VOLT.Value: expected a finite number, found 'abc'"));
+    CHECK(any_note(r, "line 7 column 3: PARM FS_BATT_MAH.Value"));
+    // A PARM FMT without a Value column: parameters are skipped with a note, samples still read.
+    const std::string nov = std::string(kTextFmts) + "FMT, 129, 23, PARM, Nf, Name,Val\n" + "PARM, BATT_CAPACITY, 4000\n" +
+                            "CURR, 0, 0, 1499, 200, 4940, 1.0\n";
+    const auto r2 = read_all(Kind::DfText, d.write("parmnov.log", nov));
+    CHECK(r2.samples.size() == 1);
+    CHECK(r2.info.parameters.empty());
+    CHECK(any_note(r2, "PARM messages are skipped"));
+}
+
 TEST_CASE("DataFlash text malformed: non-UTF-8 bytes", "[io-logs]") {
     LogTempDir d;
     std::string t = std::string(kTextFmts) + "\xFE\xFF\x80 binary junk\n" + "CURR, 0, 0, 1499, 200, 4940, 1.0\n" +
@@ -637,6 +775,49 @@ TEST_CASE("ULog: cells only up to cell_count and only while > 0", "[io-logs]") {
     REQUIRE(r.samples.size() == 2);
     CHECK(r.samples[0].cell_count == 2);
     CHECK(r.samples[1].cell_count == 0);  // first cell is 0 V: no cells
+}
+
+TEST_CASE("ULog: float and int32 parameters, defaults ignored, first value kept", "[io-logs]") {
+    LogTempDir d;
+    const std::string bytes = ulog_header() + ulog_flags() + ulog_msg('F', kBatteryFormat) +
+                              ulog_param_f("BAT1_CAPACITY", 5000.0f) + ulog_param_i("BAT1_N_CELLS", 4) +
+                              ulog_default_i("BAT1_N_CELLS", 6) + ulog_default_i("BAT1_SOURCE", 1) + ulog_sub(0, 3) +
+                              ulog_battery(3, 1000000, 16.2f, 5.0f) + ulog_param_f("BAT1_CAPACITY", 6000.0f) +
+                              ulog_param_f("BAT1_R_INTERNAL", 0.005f) + ulog_battery(3, 1100000, 16.1f, 5.0f);
+    const auto r = read_all(Kind::Ulog, d.write("param.ulg", bytes));
+    CHECK(r.samples.size() == 2);
+    REQUIRE(r.info.parameters.size() == 3);
+    CHECK(r.info.parameters[0].first == "BAT1_CAPACITY");
+    CHECK(r.info.parameters[0].second == 5000.0);  // the later change to 6000 is ignored
+    CHECK(r.info.parameters[1].first == "BAT1_N_CELLS");
+    CHECK(r.info.parameters[1].second == 4.0);  // not the default 6
+    CHECK(r.info.parameters[2].first == "BAT1_R_INTERNAL");  // first seen in the data section
+    CHECK(r.info.parameters[2].second == Approx(0.005));
+    CHECK(std::isnan(param(r, "BAT1_SOURCE")));  // only a default
+    CHECK(r.notes.empty());
+}
+
+TEST_CASE("ULog malformed: bad parameter messages are skipped with a note", "[io-logs]") {
+    LogTempDir d;
+    std::string overrun = ulog_key("float BAT1_CAPACITY");
+    overrun[0] = static_cast<char>(60);  // key_len past the end of the message
+    std::string wrong_type = ulog_key("double BAT1_V_EMPTY");
+    put(wrong_type, 0, 8);
+    std::string short_value = ulog_key("float BAT1_V_CHARGED");
+    put(short_value, 0, 2);
+    const std::string bytes = ulog_good_prefix() + ulog_msg('P', overrun) + ulog_msg('P', wrong_type) +
+                              ulog_msg('P', short_value) + ulog_msg('P', ulog_key("BAT1_NO_TYPE") + "abcd") +
+                              ulog_msg('P', "") + ulog_param_i("BAT1_N_CELLS", 3) +
+                              ulog_battery(3, 1000000, 16.2f, 5.0f);
+    const auto r = read_all(Kind::Ulog, d.write("badparam.ulg", bytes));
+    CHECK(r.samples.size() == 1);
+    REQUIRE(r.info.parameters.size() == 1);
+    CHECK(param(r, "BAT1_N_CELLS") == 3.0);
+    CHECK(any_note(r, "declares a 60-byte key"));
+    CHECK(any_note(r, "BAT1_V_EMPTY has type 'double'"));
+    CHECK(any_note(r, "BAT1_V_CHARGED has a 2-byte value, float needs 4"));
+    CHECK(any_note(r, "is not 'type name'"));
+    CHECK(any_note(r, "parameter message is empty"));
 }
 
 TEST_CASE("ULog malformed: truncated header and wrong magic", "[io-logs]") {

@@ -23,6 +23,11 @@
 //  * BCL: per-cell voltages V1..V12 in mV (0 and 65535 = no cell); the latest BCL of
 //    instance 0 is attached to every battery sample.
 //
+// Parameters: PARM (columns found by label: Name, a char field, and Value, a number; older logs
+// "Nf" Name,Value, newer ones add TimeUS and Default) go to SourceInfo::parameters as the stream
+// passes them, first value per name only (later rows are changes in flight). A row whose Value is
+// not a finite number is skipped with a note.
+//
 // Time (output time stamps are non-decreasing; a row that would go backwards is dropped with a
 // note):
 //  1. A battery row with its own TimeUS/TimeMS uses it (boot time).
@@ -95,6 +100,7 @@ double char_scale(char c) {
     }
 }
 bool char_is_number(char c) { return c != 'n' && c != 'N' && c != 'Z' && c != 'a' && char_size(c) > 0; }
+bool char_is_text(char c) { return c == 'n' || c == 'N' || c == 'Z'; }
 bool char_is_integer(char c) {
     switch (c) {
         case 'b': case 'B': case 'h': case 'H': case 'i': case 'I': case 'q': case 'Q': case 'M':
@@ -103,7 +109,7 @@ bool char_is_integer(char c) {
     }
 }
 
-enum class Role { None, Battery, Cells };
+enum class Role { None, Battery, Cells, Parameter };
 
 struct DfFormat {
     bool defined = false;
@@ -123,6 +129,7 @@ struct DfFormat {
     Role role = Role::None;
     int volt = -1, curr = -1, curr_tot = -1, temp = -1, inst = -1;
     int cells[kMaxCellFields];
+    int parm_name = -1, parm_value = -1;
     bool used() const { return role != Role::None || boot_time >= 0 || gps_week_ms >= 0; }
 };
 
@@ -182,8 +189,10 @@ void complete_format(DfFormat& f, const std::string& path, long line, const std:
     f.role = Role::None;
     f.volt = f.curr = f.curr_tot = f.temp = f.inst = -1;
     for (int& c : f.cells) c = -1;
+    f.parm_name = f.parm_value = -1;
     if (f.name == "BAT" || f.name == "CURR") f.role = Role::Battery;
     if (f.name == "BCL") f.role = Role::Cells;
+    if (f.name == "PARM") f.role = Role::Parameter;
     if (!f.decodable) {
         if (f.role != Role::None)
             notes.add("fmt", where + ": " + f.name + " cannot be decoded: " + f.why_not);
@@ -233,6 +242,16 @@ void complete_format(DfFormat& f, const std::string& path, long line, const std:
         f.inst = numeric(column(f, "Instance"));
         if (f.inst < 0) f.inst = numeric(column(f, "Inst"));
         for (int k = 0; k < kMaxCellFields; ++k) f.cells[k] = numeric(column(f, ("V" + std::to_string(k + 1)).c_str()));
+    } else if (f.role == Role::Parameter) {
+        const int name = column(f, "Name");
+        f.parm_name = name >= 0 && char_is_text(f.format[static_cast<size_t>(name)]) ? name : -1;
+        f.parm_value = numeric(column(f, "Value"));
+        if (f.parm_name < 0 || f.parm_value < 0) {
+            // Not fatal: parameters are extra information, the battery data does not need them.
+            notes.add("fmt", where + ": PARM messages are skipped: their FMT has no text Name and numeric Value "
+                                     "columns (format " + quoted(f.format) + ")");
+            f.role = Role::None;
+        }
     }
 }
 
@@ -247,6 +266,8 @@ public:
     virtual std::string raw(int i) const = 0;
     // 1-based column (text: field number on the line), 0 for binary.
     virtual long column_of(int i) const = 0;
+    // A text column (n/N/Z) as logged, without binary NUL padding or trailing spaces.
+    virtual std::string text(int i) const = 0;
 };
 
 class MessageSource {
@@ -299,6 +320,18 @@ public:
         return number(i, v) ? fixed(v, 6) : std::string("?");
     }
     long column_of(int) const override { return 0; }
+    std::string text(int i) const override {
+        if (i < 0 || static_cast<size_t>(i) >= f->offsets.size()) return std::string();
+        const char c = f->format[static_cast<size_t>(i)];
+        if (!char_is_text(c)) return raw(i);
+        const char* q = reinterpret_cast<const char*>(p + f->offsets[static_cast<size_t>(i)]);
+        // The firmware pads with NULs; anything after the first NUL is not part of the name.
+        size_t n = 0;
+        const size_t cap = static_cast<size_t>(char_size(c));
+        while (n < cap && q[n] != '\0') ++n;
+        while (n > 0 && q[n - 1] == ' ') --n;
+        return std::string(q, n);
+    }
 };
 
 class BinarySource final : public MessageSource {
@@ -514,6 +547,10 @@ public:
         return quoted(v[static_cast<size_t>(i) + 1]);
     }
     long column_of(int i) const override { return i + 2; }
+    std::string text(int i) const override {
+        if (i < 0 || static_cast<size_t>(i) + 1 >= v.size()) return std::string();
+        return std::string(v[static_cast<size_t>(i) + 1]);
+    }
 };
 
 class TextSource final : public MessageSource {
@@ -967,6 +1004,27 @@ public:
     void add_note(const std::string& text) { info_.notes.push_back(text); }
 
 private:
+    // PARM row: keeps the first finite value of each name.
+    void parameter(const DfFormat& f, const FieldReader& r, const std::string& where) {
+        const std::string name = r.text(f.parm_name);
+        const std::string at = where + (r.column_of(f.parm_value) ? " column " + std::to_string(r.column_of(f.parm_value)) : "");
+        bool printable = !name.empty();
+        for (char c : name)
+            if (static_cast<unsigned char>(c) <= 0x20 || static_cast<unsigned char>(c) >= 0x7F) printable = false;
+        if (!printable) {
+            notes_.add("parameter", where + ": PARM.Name " + quoted(name) + " is not a parameter name; row skipped");
+            return;
+        }
+        if (first_params_.seen(name)) return;  // a later change; the first value is the one in force at start
+        double value;
+        if (!r.number(f.parm_value, value) || !std::isfinite(value)) {
+            notes_.add("parameter", at + ": PARM " + name + ".Value: expected a finite number, found " +
+                                        r.raw(f.parm_value) + "; parameter row skipped");
+            return;
+        }
+        first_params_.add(name, value, notes_, where);
+    }
+
     std::unique_ptr<MessageSource> open_source(NoteLog& notes) {
         if (text_) return std::make_unique<TextSource>(path_, notes);
         return std::make_unique<BinarySource>(path_, notes);
@@ -980,6 +1038,10 @@ private:
     bool step(const DfFormat& f, const FieldReader& r, const std::string& where, long line, core::Sample& out) {
         (void)line;
         clocks_.update(f, r);
+        if (f.role == Role::Parameter && f.decodable) {
+            parameter(f, r, where);
+            return false;
+        }
         if (f.role == Role::Cells && f.decodable) {
             double inst;
             if (!read_instance(f, r, inst) || inst != 0) return false;
@@ -1062,6 +1124,7 @@ private:
     bool text_;
     SourceInfo info_;
     NoteLog notes_;
+    logio::FirstParameters first_params_{&info_.parameters};
     Plan plan_;
     std::unique_ptr<MessageSource> src_;
     Clocks clocks_;

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <string>
 #include <string_view>
+#include <unordered_set>
+#include <utility>
 #include <vector>
 
 #include "host/io/sample_reader.h"
@@ -52,6 +54,35 @@ private:
     std::vector<Kind> kinds_;
     bool finished_ = false;
 };
+
+// The parameters a log recorded: the first value of each name (later ones are changes in
+// flight), at most kMax names, so a corrupt file cannot grow memory without bound.
+class FirstParameters {
+public:
+    static constexpr size_t kMax = 100000;  // far above any autopilot's (ArduPilot ~1500)
+    explicit FirstParameters(std::vector<std::pair<std::string, double>>* out) : out_(out) {}
+    bool seen(const std::string& name) const { return names_.count(name) != 0; }
+    // Keeps a name not seen before; past the cap, notes it once (under `where`) and drops it.
+    void add(const std::string& name, double value, NoteLog& notes, const std::string& where);
+
+private:
+    std::vector<std::pair<std::string, double>>* out_;
+    std::unordered_set<std::string> names_;
+    bool capped_ = false;
+};
+
+inline void FirstParameters::add(const std::string& name, double value, NoteLog& notes, const std::string& where) {
+    if (names_.count(name)) return;
+    if (names_.size() >= kMax) {
+        if (!capped_)
+            notes.add("parameter", where + ": more than " + std::to_string(kMax) +
+                                       " distinct parameter names; further parameters ignored");
+        capped_ = true;
+        return;
+    }
+    names_.insert(name);
+    out_->emplace_back(name, value);
+}
 
 // Quotes bytes for a message: printable ASCII as is, anything else as \xNN.
 inline std::string quoted(std::string_view s, size_t max_len = 40) {

@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string_view>
@@ -141,6 +142,13 @@ LogFormat detect(const std::string& path, const std::vector<unsigned char>& head
 }  // namespace
 
 LogFormat detect_log_format(const std::string& path) { return detect(path, peek(path)); }
+
+double log_parameter(const SourceInfo& info, const std::string& name) {
+    // Linear: called for a handful of names per log, and the readers keep only first values.
+    for (const auto& p : info.parameters)
+        if (p.first == name) return p.second;
+    return std::nan("");
+}
 
 std::unique_ptr<SampleReader> open_reader(const std::string& path, const ReaderOptions& options) {
     const std::vector<unsigned char> head = peek(path);

@@ -5,6 +5,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/sample.h"
@@ -73,7 +74,14 @@ struct SourceInfo {
     int cell_count = 0;
     bool has_temperature = false;
     std::vector<std::string> notes;  // repairs and skipped lines, human readable, with line numbers
+    // Parameters the autopilot recorded (ArduPilot PARM Name/Value, PX4 ULog parameter
+    // messages), in the order first seen, each with its first value. Empty for CSV and raw
+    // logs. Complete once next() has returned false.
+    std::vector<std::pair<std::string, double>> parameters;
 };
+
+// The first recorded value of `name` among `info.parameters`; NaN when the log has none.
+double log_parameter(const SourceInfo& info, const std::string& name);
 
 class SampleReader {
 public:

@@ -21,6 +21,11 @@
 // finite). The streaming pass reads the data section once, in order; a pre-scan pass (aggregates
 // only) finds the cell count, temperature presence and anything worth a note before streaming.
 //
+// Parameters: 'P' messages (key_len u8, key "type name", value; the spec allows int32_t and
+// float, both 4 bytes little-endian) go to SourceInfo::parameters, from the definitions and the
+// data section alike, first value per name only (later ones are changes in flight). 'Q' messages
+// are defaults, not values in force, and are ignored. A malformed 'P' is skipped with a note.
+//
 // Decision, current_a == -1: PX4 logs -1 when the battery driver has no current measurement. Such
 // samples are kept (the voltage is still valid) with current 0 A, and SourceInfo::notes says how many
 // samples were affected, so a consumer can tell that 0 A means "unknown" there.
@@ -34,6 +39,7 @@
 #include <memory>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "host/io/dataflash_ulog_util.h"
@@ -52,6 +58,9 @@ constexpr uint8_t kMagic[7] = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35};
 constexpr size_t kMaxDefinitionBytes = 8 * 1024 * 1024;  // all 'F' strings together
 constexpr int kMaxNesting = 32;
 constexpr size_t kMaxMessageBytes = 65535;
+// Far above PX4's parameter count (~1500); bounds memory on corrupt input.
+
+using Parameters = std::vector<std::pair<std::string, double>>;
 
 int basic_size(const std::string& t) {
     static const std::map<std::string, int> sizes = {
@@ -141,7 +150,9 @@ struct BatteryRecord {
 // Streams the messages of a ULog and hands out battery_status (multi_id 0) records.
 class UlogStream {
 public:
-    UlogStream(const std::string& path, NoteLog& notes) : path_(path), in_(path), notes_(notes) {
+    // `params`: where parameter messages go; nullptr to skip them (pre-scan).
+    UlogStream(const std::string& path, NoteLog& notes, Parameters* params = nullptr)
+        : path_(path), in_(path), notes_(notes), params_(params), first_params_(params) {
         const size_t n = in_.ensure(16);
         if (n == 0) throw InputError(path, 0, 0, "empty file: expected a ULog (.ulg)");
         const uint8_t* p = in_.data();
@@ -231,7 +242,8 @@ public:
                     ++dropouts_;
                     if (size >= 2) dropout_ms_ += static_cast<long>(le(payload, 2));
                     break;
-                case 'I': case 'M': case 'P': case 'Q': case 'L': case 'C': case 'S': break;
+                case 'P': parameter(payload, size, off); break;
+                case 'I': case 'M': case 'Q': case 'L': case 'C': case 'S': break;
                 default:
                     notes_.add("unknown-type", "byte " + std::to_string(off) + ": unknown message type " +
                                                    quoted(std::string(1, type)) + " (" + std::to_string(size) +
@@ -255,6 +267,51 @@ private:
 
     [[noreturn]] void fail(uint64_t off, const std::string& msg) const {
         throw InputError(path_, 0, 0, "byte " + std::to_string(off) + ": " + msg);
+    }
+
+    // 'P' message: keeps the first value of each name.
+    void parameter(const uint8_t* p, size_t size, uint64_t off) {
+        if (!params_) return;
+        const std::string at = "byte " + std::to_string(off) + ": parameter message";
+        if (size < 1) {
+            notes_.add("parameter", at + " is empty; skipped");
+            return;
+        }
+        const size_t key_len = p[0];
+        if (1 + key_len > size) {
+            notes_.add("parameter", at + " declares a " + std::to_string(key_len) + "-byte key but has only " +
+                                        std::to_string(size - 1) + " bytes after key_len; skipped");
+            return;
+        }
+        const std::string key(reinterpret_cast<const char*>(p + 1), key_len);
+        const size_t space = key.find(' ');
+        const std::string type = space == std::string::npos ? std::string() : key.substr(0, space);
+        const std::string name = space == std::string::npos ? std::string() : key.substr(space + 1);
+        bool name_ok = !name.empty();
+        for (char c : name) name_ok = name_ok && name_char_ok(c);
+        if (!name_ok) {
+            notes_.add("parameter", at + ": key " + quoted(key) + " is not 'type name'; skipped");
+            return;
+        }
+        if (type != "float" && type != "int32_t") {
+            notes_.add("parameter", at + " " + name + " has type " + quoted(type) +
+                                        "; ULog parameters are int32_t or float; skipped");
+            return;
+        }
+        const size_t value_len = size - 1 - key_len;
+        if (value_len != 4) {
+            notes_.add("parameter", at + " " + name + " has a " + std::to_string(value_len) + "-byte value, " +
+                                        type + " needs 4; skipped");
+            return;
+        }
+        if (first_params_.seen(name)) return;  // a later change; the first value is the one in force at start
+        double value = 0;
+        read_basic(type, p + 1 + key_len, value);
+        if (!std::isfinite(value)) {
+            notes_.add("parameter", at + " " + name + " = " + fixed(value, 3) + " is not a finite number; skipped");
+            return;
+        }
+        first_params_.add(name, value, notes_, at);
     }
 
     void flag_bits(const uint8_t* p, size_t size, uint64_t off) {
@@ -509,6 +566,8 @@ private:
     std::vector<uint8_t> padded_;
     long dropouts_ = 0;
     long dropout_ms_ = 0;
+    Parameters* params_;
+    logio::FirstParameters first_params_;
 };
 
 // Cells of a record: the first cell_count entries (whole array without cell_count), leading
@@ -534,7 +593,7 @@ public:
         info_.path = path;
         info_.format = LogFormat::Ulog;
         scan();
-        stream_ = std::make_unique<UlogStream>(path, notes_);
+        stream_ = std::make_unique<UlogStream>(path, notes_, &info_.parameters);
     }
 
     bool next(core::Sample& out) override {
