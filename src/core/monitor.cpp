@@ -127,14 +127,17 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         status_.initial_forced = initial_.status().forced;
         float initial_ah = initial_.status().used_ah;
         float initial_wh = initial_.status().used_wh;
+        // The sample it settled from: this one, or the last at rest before a take-off.
+        const float settle_v = initial_.status().voltage_v;
+        const float settle_a = initial_.status().current_a;
         if (extended) {
             // The charge drawn from the extended model (its RC and temperature states at this
             // moment); the energy to it from the plain model's closed form.
-            initial_ah = model_.used_ah_at_voltage(sample.voltage_v, current_a);
-            initial_wh = model.energy_wh_to(initial_ah, current_a);
+            initial_ah = model_.used_ah_at_voltage(settle_v, settle_a);
+            initial_wh = model.energy_wh_to(initial_ah, settle_a);
         }
         counter_.reset(initial_ah * 1000.0f, initial_wh * 1000.0f);
-        if (config_.estimator == EstimatorKind::Joint) joint_.start(sample.voltage_v, current_a);
+        if (config_.estimator == EstimatorKind::Joint) joint_.start(settle_v, settle_a);
     } else {
         counter_.update(current_a, sample.voltage_v, dt_s);
     }

@@ -9,6 +9,8 @@ bool InitialState::update(const TremblayModel& model, float voltage_v, float cur
     if (status_.done) return false;
     if (fabsf(current_a) < config_.max_resting_current_a) {
         rested_s_ += dt_s;
+        rest_voltage_v_ = voltage_v;
+        rest_current_a_ = current_a;
     } else {
         rested_s_ = 0.0f;
     }
@@ -20,7 +22,8 @@ bool InitialState::update(const TremblayModel& model, float voltage_v, float cur
 
 void InitialState::force(const TremblayModel& model, float voltage_v, float current_a) {
     if (status_.done) return;
-    settle(model, voltage_v, current_a);
+    if (rest_voltage_v_ > 0.0f) settle(model, rest_voltage_v_, rest_current_a_);
+    else settle(model, voltage_v, current_a);
     status_.forced = true;
 }
 

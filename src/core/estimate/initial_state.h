@@ -26,10 +26,15 @@ public:
         config_ = config;
         status_ = Status{};
         rested_s_ = 0.0f;
+        rest_voltage_v_ = 0.0f;
     }
     // Returns true on the sample that settles the initial state.
     bool update(const TremblayModel& model, float voltage_v, float current_a, float dt_s);
-    // Settle now from this sample (the pack was never at rest long enough).
+    // Settle now (the flight began before the pack had rested long enough): from the last
+    // sample at rest, however short the rest, else from this loaded one. A log that starts
+    // at arming rests for a second or two, and its voltage then is the pack's open-circuit
+    // one; a loaded sample's leaves out the polarisation (an octocopter's 1.76 Ah pack read
+    // 10 % emptier from 9 A than from its 1.7 s at rest).
     void force(const TremblayModel& model, float voltage_v, float current_a);
     const Status& status() const { return status_; }
 
@@ -38,6 +43,8 @@ private:
     Config config_;
     Status status_;
     float rested_s_ = 0.0f;
+    float rest_voltage_v_ = 0.0f;  // the last sample at rest (0 = none yet)
+    float rest_current_a_ = 0.0f;
 };
 
 }  // namespace core
