@@ -1,4 +1,5 @@
 #include "host/config_json.h"
+#include "host/pack_config.h"
 
 #include <cmath>
 #include <cstdio>
@@ -444,6 +445,34 @@ std::vector<std::string> config_notes(const core::MonitorConfig& config, const L
                           log.resting_voltage_v, per_cell_v, cells);
             notes.push_back(std::string(buf) +
                             ", outside any lithium cell's resting range (2.9-4.45 V): does the config match this pack?");
+        }
+    }
+    const std::string advice = log.path.empty() ? std::string(": does the config match this pack?")
+                                                : ": battsim make-config --from-log " + log.path + " writes one for it";
+    if (log.declared_cells > 0 && log.declared_cells != cells)
+        notes.push_back("the log's autopilot was set for " + std::to_string(log.declared_cells) + " cells (" +
+                        log.declared_cells_from + "), the config has " + std::to_string(cells) + advice);
+    // Rated capacities differ by a few percent between makers' labels; beyond this it is another pack.
+    constexpr double kCapacityTolerance = 0.10;
+    const double capacity_ah = config.battery.capacity_ah;
+    if (std::isfinite(log.declared_capacity_ah) &&
+        std::fabs(log.declared_capacity_ah / capacity_ah - 1.0) > kCapacityTolerance) {
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "the log's autopilot was set for a %.3g Ah pack (%s), the config's is %.3g Ah",
+                      log.declared_capacity_ah, log.declared_capacity_from.c_str(), capacity_ah);
+        notes.push_back(buf + advice);
+    }
+    // Inside the resting range, but only as the lowest charge anybody takes off with, while
+    // another cell count puts it in the middle: the config's count is likely wrong (a 3S
+    // pack at 3.99 V per cell read as a 4S one at 3.00 V).
+    if (cells > 0 && std::isfinite(log.resting_voltage_v) && log.declared_cells == 0 && log.cells == 0) {
+        const double per_cell_v = log.resting_voltage_v / cells;
+        const int likely = cells_from_resting_voltage(log.resting_voltage_v);
+        if (likely > 0 && likely != cells && per_cell_v >= kRestMinV && per_cell_v <= kRestMaxV) {
+            char buf[200];
+            std::snprintf(buf, sizeof buf, "the pack rests at %.2f V: %.2f V per cell as %d cells, %.2f V as the config's %d",
+                          log.resting_voltage_v, log.resting_voltage_v / likely, likely, per_cell_v, cells);
+            notes.push_back(buf + advice);
         }
     }
     // Without a table the joint estimator reads the state of charge off the Tremblay curve,

@@ -33,6 +33,13 @@ LoadedConfig default_config();
 struct LogFacts {
     int cells = 0;
     double resting_voltage_v = NAN;
+    // What the log's autopilot was set for (pack_config.h, log_pack()), with the parameter
+    // it came from; and the log's path, for the advice.
+    int declared_cells = 0;
+    std::string declared_cells_from;
+    double declared_capacity_ah = NAN;
+    std::string declared_capacity_from;
+    std::string path;
 };
 std::vector<std::string> config_notes(const core::MonitorConfig& config, const LogFacts& log = LogFacts());
 

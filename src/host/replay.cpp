@@ -7,6 +7,7 @@
 #include <memory>
 #include <thread>
 
+#include "host/pack_config.h"
 #include "host/report/series_writer.h"
 #include "host/report/summary.h"
 #include "host/stats.h"
@@ -77,7 +78,8 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
 
     core::Sample sample;
     InputShape shape;
-    LogFacts facts;  // for the config's notes: its first voltage, when the pack was at rest
+    LogFacts facts;  // for the config's notes
+    FirstRest rest(options.config.monitor.initial.max_resting_current_a);
     bool first = true;
     uint64_t t0_us = 0;
     const auto wall0 = std::chrono::steady_clock::now();
@@ -89,10 +91,8 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
                 series = std::make_unique<SeriesWriter>(options.series_path, series_cells);
             }
             first = false;
-            if (std::isfinite(sample.voltage_v) && sample.voltage_v > 0.0f &&
-                std::fabs(sample.current_a) <= options.config.monitor.initial.max_resting_current_a)
-                facts.resting_voltage_v = sample.voltage_v;
         }
+        rest.add(sample);
         if (options.realtime_speed > 0) {
             // Pace only the output; the monitor still sees the log's time stamps.
             const auto due = wall0 + std::chrono::microseconds(static_cast<int64_t>(
@@ -122,6 +122,26 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     j["estimator"] = options.config.monitor.estimator == core::EstimatorKind::Joint ? "joint" : "reference";
     // Only when one applies: summaries of configs without notes keep their keys.
     facts.cells = info.cell_count;
+    facts.resting_voltage_v = rest.voltage_v();
+    facts.path = path;
+    const LogPack declared = log_pack(info, facts.resting_voltage_v);
+    // Declared means a parameter (PX4's cell count), not the log's columns or its voltage.
+    if (declared.cells_from.rfind("the log's BAT", 0) == 0) {
+        facts.declared_cells = declared.cells;
+        facts.declared_cells_from = declared.cells_from;
+    }
+    facts.declared_capacity_ah = declared.capacity_ah;
+    facts.declared_capacity_from = declared.capacity_from;
+    if (!info.parameters.empty()) {
+        // The battery parameters the log's autopilot flew with, as make-config reads them.
+        nlohmann::json a = nlohmann::json::object();
+        if (facts.declared_cells > 0) a["cells"] = facts.declared_cells;
+        if (std::isfinite(declared.capacity_ah)) a["capacity_ah"] = declared.capacity_ah;
+        if (std::isfinite(declared.cutoff_voltage_v)) a["cutoff_voltage_v"] = declared.cutoff_voltage_v;
+        if (std::isfinite(declared.cutoff_delay_s)) a["cutoff_delay_s"] = declared.cutoff_delay_s;
+        if (std::isfinite(declared.resistance_ohm)) a["resistance_ohm"] = declared.resistance_ohm;
+        j["input"]["autopilot_battery"] = a;
+    }
     const std::vector<std::string> notes = config_notes(options.config.monitor, facts);
     if (!notes.empty()) j["config_notes"] = notes;
     for (auto it = body.begin(); it != body.end(); ++it) j[it.key()] = it.value();

@@ -160,6 +160,15 @@ TEST_CASE("JsonLocator: paths to positions, and text that does not parse cannot 
     CHECK(d.offset(path) == 32);
 }
 
+namespace {
+LogFacts facts(int cells, double resting_voltage_v) {
+    LogFacts f;
+    f.cells = cells;
+    f.resting_voltage_v = resting_voltage_v;
+    return f;
+}
+}  // namespace
+
 TEST_CASE("config_notes: the joint estimator without a table, and a config for another pack", "[config]") {
     using battsim::host::config_notes;
     using battsim::host::LogFacts;
@@ -171,16 +180,21 @@ TEST_CASE("config_notes: the joint estimator without a table, and a config for a
     c.joint.ocv.points = 2;  // any table
     CHECK(config_notes(c).empty());
     // 4 cells at rest at 16.0 V: 4.0 V each, fine; the log's own 4 cell columns agree.
-    CHECK(config_notes(c, LogFacts{4, 16.0}).empty());
-    CHECK(config_notes(c, LogFacts{0, NAN}).empty());  // nothing known about the log
+    CHECK(config_notes(c, facts(4, 16.0)).empty());
+    CHECK(config_notes(c, facts(0, NAN)).empty());  // nothing known about the log
     // A 6S log: six cell columns, and 24.0 V is 6.0 V per configured cell.
-    const auto six = config_notes(c, LogFacts{6, 24.0});
+    const auto six = config_notes(c, facts(6, 24.0));
     REQUIRE(six.size() == 2);
     CHECK(six[0] == "the log has 6 cell voltages but the config 4 cells in series (cells_in_series): does the config match "
                     "this pack?");
     CHECK(six[1] == "the pack rests at 24.00 V, 6.000 V per cell for the config's 4 cells in series, outside any lithium "
                     "cell's resting range (2.9-4.45 V): does the config match this pack?");
     // A 3S log without cell columns: 11.4 V is 2.85 V per configured cell, below 2.9.
-    CHECK(config_notes(c, LogFacts{0, 11.4}).size() == 1);
-    CHECK(config_notes(c, LogFacts{0, 11.6}).empty());  // 2.9 V per cell: a deeply discharged 4S pack
+    CHECK(config_notes(c, facts(0, 11.4)).size() == 1);
+    // 2.9 V per cell: a deeply discharged 4S pack, or a 3S one at 3.87 V: only asked.
+    const auto eleven = config_notes(c, facts(0, 11.6));
+    REQUIRE(eleven.size() == 1);
+    CHECK(eleven[0] == "the pack rests at 11.60 V: 3.87 V per cell as 3 cells, 2.90 V as the config's 4: does the config "
+                       "match this pack?");
+    CHECK(config_notes(c, facts(0, 14.8)).empty());  // 3.7 V per cell
 }

@@ -1,0 +1,125 @@
+// battsim make-config --cells 4 --capacity-mah 1760 -o my-pack.json, or --from-log LOG:
+// a config for one's own pack, from its rating or from the autopilot's battery parameters
+// recorded in the log. Values given on the command line win over the log's.
+#include <cmath>
+#include <iostream>
+
+#include "command.h"
+#include "host/config_json.h"
+#include "host/io/atomic_file.h"
+#include "host/pack_config.h"
+
+namespace battsim {
+namespace cli {
+namespace {
+
+struct MakeConfigArgs {
+    std::string from_log;
+    std::string format = "auto";
+    int cells = 0;
+    double capacity_mah = NAN;
+    double resistance_mohm = NAN;
+    double cutoff_v = NAN;
+    double cutoff_delay_s = NAN;
+    std::string name;
+    std::string output = "-";
+};
+
+int run(const MakeConfigArgs& a) {
+    const char* me = "battsim make-config";
+    host::PackRating r;
+    r.name = a.name;
+    host::LogPack log;
+    if (!a.from_log.empty()) {
+        host::ReaderOptions options;
+        options.format = host::parse_log_format(a.format);
+        log = host::read_log_pack(a.from_log, options);
+        for (const std::string& why : log.ignored) std::cerr << me << ": note: ignored " << why << "\n";
+    }
+    // The command line first, then the log; each value says where it came from.
+    auto pick = [&r](double given, const char* given_text, double logged, const std::string& logged_from, double* out) {
+        if (std::isfinite(given)) {
+            *out = given;
+            r.sources.push_back(given_text);
+        } else if (std::isfinite(logged)) {
+            *out = logged;
+            r.sources.push_back(logged_from);
+        }
+    };
+    if (a.cells > 0) {
+        r.cells = a.cells;
+        r.sources.push_back("cells given");
+    } else if (log.cells > 0) {
+        r.cells = log.cells;
+        r.sources.push_back(std::to_string(log.cells) + " cells from " + log.cells_from);
+    }
+    pick(a.capacity_mah / 1000.0, "capacity given", log.capacity_ah, "capacity from " + log.capacity_from, &r.capacity_ah);
+    pick(a.resistance_mohm / 1000.0, "resistance given", log.resistance_ohm, "resistance from " + log.resistance_from,
+         &r.resistance_ohm);
+    pick(a.cutoff_v, "cutoff given", log.cutoff_voltage_v, "cutoff from " + log.cutoff_from, &r.cutoff_voltage_v);
+    pick(a.cutoff_delay_s, "cutoff delay given", log.cutoff_delay_s, "cutoff delay from " + log.cutoff_delay_from,
+         &r.cutoff_delay_s);
+    const std::string where = a.from_log.empty() ? "" : " (the log does not say)";
+    if (r.cells <= 0) {
+        std::cerr << me << ": how many cells in series? give --cells" << where << "\n";
+        return kExitUsage;
+    }
+    if (!std::isfinite(r.capacity_ah)) {
+        std::cerr << me << ": what is the rated capacity? give --capacity-mah" << where << "\n";
+        return kExitUsage;
+    }
+    for (const std::string& s : r.sources) std::cerr << me << ": " << s << "\n";
+    nlohmann::json j;
+    try {
+        j = host::pack_config_json(r);
+    } catch (const std::invalid_argument& e) {
+        std::cerr << me << ": " << e.what() << "\n";
+        return kExitUsage;
+    }
+    host::write_file_atomic(a.output, j.dump(2) + "\n");
+    return kExitOk;
+}
+
+std::function<int()> setup(CLI::App& sub) {
+    auto a = std::make_shared<MakeConfigArgs>();
+    sub.add_option("--from-log", a->from_log,
+                   "Take what an autopilot log says about its pack: PX4 BAT1_N_CELLS, BAT1_CAPACITY, BAT1_R_INTERNAL; "
+                   "ArduPilot BATT_CAPACITY, BATT_LOW_VOLT (or LOW_VOLT, FS_BATT_VOLTAGE), BATT_LOW_TIMER; the cell "
+                   "count from its cell columns or how high it rests");
+    sub.add_option("--format", a->format, "Log format of --from-log (as replay)")->capture_default_str();
+    sub.add_option("--cells", a->cells, "Cells in series")->check(CLI::Range(1, 12));
+    sub.add_option("--capacity-mah", a->capacity_mah, "Rated capacity (mAh)")->check(CLI::PositiveNumber);
+    sub.add_option("--resistance-mohm", a->resistance_mohm,
+                   "Pack internal resistance (mOhm; default: the reference pack's per cell, scaled by capacity)")
+        ->check(CLI::PositiveNumber);
+    sub.add_option("--cutoff-v", a->cutoff_v, "Loaded pack voltage the remaining time runs to (V; default 3.325 V per cell)")
+        ->check(CLI::PositiveNumber);
+    sub.add_option("--cutoff-delay-s", a->cutoff_delay_s,
+                   "How long the flight goes on below the cutoff before the failsafe acts (s; default 5)")
+        ->check(CLI::Range(0.0, 600.0));
+    sub.add_option("--name", a->name, "Config name (default pack-<cells>s-<mAh>)");
+    sub.add_option("-o,--output", a->output, "Config JSON to write (\"-\" = standard output)")->capture_default_str();
+    return [a]() -> int {
+        try {
+            return run(*a);
+        } catch (const host::InputError& e) {
+            std::cerr << "battsim make-config: " << e.what() << "\n";
+            return kExitInputError;
+        } catch (const host::ConfigError& e) {
+            std::cerr << "battsim make-config: " << e.what() << "\n";
+            return kExitConfigError;
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "battsim make-config: " << e.what() << "\n";
+            return kExitUsage;
+        } catch (const std::runtime_error& e) {
+            std::cerr << "battsim make-config: " << e.what() << "\n";
+            return kExitOutputError;
+        }
+    };
+}
+
+const RegisterCommand reg{{"make-config", "Write a config for your pack from its rating or an autopilot log's battery parameters", setup}};
+
+}  // namespace
+}  // namespace cli
+}  // namespace battsim

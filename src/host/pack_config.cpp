@@ -1,0 +1,216 @@
+#include "host/pack_config.h"
+
+#include <cstdio>
+#include <stdexcept>
+
+#include "core/config.h"
+#include "host/config_json.h"
+
+namespace battsim {
+namespace host {
+namespace {
+
+using json = nlohmann::json;
+
+// The reference pack, per cell and per rated amp-hour (configs/sim-4s.json: 4S, 1.55 Ah).
+constexpr double kRefCapacityAh = 1.55;
+constexpr double kFullV = 4.2, kExponentialV = 3.815, kNominalZoneV = 3.6875, kNominalV = 3.7, kMinV = 3.325;
+constexpr double kExponentialAh = 0.3, kNominalZoneAh = 1.5;  // at the reference capacity
+constexpr double kCellResistanceOhm = 0.005;                   // at the reference capacity
+constexpr double kCurveCurrentA = 7.0;                          // the curve's C-rate is kept
+constexpr double kVarianceV = 0.05, kAveragePowerW = 79.0, kMaxPackV = 5.25;
+constexpr double kCutoffDelayS = 5.0;
+// The simulator's healthy LiPo cell at rest, empty to full in 5 % steps (read off a C/5
+// discharge by scripts/suite-ocv-tables.py; normalised to the rated capacity).
+constexpr double kOcvCellV[] = {3.3271, 3.5607, 3.6542, 3.6925, 3.7166, 3.7358, 3.7506, 3.7655, 3.7803, 3.7952, 3.8105,
+                                3.8302, 3.8503, 3.8749, 3.9009, 3.9296, 3.9605, 3.9951, 4.035,  4.0898, 4.1999};
+// A per-cell cutoff outside this is not one anybody flies to: a typo or another unit.
+constexpr double kCutoffMinV = 2.5, kCutoffMaxV = 3.9;
+
+// Rounded so the file reads like a hand-written one and the same rating gives the same bytes.
+double round_to(double v, double step) { return std::round(v / step) * step; }
+
+std::string number_text(double v, const char* format) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, format, v);
+    return buf;
+}
+
+// The first positive value among `names` (an autopilot marks "unset" with 0 or -1).
+bool first_positive(const SourceInfo& info, std::initializer_list<const char*> names, double* value, std::string* from) {
+    for (const char* name : names) {
+        const double v = log_parameter(info, name);
+        if (std::isfinite(v) && v > 0.0) {
+            *value = v;
+            *from = std::string(name) + " " + number_text(v, "%g");
+            return true;
+        }
+    }
+    return false;
+}
+
+}  // namespace
+
+int cells_from_resting_voltage(double voltage_v) {
+    if (!(voltage_v > 0.0) || !std::isfinite(voltage_v)) return 0;
+    int found = 0;
+    for (int n = 1; n <= core::kMaxCells; ++n) {
+        const double per_cell_v = voltage_v / n;
+        if (per_cell_v >= 3.45 && per_cell_v <= 4.40) {
+            if (found != 0) return 0;  // two counts fit: the voltage cannot tell
+            found = n;
+        }
+    }
+    return found;
+}
+
+json pack_config_json(const PackRating& r) {
+    if (r.cells < 1 || r.cells > core::kMaxCells)
+        throw std::invalid_argument("cells: expected 1.." + std::to_string(core::kMaxCells) + ", found " + std::to_string(r.cells));
+    if (!(r.capacity_ah >= 0.05 && r.capacity_ah <= 1000.0))
+        throw std::invalid_argument("capacity: expected 50 mAh .. 1000 Ah, found " + number_text(r.capacity_ah * 1000.0, "%g mAh"));
+    if (std::isfinite(r.resistance_ohm) && !(r.resistance_ohm > 0.0 && r.resistance_ohm < 10.0))
+        throw std::invalid_argument("resistance: expected above 0 and below 10 ohm, found " + number_text(r.resistance_ohm, "%g ohm"));
+    const double n = r.cells;
+    if (std::isfinite(r.cutoff_voltage_v) && !(r.cutoff_voltage_v / n >= kCutoffMinV && r.cutoff_voltage_v / n <= kCutoffMaxV))
+        throw std::invalid_argument("cutoff: expected " + number_text(kCutoffMinV, "%.1f") + ".." + number_text(kCutoffMaxV, "%.1f") +
+                                    " V per cell, found " + number_text(r.cutoff_voltage_v / n, "%.3f V"));
+    if (std::isfinite(r.cutoff_delay_s) && !(r.cutoff_delay_s >= 0.0 && r.cutoff_delay_s <= 600.0))
+        throw std::invalid_argument("cutoff delay: expected 0..600 s, found " + number_text(r.cutoff_delay_s, "%g s"));
+
+    const double k = r.capacity_ah / kRefCapacityAh;
+    const double resistance_ohm =
+        std::isfinite(r.resistance_ohm) ? r.resistance_ohm : round_to(kCellResistanceOhm * n / k, 1e-5);
+    const double cutoff_v = std::isfinite(r.cutoff_voltage_v) ? r.cutoff_voltage_v : kMinV * n;
+    const long mah = std::lround(r.capacity_ah * 1000.0);
+    std::string description = std::to_string(r.cells) + "S " + std::to_string(mah) +
+                              " mAh lithium polymer pack, written by battsim make-config";
+    if (!r.sources.empty()) {
+        description += " (";
+        for (size_t i = 0; i < r.sources.size(); ++i) description += (i ? "; " : "") + r.sources[i];
+        description += ")";
+    }
+    description +=
+        ": the reference pack (configs/sim-4s.json) scaled per cell and by capacity (capacities x capacity, resistance "
+        "/ capacity unless given, the curve's current at the same C-rate), with the simulator's LiPo rest curve as the "
+        "OCV table. Not fitted to this pack: battsim fit, fit-ocv and calibrate make it its own.";
+
+    json battery = {
+        {"cells_in_series", r.cells},
+        {"full_voltage_v", round_to(kFullV * n, 1e-4)},
+        {"exponential_voltage_v", round_to(kExponentialV * n, 1e-4)},
+        {"exponential_capacity_ah", round_to(kExponentialAh * k, 1e-4)},
+        {"nominal_zone_voltage_v", round_to(kNominalZoneV * n, 1e-4)},
+        {"nominal_zone_capacity_ah", round_to(kNominalZoneAh * k, 1e-4)},
+        {"capacity_ah", round_to(r.capacity_ah, 1e-4)},
+        {"internal_resistance_ohm", resistance_ohm},
+        {"curve_current_a", round_to(kCurveCurrentA * k, 1e-3)},
+        {"nominal_voltage_v", round_to(kNominalV * n, 1e-4)},
+        {"max_voltage_v", round_to(kFullV * n, 1e-4)},
+        {"min_voltage_v", round_to(kMinV * n, 1e-4)},
+    };
+    json monitor = {
+        {"reaction_time_s", 30},
+        {"min_flight_voltage_v", round_to(cutoff_v, 1e-4)},
+        {"capacity_step_fraction", 0.01},
+        {"max_voltage_variance_v", round_to(kVarianceV * n, 1e-4)},
+        {"variance_persistence_updates", 5},
+        {"short_average_time_s", 180},
+        {"long_average_time_s", 1800},
+        // Only the first flight's guess before its own power is known: a bigger pack flies a bigger drone.
+        {"remembered_average_power_w", round_to(kAveragePowerW * n * k, 0.1)},
+        {"min_flying_current_a", 1.0},
+        {"landed_hold_s", 1.0},
+        {"takeoff_confirm_s", 0.5},
+        {"max_resting_current_a", 1.0},
+        {"stabilisation_time_s", 5.0},
+    };
+    json j = {
+        {"schema", "battsim.config"},
+        {"version", 1},
+        {"name", r.name.empty() ? "pack-" + std::to_string(r.cells) + "s-" + std::to_string(mah) : r.name},
+        {"description", description},
+        {"estimator", "joint"},
+        {"battery", battery},
+        {"monitor", monitor},
+        // The reference logger's shunt calibration (a raw log's shunt column only).
+        {"sensor", {{"shunt_offset_ma", -982.8158579}, {"shunt_scale_mv_per_10a", 3.7834625},
+                    {"max_pack_voltage_v", round_to(kMaxPackV * n, 1e-4)}}},
+        {"joint",
+         {{"first_cell_includes_lead", true},
+          {"cutoff_delay_s", std::isfinite(r.cutoff_delay_s) ? r.cutoff_delay_s : kCutoffDelayS},
+          {"ocv_cell_voltage_v", kOcvCellV}}},
+    };
+    config_from_json(j, "make-config");  // the same checks as any config file; throws ConfigError
+    return j;
+}
+
+LogPack log_pack(const SourceInfo& info, double resting_voltage_v) {
+    LogPack p;
+    double v = NAN;
+    std::string from;
+    // PX4 says how many cells; ArduPilot does not, and a log's cell columns do.
+    if (first_positive(info, {"BAT1_N_CELLS", "BAT_N_CELLS"}, &v, &from) && v <= core::kMaxCells) {
+        p.cells = static_cast<int>(v);
+        p.cells_from = "the log's " + from;
+    } else if (info.cell_count > 0) {
+        p.cells = info.cell_count;
+        p.cells_from = "the log's " + std::to_string(info.cell_count) + " cell voltages";
+    } else if (const int n = cells_from_resting_voltage(resting_voltage_v)) {
+        p.cells = n;
+        p.cells_from = "the pack resting at " + number_text(resting_voltage_v, "%.2f V") + " (" +
+                       number_text(resting_voltage_v / n, "%.2f V") + " per cell)";
+    }
+    if (first_positive(info, {"BATT_CAPACITY", "BAT1_CAPACITY", "BAT_CAPACITY"}, &v, &from)) {
+        p.capacity_ah = v / 1000.0;
+        p.capacity_from = "the log's " + from + " mAh";
+    }
+    // ArduPilot's low-voltage failsafe is the voltage the pilot flies to: the remaining
+    // time's target. (PX4's BAT1_V_EMPTY is a load-compensated empty cell, not a cutoff.)
+    if (first_positive(info, {"BATT_LOW_VOLT", "FS_BATT_VOLTAGE", "LOW_VOLT"}, &v, &from)) {
+        if (p.cells > 0 && v / p.cells >= kCutoffMinV && v / p.cells <= kCutoffMaxV) {
+            p.cutoff_voltage_v = v;
+            p.cutoff_from = "the log's " + from + " V";
+        } else if (p.cells > 0) {
+            p.ignored.push_back(from + " V: " + number_text(v / p.cells, "%.2f V") + " per cell is no cutoff (" +
+                                number_text(kCutoffMinV, "%.1f") + "-" + number_text(kCutoffMaxV, "%.1f") +
+                                " V); the default 3.325 V per cell is used");
+        }
+    }
+    if (first_positive(info, {"BATT_LOW_TIMER"}, &v, &from) && v <= 600.0) {
+        p.cutoff_delay_s = v;  // the failsafe acts once the voltage has stayed low this long
+        p.cutoff_delay_from = "the log's " + from + " s";
+    }
+    if (first_positive(info, {"BAT1_R_INTERNAL", "BAT_R_INTERNAL"}, &v, &from) && p.cells > 0) {
+        p.resistance_ohm = v * p.cells;  // PX4's is per cell
+        p.resistance_from = "the log's " + from + " ohm per cell";
+    }
+    return p;
+}
+
+void FirstRest::add(const core::Sample& s) {
+    if (!started_) {
+        started_ = true;
+        t0_us_ = s.time_us;
+    }
+    constexpr uint64_t kWindowUs = 10000000;
+    if (!std::isnan(voltage_v_) || s.time_us - t0_us_ > kWindowUs) return;
+    if (std::isfinite(s.voltage_v) && s.voltage_v > 0.0f && std::fabs(s.current_a) <= max_current_a_)
+        voltage_v_ = s.voltage_v;
+}
+
+LogPack read_log_pack(const std::string& path, const ReaderOptions& options) {
+    std::unique_ptr<SampleReader> reader = open_reader(path, options);
+    core::Sample sample;
+    FirstRest rest(1.0);
+    bool any = false;
+    while (reader->next(sample)) {
+        rest.add(sample);
+        any = true;
+    }
+    if (!any) throw InputError(path, 0, 0, "the log holds no samples");
+    return log_pack(reader->info(), rest.voltage_v());
+}
+
+}  // namespace host
+}  // namespace battsim

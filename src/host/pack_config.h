@@ -1,0 +1,76 @@
+// A config for a pack nobody has fitted yet: from its rating (cells, capacity), or from
+// what an autopilot log says about it (ArduPilot BATT_CAPACITY, BATT_LOW_VOLT; PX4
+// BAT1_CAPACITY, BAT1_N_CELLS, BAT1_R_INTERNAL) and how high it rests. Without one, a
+// user replaying their own log ran the dissertation's 1.55 Ah 4S pack against it: a 1.76 Ah
+// octocopter pack resting at 3.75 V per cell started the reference model past empty, and
+// its voltage error read 89 V. `battsim make-config` writes it; `replay` notes the mismatch.
+#pragma once
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "host/io/sample_reader.h"
+
+namespace battsim {
+namespace host {
+
+struct PackRating {
+    int cells = 0;                  // cells in series
+    double capacity_ah = NAN;       // rated capacity
+    double resistance_ohm = NAN;    // pack resistance; NaN = the reference pack's per cell, scaled by capacity
+    double cutoff_voltage_v = NAN;  // loaded pack voltage the remaining time runs to; NaN = 3.325 V per cell
+    double cutoff_delay_s = NAN;    // how long the flight goes on past it (joint.cutoff_delay_s); NaN = 5 s
+    std::string name;               // empty: "pack-<cells>s-<mAh>"
+    std::vector<std::string> sources;  // where the values came from, for the description
+};
+
+// The reference pack (configs/sim-4s.json: the dissertation's hand-modified Tremblay
+// parameters and the simulator's LiPo rest curve) scaled per cell and by capacity as
+// configs/generic-3s.json and sim-4s-1800.json were by hand. Checked by config_from_json.
+// Throws std::invalid_argument naming the value out of range.
+nlohmann::json pack_config_json(const PackRating& rating);
+
+// What a log says about its pack; a field stays empty (0 / NaN) when the log does not say.
+struct LogPack {
+    int cells = 0;
+    std::string cells_from;
+    double capacity_ah = NAN;
+    std::string capacity_from;
+    double cutoff_voltage_v = NAN;
+    std::string cutoff_from;
+    double resistance_ohm = NAN;
+    std::string resistance_from;
+    double cutoff_delay_s = NAN;
+    std::string cutoff_delay_from;
+    std::vector<std::string> ignored;  // parameters present but not taken, and why
+};
+// `resting_voltage_v`: the log's first pack voltage while at rest (NaN = not at rest).
+LogPack log_pack(const SourceInfo& info, double resting_voltage_v);
+
+// The first pack voltage at rest (|current| at most `max_current_a`) in the log's first
+// 10 s: a log may open with the motors armed, and a pack rests before a flight, not after.
+class FirstRest {
+public:
+    explicit FirstRest(double max_current_a) : max_current_a_(max_current_a) {}
+    void add(const core::Sample& s);
+    double voltage_v() const { return voltage_v_; }
+
+private:
+    double max_current_a_;
+    double voltage_v_ = NAN;
+    uint64_t t0_us_ = 0;
+    bool started_ = false;
+};
+// Reads the whole log (its parameters may come anywhere) and gives log_pack() of it; the
+// first sample counts as at rest below 1 A. Throws InputError like open_reader().
+LogPack read_log_pack(const std::string& path, const ReaderOptions& options);
+
+// The one cell count whose per-cell voltage lies where a charged or part-charged lithium
+// cell rests (3.45-4.35 V); 0 when none or more than one does.
+int cells_from_resting_voltage(double voltage_v);
+
+}  // namespace host
+}  // namespace battsim

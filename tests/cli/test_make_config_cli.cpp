@@ -1,0 +1,100 @@
+// battsim make-config from the outside: a config for one's own pack, from its rating or an
+// autopilot log; and replay saying when the config is for another pack than the log's.
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <string>
+
+#include "cli_util.h"
+
+using nlohmann::json;
+using clitest::q;
+
+namespace {
+const std::string kSource = BATTSIM_SOURCE_DIR;
+const std::string kData = BATTSIM_DATA_DIR;
+
+bool any_contains(const json& list, const std::string& text) {
+    if (!list.is_array()) return false;
+    for (const json& s : list)
+        if (s.get<std::string>().find(text) != std::string::npos) return true;
+    return false;
+}
+}  // namespace
+
+TEST_CASE("battsim make-config: from a rating, and what it refuses", "[cli][make_config]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string out = dir + "/pack.json";
+    const clitest::Result r = clitest::run("make-config --cells 4 --capacity-mah 1550 -o " + q(out));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const json made = json::parse(clitest::read_file(out));
+    const json ref = json::parse(clitest::read_file(kSource + "/configs/sim-4s.json"));
+    CHECK(made["joint"]["ocv_cell_voltage_v"] == ref["joint"]["ocv_cell_voltage_v"]);
+    CHECK(made["battery"]["internal_resistance_ohm"] == ref["battery"]["internal_resistance_ohm"]);
+
+    // The example replays alike through it and through configs/sim-4s.json (same numbers;
+    // only the name and the estimator's source differ).
+    const json a = clitest::run_json("replay " + q(kSource + "/logs/example-4s.csv") + " -c " + q(out) + " --json");
+    const json b = clitest::run_json("replay " + q(kSource + "/logs/example-4s.csv") + " -c " +
+                                     q(kSource + "/configs/sim-4s.json") + " --estimator joint --json");
+    CHECK(a["flight"] == b["flight"]);
+    CHECK(a["warnings"] == b["warnings"]);
+    CHECK(a["estimator"] == "joint");
+
+    const clitest::Result no_cells = clitest::run("make-config --capacity-mah 1550");
+    CHECK(no_cells.exit_code == 2);
+    CHECK(no_cells.err.find("give --cells") != std::string::npos);
+    const clitest::Result no_capacity = clitest::run("make-config --cells 4");
+    CHECK(no_capacity.exit_code == 2);
+    CHECK(no_capacity.err.find("give --capacity-mah") != std::string::npos);
+    const clitest::Result bad_cutoff = clitest::run("make-config --cells 4 --capacity-mah 1500 --cutoff-v 8");
+    CHECK(bad_cutoff.exit_code == 2);
+    CHECK(bad_cutoff.err.find("V per cell, found 2.000 V") != std::string::npos);
+    const clitest::Result missing = clitest::run("make-config --from-log " + q(dir + "/nothing.bin"));
+    CHECK(missing.exit_code == 3);
+    // A CSV log without cell columns whose voltage fits two cell counts says what it lacks.
+    const std::string csv = dir + "/ambiguous.csv";
+    clitest::write_file(csv, "time_s,voltage_v,current_a\n0,21.9,0.2\n1,21.9,0.2\n2,21.8,12\n");
+    const clitest::Result ambiguous = clitest::run("make-config --from-log " + q(csv) + " --capacity-mah 2200");
+    CHECK(ambiguous.exit_code == 2);
+    CHECK(ambiguous.err.find("give --cells (the log does not say)") != std::string::npos);
+}
+
+TEST_CASE("battsim make-config reads an ArduPilot log's pack, and replay notes the mismatch", "[cli][make_config][data]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string log = kData + "/ardupilot/robert_lefebvre_octo_PM.log";
+
+    // With the default config (the dissertation's 1.55 Ah pack) replay says so, and names the cure.
+    const json before = clitest::run_json("replay " + q(log) + " --json");
+    CHECK(before["input"]["autopilot_battery"]["capacity_ah"].get<double>() == Approx(1.76));
+    CHECK(before["input"]["autopilot_battery"]["cutoff_voltage_v"].get<double>() == Approx(10.5));
+    CHECK(any_contains(before["config_notes"], "set for a 1.76 Ah pack (the log's BATT_CAPACITY 1760 mAh)"));
+    CHECK(any_contains(before["config_notes"], "make-config --from-log"));
+
+    const std::string cfg = dir + "/octo.json";
+    const clitest::Result made = clitest::run("make-config --from-log " + q(log) + " -o " + q(cfg));
+    INFO(made.err);
+    REQUIRE(made.exit_code == 0);
+    CHECK(made.err.find("4 cells from the pack resting at 14.99 V") != std::string::npos);
+    const json c = json::parse(clitest::read_file(cfg));
+    CHECK(c["battery"]["cells_in_series"] == 4);
+    CHECK(c["battery"]["capacity_ah"].get<double>() == Approx(1.76));
+    CHECK(c["monitor"]["min_flight_voltage_v"].get<double>() == Approx(10.5));
+    CHECK(c["description"].get<std::string>().find("BATT_CAPACITY 1760") != std::string::npos);
+
+    const json after = clitest::run_json("replay " + q(log) + " -c " + q(cfg) + " --json");
+    CHECK_FALSE(after.contains("config_notes"));
+
+    // A 3S pack: nothing in the log says so but how high it rests (4.03 V as 3S, 3.03 V as 4S at its first rest).
+    const std::string under = kData + "/ardupilot/underpowered.log";
+    const json under_before = clitest::run_json("replay " + q(under) + " --json");
+    CHECK(any_contains(under_before["config_notes"], "4.03 V per cell as 3 cells, 3.03 V as the config's 4"));
+    const std::string cfg3 = dir + "/under.json";
+    REQUIRE(clitest::run("make-config --from-log " + q(under) + " -o " + q(cfg3)).exit_code == 0);
+    const json c3 = json::parse(clitest::read_file(cfg3));
+    CHECK(c3["battery"]["cells_in_series"] == 3);
+    CHECK(c3["battery"]["capacity_ah"].get<double>() == Approx(4.0));
+    CHECK(c3["monitor"]["min_flight_voltage_v"].get<double>() == Approx(9.4));
+    CHECK_FALSE(clitest::run_json("replay " + q(under) + " -c " + q(cfg3) + " --json").contains("config_notes"));
+}

@@ -1,0 +1,164 @@
+// make-config's library: a config scaled from the reference pack, what a log's autopilot
+// parameters say about its pack, and the notes replay gives when a config does not match.
+#include <catch2/catch.hpp>
+
+#include <fstream>
+
+#include "host/config_json.h"
+#include "host/pack_config.h"
+
+using namespace battsim::host;
+using nlohmann::json;
+
+namespace {
+json read_json(const std::string& path) {
+    std::ifstream in(path);
+    REQUIRE(in.good());
+    return json::parse(in);
+}
+SourceInfo with_parameters(std::vector<std::pair<std::string, double>> p) {
+    SourceInfo info;
+    info.parameters = std::move(p);
+    return info;
+}
+}  // namespace
+
+TEST_CASE("make-config: the reference rating gives the committed configs' numbers", "[pack_config]") {
+    // 4S 1.55 Ah is configs/sim-4s.json itself (OCV table included); 3S is generic-3s.json
+    // (its table was read off the 3S suite's own discharge, so it differs in the 4th decimal).
+    for (int cells : {3, 4}) {
+        PackRating r;
+        r.cells = cells;
+        r.capacity_ah = 1.55;
+        const json made = pack_config_json(r);
+        const json ref = read_json(std::string(BATTSIM_SOURCE_DIR) + (cells == 4 ? "/configs/sim-4s.json" : "/configs/generic-3s.json"));
+        INFO(cells << "S");
+        for (const char* section : {"battery", "monitor"})
+            for (auto it = ref[section].begin(); it != ref[section].end(); ++it) {
+                INFO(section << "." << it.key());
+                CHECK(made[section][it.key()].get<double>() == Approx(it.value().get<double>()).epsilon(1e-9));
+            }
+        CHECK(made["sensor"]["max_pack_voltage_v"].get<double>() == Approx(5.25 * cells));
+        CHECK(made["joint"]["cutoff_delay_s"].get<double>() == 5.0);
+        if (cells == 4) CHECK(made["joint"]["ocv_cell_voltage_v"] == ref["joint"]["ocv_cell_voltage_v"]);
+        CHECK(made["estimator"] == "joint");
+        CHECK(made["name"] == (cells == 4 ? "pack-4s-1550" : "pack-3s-1550"));
+    }
+}
+
+TEST_CASE("make-config: capacity scales the charges, the curve's current and the resistance", "[pack_config]") {
+    PackRating r;
+    r.cells = 6;
+    r.capacity_ah = 5.2;  // k = 5.2 / 1.55 = 3.3548
+    const json j = pack_config_json(r);
+    const json& b = j["battery"];
+    CHECK(b["capacity_ah"].get<double>() == Approx(5.2));
+    CHECK(b["nominal_zone_capacity_ah"].get<double>() == Approx(1.5 * 5.2 / 1.55).margin(1e-4));  // 5.0323
+    CHECK(b["exponential_capacity_ah"].get<double>() == Approx(0.3 * 5.2 / 1.55).margin(1e-4));   // 1.0065
+    CHECK(b["curve_current_a"].get<double>() == Approx(23.484).margin(1e-3));                      // 7 A at the same C-rate
+    CHECK(b["internal_resistance_ohm"].get<double>() == Approx(0.00894).margin(1e-9));            // 6 × 5 mΩ / 3.3548
+    CHECK(b["full_voltage_v"].get<double>() == Approx(25.2));
+    CHECK(j["monitor"]["min_flight_voltage_v"].get<double>() == Approx(19.95));
+    CHECK(j["monitor"]["remembered_average_power_w"].get<double>() == Approx(1590.2).margin(0.05));  // 79 W × 6 × k
+    // Given values win; the description says where they came from.
+    r.resistance_ohm = 0.012;
+    r.cutoff_voltage_v = 21.0;
+    r.cutoff_delay_s = 10.0;
+    r.sources = {"capacity from the log's BATT_CAPACITY 5200 mAh"};
+    const json g = pack_config_json(r);
+    CHECK(g["battery"]["internal_resistance_ohm"].get<double>() == 0.012);
+    CHECK(g["monitor"]["min_flight_voltage_v"].get<double>() == Approx(21.0));
+    CHECK(g["joint"]["cutoff_delay_s"].get<double>() == 10.0);
+    CHECK(g["description"].get<std::string>().find("BATT_CAPACITY 5200 mAh") != std::string::npos);
+    // And the result is a config like any other.
+    const LoadedConfig c = config_from_json(g, "test");
+    CHECK(c.monitor.cells_in_series == 6);
+    CHECK(c.monitor.joint.ocv.points == 21);
+}
+
+TEST_CASE("make-config: a rating out of range is refused with what was expected", "[pack_config]") {
+    PackRating r;
+    r.cells = 4;
+    r.capacity_ah = 1.5;
+    r.cutoff_voltage_v = 8.0;  // 2.0 V per cell
+    CHECK_THROWS_WITH(pack_config_json(r), Catch::Contains("2.5..3.9 V per cell, found 2.000 V"));
+    r.cutoff_voltage_v = NAN;
+    r.cells = 13;
+    CHECK_THROWS_WITH(pack_config_json(r), Catch::Contains("cells: expected 1..12, found 13"));
+    r.cells = 4;
+    r.capacity_ah = 0.01;
+    CHECK_THROWS_WITH(pack_config_json(r), Catch::Contains("found 10 mAh"));
+}
+
+TEST_CASE("The cell count from how high a pack rests", "[pack_config]") {
+    CHECK(cells_from_resting_voltage(11.98) == 3);  // underpowered.log: 3.99 V as 3S, 3.00 V as 4S
+    CHECK(cells_from_resting_voltage(14.99) == 4);  // the octocopter's: 3.75 V
+    CHECK(cells_from_resting_voltage(16.54) == 4);  // log171.bin: 4.135 V, 3.31 V as 5S
+    CHECK(cells_from_resting_voltage(22.8) == 6);  // 3.80 V; 4.56 V as 5S, 3.26 V as 7S
+    CHECK(cells_from_resting_voltage(25.2) == 0);  // a full 6S pack (4.2 V) or a 7S one at 3.6 V
+    CHECK(cells_from_resting_voltage(21.9) == 0);  // 3.65 V as 6S and 4.38 V as 5S: cannot tell
+    CHECK(cells_from_resting_voltage(2.0) == 0);
+    CHECK(cells_from_resting_voltage(NAN) == 0);
+}
+
+TEST_CASE("What an autopilot log says about its pack", "[pack_config]") {
+    SECTION("ArduPilot: capacity, failsafe voltage and timer; cells from the voltage") {
+        const LogPack p = log_pack(with_parameters({{"BATT_MONITOR", 4}, {"BATT_CAPACITY", 1760}, {"LOW_VOLT", 10.5}}), 14.99);
+        CHECK(p.cells == 4);
+        CHECK(p.cells_from.find("14.99 V") != std::string::npos);
+        CHECK(p.capacity_ah == Approx(1.76));
+        CHECK(p.capacity_from == "the log's BATT_CAPACITY 1760 mAh");
+        CHECK(p.cutoff_voltage_v == Approx(10.5));  // 2.625 V per cell: low, but a cutoff
+        const LogPack q = log_pack(with_parameters({{"BATT_CAPACITY", 0}, {"BATT_LOW_VOLT", 20.0}, {"BATT_LOW_TIMER", 10}}), 14.99);
+        CHECK(std::isnan(q.capacity_ah));  // 0 = unset
+        CHECK(std::isnan(q.cutoff_voltage_v));  // 5 V per cell is no cutoff
+        REQUIRE(q.ignored.size() == 1);
+        CHECK(q.ignored[0].find("BATT_LOW_VOLT 20") != std::string::npos);
+        CHECK(q.cutoff_delay_s == 10.0);
+    }
+    SECTION("PX4: cells, capacity and a per-cell resistance; -1 = unset") {
+        const LogPack p = log_pack(with_parameters({{"BAT1_N_CELLS", 3}, {"BAT1_CAPACITY", 2200}, {"BAT1_R_INTERNAL", 0.005}}), NAN);
+        CHECK(p.cells == 3);
+        CHECK(p.cells_from == "the log's BAT1_N_CELLS 3");
+        CHECK(p.capacity_ah == Approx(2.2));
+        CHECK(p.resistance_ohm == Approx(0.015));
+        const LogPack q = log_pack(with_parameters({{"BAT1_N_CELLS", 0}, {"BAT1_CAPACITY", -1}, {"BAT1_R_INTERNAL", -1}}), NAN);
+        CHECK(q.cells == 0);
+        CHECK(std::isnan(q.capacity_ah));
+        CHECK(std::isnan(q.resistance_ohm));
+    }
+    SECTION("a log's cell columns count before its voltage") {
+        SourceInfo info;
+        info.cell_count = 4;
+        CHECK(log_pack(info, 11.98).cells == 4);
+    }
+}
+
+TEST_CASE("Replay notes a config for another pack than the log's autopilot flew", "[pack_config][config]") {
+    const battsim::core::MonitorConfig m = default_config().monitor;  // 4S, 1.55 Ah
+    LogFacts f;
+    f.path = "flight.bin";
+    f.declared_capacity_ah = 1.76;
+    f.declared_capacity_from = "the log's BATT_CAPACITY 1760 mAh";
+    std::vector<std::string> notes = config_notes(m, f);
+    REQUIRE(notes.size() == 1);
+    CHECK(notes[0] == "the log's autopilot was set for a 1.76 Ah pack (the log's BATT_CAPACITY 1760 mAh), the config's is "
+                      "1.55 Ah: battsim make-config --from-log flight.bin writes one for it");
+    f.declared_capacity_ah = 1.6;  // within 10 %: labels differ that much
+    CHECK(config_notes(m, f).empty());
+    f.declared_cells = 6;
+    f.declared_cells_from = "the log's BAT1_N_CELLS 6";
+    notes = config_notes(m, f);
+    REQUIRE(notes.size() == 1);
+    CHECK(notes[0].find("set for 6 cells (the log's BAT1_N_CELLS 6), the config has 4") != std::string::npos);
+    // A 3S pack at rest read as 4S: 3.00 V per cell is inside the resting range, so only
+    // the likelier count says it.
+    LogFacts rest;
+    rest.resting_voltage_v = 12.0;
+    notes = config_notes(m, rest);
+    REQUIRE(notes.size() == 1);
+    CHECK(notes[0] == "the pack rests at 12.00 V: 4.00 V per cell as 3 cells, 3.00 V as the config's 4: does the config "
+                      "match this pack?");
+    rest.resting_voltage_v = 14.99;
+    CHECK(config_notes(m, rest).empty());
+}
