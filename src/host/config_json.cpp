@@ -475,6 +475,17 @@ std::vector<std::string> config_notes(const core::MonitorConfig& config, const L
             notes.push_back(buf + advice);
         }
     }
+    // The Tremblay model's Q/(Q − it) term runs away as the count nears Q: past it the model
+    // voltage reads tens of volts negative (the octocopter log with the default config: a
+    // mean error of 105 V), and the error statistics are the model's, not the pack's.
+    if (std::isfinite(log.capacity_passed_s)) {
+        char buf[120];
+        std::snprintf(buf, sizeof buf, "the charge counted since full passed the config's capacity (%.3g Ah) %.1f s into the log",
+                      capacity_ah, log.capacity_passed_s);
+        notes.push_back(std::string(buf) +
+                        ": the model's voltage past there is not a battery's, and voltage_error_v.model counts it (a "
+                        "pack not charged full at the start reads so too: the model is no rest curve)");
+    }
     // Without a table the joint estimator reads the state of charge off the Tremblay curve,
     // a fit of a discharge under load, not a rest curve: on the dissertation's flights with
     // configs/reference-modified.json its final capacities read 2.55–3.08 Ah for packs of

@@ -40,6 +40,9 @@ struct LogFacts {
     double declared_capacity_ah = NAN;
     std::string declared_capacity_from;
     std::string path;
+    // Log time (s) at which the charge counted since full first passed the config's
+    // capacity; NaN = never.
+    double capacity_passed_s = NAN;
 };
 std::vector<std::string> config_notes(const core::MonitorConfig& config, const LogFacts& log = LogFacts());
 

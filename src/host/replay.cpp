@@ -80,6 +80,7 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     InputShape shape;
     LogFacts facts;  // for the config's notes
     FirstRest rest(options.config.monitor.initial.max_resting_current_a);
+    const double capacity_mah = 1000.0 * options.config.monitor.battery.capacity_ah;
     bool first = true;
     uint64_t t0_us = 0;
     const auto wall0 = std::chrono::steady_clock::now();
@@ -101,6 +102,8 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
         }
         shape.add(sample);
         const core::MonitorStatus& status = monitor->update(sample);
+        if (std::isnan(facts.capacity_passed_s) && status.initialised && status.consumed_mah > capacity_mah)
+            facts.capacity_passed_s = static_cast<double>(sample.time_us - t0_us) * 1e-6;
         summary.add(status);
         if (series) series->add(sample, status);
         if (observer) observer(sample, status);

@@ -102,9 +102,11 @@ TEST_CASE("replay notes what the config makes unreliable: no OCV table for the j
     auto six = run("replay " + q(kSource + "/logs/example-4s.csv") + " -c " + q(kSource + "/configs/generic-6s.json") + " --json");
     REQUIRE(six.exit_code == 0);
     const auto n6 = nlohmann::json::parse(six.out)["config_notes"];
-    REQUIRE(n6.size() == 2);
+    REQUIRE(n6.size() == 3);
     CHECK_THAT(n6[0].get<std::string>(), Catch::StartsWith("the log has 4 cell voltages but the config 6 cells in series"));
     CHECK_THAT(n6[1].get<std::string>(), Catch::StartsWith("the pack rests at 16.80 V, 2.800 V per cell"));
+    // Read as an empty 6S pack, its count passes the capacity at once, and the model's voltage runs away.
+    CHECK_THAT(n6[2].get<std::string>(), Catch::StartsWith("the charge counted since full passed the config's capacity (1.55 Ah)"));
     CHECK_THAT(six.err, Catch::Contains("battsim replay: note: the log has 4 cell voltages"));
     // The firmware's header is written all the same, with the note.
     auto e = run("export-config --firmware " + q(kConfig) + " --estimator joint -o " + q(dir + "/h.h"));

@@ -161,4 +161,10 @@ TEST_CASE("Replay notes a config for another pack than the log's autopilot flew"
                       "match this pack?");
     rest.resting_voltage_v = 14.99;
     CHECK(config_notes(m, rest).empty());
+    LogFacts passed;
+    passed.capacity_passed_s = 22.4;
+    notes = config_notes(m, passed);
+    REQUIRE(notes.size() == 1);
+    CHECK(notes[0].rfind("the charge counted since full passed the config's capacity (1.55 Ah) 22.4 s into the log: the "
+                         "model's voltage past there is not a battery's", 0) == 0);
 }
