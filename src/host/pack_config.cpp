@@ -1,6 +1,8 @@
 #include "host/pack_config.h"
 
 #include <cstdio>
+#include <initializer_list>
+#include <memory>
 #include <stdexcept>
 
 #include "core/config.h"
