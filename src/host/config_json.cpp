@@ -1,5 +1,4 @@
 #include "host/config_json.h"
-#include "host/pack_config.h"
 
 #include <cmath>
 #include <cstdio>
@@ -7,6 +6,7 @@
 #include <fstream>
 
 #include "host/config_extensions.h"
+#include "host/pack_config.h"
 
 namespace battsim {
 namespace host {

@@ -155,6 +155,7 @@ LogPack log_pack(const SourceInfo& info, double resting_voltage_v) {
     if (first_positive(info, {"BAT1_N_CELLS", "BAT_N_CELLS"}, &v, &from) && v <= core::kMaxCells) {
         p.cells = static_cast<int>(v);
         p.cells_from = "the log's " + from;
+        p.cells_declared = true;
     } else if (info.cell_count > 0) {
         p.cells = info.cell_count;
         p.cells_from = "the log's " + std::to_string(info.cell_count) + " cell voltages";

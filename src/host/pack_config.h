@@ -37,6 +37,7 @@ nlohmann::json pack_config_json(const PackRating& rating);
 struct LogPack {
     int cells = 0;
     std::string cells_from;
+    bool cells_declared = false;  // from a parameter (PX4's), not the log's columns or voltage
     double capacity_ah = NAN;
     std::string capacity_from;
     double cutoff_voltage_v = NAN;

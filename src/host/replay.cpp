@@ -128,8 +128,7 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     facts.resting_voltage_v = rest.voltage_v();
     facts.path = path;
     const LogPack declared = log_pack(info, facts.resting_voltage_v);
-    // Declared means a parameter (PX4's cell count), not the log's columns or its voltage.
-    if (declared.cells_from.rfind("the log's BAT", 0) == 0) {
+    if (declared.cells_declared) {
         facts.declared_cells = declared.cells;
         facts.declared_cells_from = declared.cells_from;
     }

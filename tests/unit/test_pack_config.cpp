@@ -2,20 +2,14 @@
 // parameters say about its pack, and the notes replay gives when a config does not match.
 #include <catch2/catch.hpp>
 
-#include <fstream>
-
 #include "host/config_json.h"
 #include "host/pack_config.h"
+#include "test_files.h"
 
 using namespace battsim::host;
 using nlohmann::json;
 
 namespace {
-json read_json(const std::string& path) {
-    std::ifstream in(path);
-    REQUIRE(in.good());
-    return json::parse(in);
-}
 SourceInfo with_parameters(std::vector<std::pair<std::string, double>> p) {
     SourceInfo info;
     info.parameters = std::move(p);
@@ -31,7 +25,8 @@ TEST_CASE("make-config: the reference rating gives the committed configs' number
         r.cells = cells;
         r.capacity_ah = 1.55;
         const json made = pack_config_json(r);
-        const json ref = read_json(std::string(BATTSIM_SOURCE_DIR) + (cells == 4 ? "/configs/sim-4s.json" : "/configs/generic-3s.json"));
+        const json ref = json::parse(testsupport::read_file(std::string(BATTSIM_SOURCE_DIR) +
+                                                            (cells == 4 ? "/configs/sim-4s.json" : "/configs/generic-3s.json")));
         INFO(cells << "S");
         for (const char* section : {"battery", "monitor"})
             for (auto it = ref[section].begin(); it != ref[section].end(); ++it) {
@@ -120,6 +115,7 @@ TEST_CASE("What an autopilot log says about its pack", "[pack_config]") {
         const LogPack p = log_pack(with_parameters({{"BAT1_N_CELLS", 3}, {"BAT1_CAPACITY", 2200}, {"BAT1_R_INTERNAL", 0.005}}), NAN);
         CHECK(p.cells == 3);
         CHECK(p.cells_from == "the log's BAT1_N_CELLS 3");
+        CHECK(p.cells_declared);
         CHECK(p.capacity_ah == Approx(2.2));
         CHECK(p.resistance_ohm == Approx(0.015));
         const LogPack q = log_pack(with_parameters({{"BAT1_N_CELLS", 0}, {"BAT1_CAPACITY", -1}, {"BAT1_R_INTERNAL", -1}}), NAN);
@@ -131,6 +127,7 @@ TEST_CASE("What an autopilot log says about its pack", "[pack_config]") {
         SourceInfo info;
         info.cell_count = 4;
         CHECK(log_pack(info, 11.98).cells == 4);
+        CHECK_FALSE(log_pack(info, 11.98).cells_declared);  // columns, not a setting
     }
 }
 
