@@ -22,6 +22,7 @@ struct ScoreArgs {
     std::string logs_dir;
     std::string columns;
     int copies = 1;
+    std::string log_format;
 };
 
 std::function<int()> setup(CLI::App& sub) {
@@ -35,6 +36,10 @@ std::function<int()> setup(CLI::App& sub) {
                    "Fly the suite this many times: as written, then with other seeds (gusts, cell spreads, sensor "
                    "noise; copy k adds 7919 k to each seed); figures pool every copy, with the copies' range beside them")
         ->check(CLI::Range(1, 100));
+    sub.add_option("--log-format", a->log_format,
+                   "Fly every scenario with this log format instead of its own: raw (4 cells only), csv, or edgetx "
+                   "(a radio's telemetry log, as `battsim simulate --format`)")
+        ->check(CLI::IsMember({"raw", "csv", "edgetx"}));
     sub.add_option("--columns", a->columns, "Estimator columns to run, comma-separated (default: all but the diagnostic solve-truth)");
     return [a]() -> int {
         std::vector<std::string> paths = a->paths;
@@ -45,6 +50,15 @@ std::function<int()> setup(CLI::App& sub) {
         } catch (const host::sim::ScenarioError& e) {
             std::cerr << "battsim score: " << e.what() << "\n";
             return kExitConfigError;
+        }
+        for (host::sim::Scenario& s : scenarios) {
+            if (a->log_format.empty()) continue;
+            if (a->log_format == "raw" && s.pack.cells != 4) {
+                std::cerr << "battsim score: --log-format raw: " << s.source_path << " has " << s.pack.cells
+                          << " cells; the raw format has 4\n";
+                return kExitUsage;
+            }
+            s.log_format = a->log_format;
         }
         std::vector<host::score::EstimatorColumn> columns;
         auto all = host::score::standard_columns();

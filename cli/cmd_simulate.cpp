@@ -34,7 +34,9 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--truth", a->truth, "Truth JSON to write (default: the log's name with .truth.json)");
     sub.add_option("--out-dir", a->out_dir, "Write NAME.csv and NAME.truth.json here for every scenario");
     sub.add_option("--seed", a->seed, "Override the scenario's seed");
-    sub.add_option("--format", a->format, "Override the log format: raw (4 cells only) or csv");
+    sub.add_option("--format", a->format,
+                   "Override the log format: raw (4 cells only), csv, or edgetx (a radio's telemetry log: pack "
+                   "voltage and current in 0.1 V and 0.1 A steps every log.interval_s, no cells)");
     sub.add_option("--cutoff-v-per-cell", a->cutoff, "Override the truth's loaded cutoff voltage per cell (default: the monitor config's min_flight_voltage_v per cell)");
     return [a]() -> int {
         if (a->output.empty() == a->out_dir.empty()) {
@@ -45,8 +47,8 @@ std::function<int()> setup(CLI::App& sub) {
             std::cerr << "battsim simulate: --truth goes with -o/--output\n";
             return kExitUsage;
         }
-        if (!a->format.empty() && a->format != "raw" && a->format != "csv" && a->format != "auto") {
-            std::cerr << "battsim simulate: --format: expected auto, raw or csv, found \"" << a->format << "\"\n";
+        if (!a->format.empty() && a->format != "raw" && a->format != "csv" && a->format != "edgetx" && a->format != "auto") {
+            std::cerr << "battsim simulate: --format: expected auto, raw, csv or edgetx, found \"" << a->format << "\"\n";
             return kExitUsage;
         }
         if (a->cutoff != 0 && !(a->cutoff >= 2.0 && a->cutoff <= 4.5)) {

@@ -19,10 +19,19 @@ namespace {
 
 // Two misreadings no reader can tell from the data alone, and no number shows: a log that
 // counts discharge as negative flies nothing, and a time column in milliseconds read as
-// seconds spreads a flight over days. Both read on without complaint, so say so.
+// seconds spreads a flight over days. Both read on without complaint, so say so. Two more
+// shapes make every estimate rougher without any error: a pack voltage in 0.1 V steps (a
+// radio's telemetry log) and samples too close together for the resistance's lag.
 class InputShape {
 public:
     void add(const core::Sample& s) {
+        if (std::isfinite(s.voltage_v) && s.voltage_v != 0.0f) {
+            const double tenths = 10.0 * static_cast<double>(s.voltage_v);
+            coarse_ = coarse_ && std::fabs(tenths - std::round(tenths)) < 2e-3;
+            if (voltages_ == 0) first_v_ = s.voltage_v;
+            varied_ = varied_ || s.voltage_v != first_v_;
+            ++voltages_;
+        }
         if (have_ && s.time_us > last_us_) intervals_s_.push_back(static_cast<double>(s.time_us - last_us_) * 1e-6);
         last_us_ = s.time_us;
         have_ = true;
@@ -31,7 +40,9 @@ public:
             max_a_ = std::max(max_a_, static_cast<double>(s.current_a));
         }
     }
-    std::vector<std::string> notes(bool flew, double takeoff_a) const {
+    // fastest_s: the shortest median interval at which the joint estimator's resistance lags
+    // are reached (0: no such limit, the reference estimator).
+    std::vector<std::string> notes(bool flew, double takeoff_a, double fastest_s) const {
         std::vector<std::string> out;
         char buf[320];
         if (!flew && max_a_ < takeoff_a && min_a_ <= -takeoff_a) {
@@ -51,11 +62,29 @@ public:
                           dt_s);
             out.push_back(buf);
         }
+        if (coarse_ && varied_ && voltages_ >= kCoarseMinSamples) {
+            out.push_back("the pack voltage moves in 0.1 V steps, as a radio's telemetry carries it: the capacity, "
+                          "resistance and short-flight warnings read from it are rougher than from the monitor's own "
+                          "sensors (README, \"Radio telemetry logs\")");
+        }
+        if (dt_s > 0.0 && dt_s < fastest_s) {
+            std::snprintf(buf, sizeof buf,
+                          "the samples are %.3g ms apart (median): the joint estimator's resistance compares samples "
+                          "up to %.3g s apart among its last %d, so below %.3g ms it is measured late or never; "
+                          "thin the log to at least that interval",
+                          dt_s * 1e3, fastest_s * (core::DifferenceResistanceEstimator::kHistory - 1),
+                          core::DifferenceResistanceEstimator::kHistory, fastest_s * 1e3);
+            out.push_back(buf);
+        }
         return out;
     }
 
 private:
     static constexpr double kSlowestIntervalS = 10.0;
+    static constexpr long kCoarseMinSamples = 20;
+    bool coarse_ = true, varied_ = false;
+    float first_v_ = 0.0f;
+    long voltages_ = 0;
     std::vector<double> intervals_s_;
     uint64_t last_us_ = 0;
     bool have_ = false;
@@ -118,7 +147,13 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     nlohmann::json body = summary.to_json(info.cell_count);
     std::vector<std::string> input_notes = info.notes;
     const bool flew = body["flight"].is_object();
-    for (const std::string& n : shape.notes(flew, options.config.monitor.flying.min_flying_current_a)) input_notes.push_back(n);
+    const core::JointEstimator::Config& jc = options.config.monitor.joint;
+    const double fastest_s = options.config.monitor.estimator == core::EstimatorKind::Joint
+                                 ? std::max(jc.resistance.lag_s, jc.hover_resistance.lag_s) /
+                                       (core::DifferenceResistanceEstimator::kHistory - 1)
+                                 : 0.0;
+    for (const std::string& n : shape.notes(flew, options.config.monitor.flying.min_flying_current_a, fastest_s))
+        input_notes.push_back(n);
     j["input"] = {{"path", path}, {"format", to_string(info.format)}, {"cells", info.cell_count},
                   {"has_temperature", info.has_temperature}, {"notes", input_notes}};
     j["config"] = options.config.name;

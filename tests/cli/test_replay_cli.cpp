@@ -2,6 +2,8 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <sstream>
@@ -122,7 +124,7 @@ TEST_CASE("replay notes a current of the other sign and a time column in millise
     std::string neg = "time_s,voltage_v,current_a\n", ms = neg, ok = neg;
     for (int k = 0; k < 300; ++k) {
         const bool load = k >= 150;
-        const std::string v = load ? "15.90" : "16.50", a = load ? "20" : "0.25";
+        const std::string v = load ? "15.93" : "16.52", a = load ? "20" : "0.25";
         const std::string t_s = std::to_string(0.63 + 0.067 * k), t_ms = std::to_string(630 + 67 * k);
         neg += t_s + "," + v + ",-" + a + "\n";
         ms += t_ms + "," + v + "," + a + "\n";
@@ -146,6 +148,64 @@ TEST_CASE("replay notes a current of the other sign and a time column in millise
     CHECK(m[0] == "the samples are 67 s apart (median): if the time column counts milliseconds, give --time-unit ms (or "
                   "--time-col with a column in seconds)");
     CHECK(notes("ok.csv", "").empty());
+}
+
+TEST_CASE("replay reads a radio's telemetry log and says what its 0.1 V steps and a fast log cost", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string radio = dir + "/radio.csv";
+    const auto sim = run("simulate " + q(kSource + "/configs/scenarios/4s-racing-healthy-a.json") + " --format edgetx -o " +
+                         q(radio) + " --truth " + q(dir + "/radio.truth.json"));
+    INFO(sim.err);
+    REQUIRE(sim.exit_code == 0);
+    CHECK(clitest::read_file(radio).rfind("Date,Time,RxBt(V),Curr(A)\n2026-01-01,00:00:00.652,16.8,0.3\n", 0) == 0);
+    const auto j = clitest::run_json("replay " + q(radio) + " -c " + q(kSource + "/configs/sim-4s.json") +
+                                     " --estimator joint --json");
+    const auto& notes = j["input"]["notes"];
+    REQUIRE(notes.size() == 2);
+    CHECK(notes[0].get<std::string>().rfind("columns read as an EdgeTX/OpenTX radio log", 0) == 0);
+    CHECK(notes[1] == "the pack voltage moves in 0.1 V steps, as a radio's telemetry carries it: the capacity, "
+                      "resistance and short-flight warnings read from it are rougher than from the monitor's own "
+                      "sensors (README, \"Radio telemetry logs\")");
+    CHECK(j["input"]["cells"] == 0);
+    // The healthy 1.545 Ah pack (truth) still reads within 15 % at the landing, with no warning.
+    CHECK(j["flight"]["capacity_ah"]["final"].get<double>() == Approx(1.545).epsilon(0.15));
+    CHECK(j["warnings"].empty());
+
+    // 500 samples a second: too fast for the resistance's lags, said with the interval to thin to.
+    std::string fast = "time_us,voltage_v,current_a\n";
+    for (int k = 0; k < 20000; ++k) {
+        char row[64];
+        std::snprintf(row, sizeof row, "%d,%.4f,%s\n", 2000 * k, 16.52 - 1e-5 * k, k < 3000 ? "0.3" : "20");
+        fast += row;
+    }
+    clitest::write_file(dir + "/fast.csv", fast);
+    const auto f = clitest::run_json("replay " + q(dir + "/fast.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
+                                     " --estimator joint --json");
+    REQUIRE(f["input"]["notes"].size() == 1);
+    CHECK(f["input"]["notes"][0] ==
+          "the samples are 2 ms apart (median): the joint estimator's resistance compares samples up to 0.13 s apart "
+          "among its last 16, so below 8.67 ms it is measured late or never; thin the log to at least that interval");
+    // The reference estimator's resistance has no such lag: no note.
+    const auto fr = clitest::run_json("replay " + q(dir + "/fast.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
+                                      " --estimator reference --json");
+    CHECK(fr["input"]["notes"].empty());
+}
+
+TEST_CASE("score --log-format edgetx flies the suite through a radio's telemetry log", "[cli]") {
+    const std::string scenario = q(kSource + "/configs/scenarios/4s-racing-healthy-a.json");
+    const auto radio = clitest::run_json("score " + scenario + " --log-format edgetx --json --columns joint");
+    const auto own = clitest::run_json("score " + scenario + " --json --columns joint");
+    const auto& rj = radio["flights"][0]["estimators"]["joint"];
+    const auto& oj = own["flights"][0]["estimators"]["joint"];
+    // The same flight and truth, another log: the estimates differ.
+    CHECK(radio["flights"][0]["total_flight_time_s"] == own["flights"][0]["total_flight_time_s"]);
+    CHECK(rj["capacity_error_end_pct"] != oj["capacity_error_end_pct"]);
+    CHECK(std::fabs(rj["capacity_error_end_pct"].get<double>()) < 15.0);
+    const auto bad = run("score " + scenario + " --log-format blackbox");
+    CHECK(bad.exit_code == 2);
+    const auto raw6 = run("score " + q(kSource + "/configs/scenarios/6s-hover-healthy.json") + " --log-format raw");
+    CHECK(raw6.exit_code == 2);
+    CHECK(raw6.err.find("the raw format has 4") != std::string::npos);
 }
 
 TEST_CASE("replay writes series and summary files atomically", "[cli]") {

@@ -351,11 +351,11 @@ TEST_CASE("bad input: unit of a mapped column cannot be inferred", "[io]") {
     opt.columns.current = "battery_current";
     opt.columns.current_scale_to_a = 1.0;
     CHECK(read_error(p, opt) == p + ":1:1: cannot tell the unit of time column \"time\": expected a name ending in "
-                                    "_s, _ms or _us, or a time scale (seconds per unit)");
+                                    "_s, _ms or _us (or (s), (ms), (us)), or a time scale (seconds per unit)");
     opt.columns.time_scale_to_s = 1.0;
     opt.columns.current_scale_to_a = 0.0;
     CHECK(read_error(p, opt) == p + ":1:3: cannot tell the unit of current column \"battery_current\": expected a "
-                                    "name ending in _a or _ma, or a current scale (amps per unit)");
+                                    "name ending in _a or _ma (or (a), (ma)), or a current scale (amps per unit)");
     opt.columns.current_scale_to_a = 1.0;
     opt.columns.time_scale_to_s = -1.0;
     CHECK(read_error(p, opt) == p + ": time scale must be a positive number of seconds per unit, got -1");
@@ -441,6 +441,99 @@ TEST_CASE("headered CSV: unused columns are not parsed", "[io]") {
     TempDir t;
     const std::string p = t.write("n.csv", "time_s,voltage_v,current_a,chamber_temperature_c\n0,4.1,1,nan\n1,4.1,1,\n");
     CHECK(read_all(p, ReaderOptions()).size() == 2);
+}
+
+// ---------------------------------------------------------------------------------------
+// Other programs' logs, recognised by their columns
+
+TEST_CASE("EdgeTX radio log: wall-clock time across midnight, VFAS before RxBt, rows without telemetry", "[io]") {
+    TempDir t;
+    const std::string p = t.write("Quad-2026-05-01-235959.csv",
+                                  "Date,Time,1RSS(dB),RxBt(V),Curr(A),Capa(mAh),VFAS(V),GPS,Hdg(\xC2\xB0)\n"
+                                  "2026-05-01,23:59:59.800,-60,5.1,,0,,12.000000 -45.000000,0\n"
+                                  "2026-05-01,23:59:59.900,-60,5.1,0.0,0,0.0,12.000000 -45.000000,0\n"
+                                  "2026-05-01,23:59:59.950,-60,5.1,12.3,40,16.4,12.000000 -45.000000,0\n"
+                                  "2026-05-02,00:00:00.150,-60,5.1,12.5,41,16.3,12.000000 -45.000000,0\n"
+                                  "2026-05-02,00:00:01,-60,5.1,0.4,41,16.6,,0\n");
+    SourceInfo info;
+    const auto s = read_all(p, ReaderOptions(), &info);
+    REQUIRE(s.size() == 3);
+    const std::uint64_t t0 = ((23ull * 60 + 59) * 60 + 59) * 1000000ull + 950000ull;
+    CHECK(s[0].time_us == t0);
+    CHECK(s[1].time_us == 86400000000ull + 150000ull);  // the next day
+    CHECK(s[2].time_us == 86401000000ull);
+    CHECK(s[0].voltage_v == 16.4f);  // VFAS (the pack), not RxBt (a FrSky receiver's own supply)
+    CHECK(s[0].current_a == 12.3f);
+    CHECK(s[0].cell_count == 0);
+    REQUIRE(info.notes.size() == 2);
+    CHECK(info.notes[0] ==
+          "columns read as an EdgeTX/OpenTX radio log: time from \"Date\" and \"Time\", voltage \"VFAS(V)\", current "
+          "\"Curr(A)\"; rows without battery telemetry (empty or 0 V) are skipped");
+    CHECK(info.notes[1] == "2 rows without battery telemetry skipped (first on line 2)");
+
+    // Crossfire / ExpressLRS: the pack is RxBt.
+    const std::string q = t.write("crsf.csv", "Date,Time,RxBt(V),Curr(A)\n2026-05-01,10:00:00.000,25.2,1.5\n");
+    CHECK(read_all(q, ReaderOptions())[0].voltage_v == 25.2f);
+}
+
+TEST_CASE("EdgeTX radio log: bad dates and times name the field", "[io]") {
+    TempDir t;
+    const char* head = "Date,Time,RxBt(V),Curr(A)\n2026-05-01,10:00:00.000,16.8,1\n";
+    const auto err = [&](const char* row) { return read_error(t.write("r.csv", std::string(head) + row)); };
+    const std::string p = t.path("r.csv");
+    CHECK(err("2026-02-30,10:00:01.000,16.8,1\n") ==
+          p + ":3:1: expected a date as YYYY-MM-DD, found \"2026-02-30\"");
+    CHECK(err("2026-05-01,10:00:1.000,16.8,1\n") ==
+          p + ":3:2: expected a time of day as HH:MM:SS or HH:MM:SS.fff, found \"10:00:1.000\"");
+    CHECK(err("2026-05-01,24:00:00,16.8,1\n") ==
+          p + ":3:2: expected a time of day as HH:MM:SS or HH:MM:SS.fff, found \"24:00:00\"");
+    CHECK(err("2026-04-30,10:00:01.000,16.8,1\n") ==
+          p + ":3:1: time goes backwards: date \"2026-04-30\" is earlier than the first row's");
+    CHECK(err("2026-05-01,09:59:59.000,16.8,1\n") ==
+          p + ":3:2: time goes backwards: 35999.000000 s is earlier than 36000.000000 s on line 2");
+    // A cut-off last line is skipped as in any CSV.
+    SourceInfo info;
+    const auto s = read_all(t.write("c.csv", std::string(head) + "2026-05-01,10:00:0"), ReaderOptions(), &info);
+    CHECK(s.size() == 1);
+    REQUIRE(info.notes.size() == 2);
+    CHECK(info.notes[1].find("last line is cut off") != std::string::npos);
+    // 2024 is a leap year, 2100 is not.
+    CHECK(read_error(t.write("l.csv", "Date,Time,RxBt(V),Curr(A)\n2024-02-29,10:00:00,16.8,1\n")).empty());
+    CHECK(read_error(t.write("m.csv", "Date,Time,RxBt(V),Curr(A)\n2100-02-29,10:00:00,16.8,1\n")) ==
+          t.path("m.csv") + ":2:1: expected a date as YYYY-MM-DD, found \"2100-02-29\"");
+}
+
+TEST_CASE("blackbox_decode log and units in parentheses", "[io]") {
+    TempDir t;
+    const std::string p = t.write("LOG00001.01.csv",
+                                  "loopIteration, time (us), axisP[0], vbatLatest (V), amperageLatest (A)\n"
+                                  "0, 1000000, 3, 16.42, 1.25\n"
+                                  "1, 1000500, 4, 16.41, 1.27\n");
+    SourceInfo info;
+    const auto s = read_all(p, ReaderOptions(), &info);
+    REQUIRE(s.size() == 2);
+    CHECK(s[1].time_us == 1000500u);
+    CHECK(s[0].voltage_v == 16.42f);
+    CHECK(s[1].current_a == 1.27f);
+    REQUIRE(info.notes.size() == 1);
+    CHECK(info.notes[0] == "columns read as a blackbox_decode log: time \"time (us)\", voltage \"vbatLatest (V)\", "
+                           "current \"amperageLatest (A)\"");
+    // A unit in parentheses counts like a suffix for mapped columns too.
+    const std::string q = t.write("q.csv", "t (ms),pack (mV),load (mA)\n1500,16420,2500\n");
+    ReaderOptions opt;
+    opt.columns.time = "t (ms)";
+    opt.columns.voltage = "pack (mV)";
+    opt.columns.current = "load (mA)";
+    const auto r = read_all(q, opt);
+    CHECK(r[0].time_us == 1500000u);
+    CHECK(r[0].voltage_v == Approx(16.42));
+    CHECK(r[0].current_a == Approx(2.5));
+    // A column option turns recognition off: the named columns are what is read.
+    opt = ReaderOptions();
+    opt.columns.voltage = "vbatLatest (V)";
+    CHECK(read_error(p, opt) ==
+          p + ":1: missing time column (expected time_s, time_ms or time_us); columns found: loopIteration, time (us), "
+              "axisP[0], vbatLatest (V), amperageLatest (A)");
 }
 
 TEST_CASE("line reader streams across block boundaries", "[io]") {
@@ -533,8 +626,17 @@ TEST_CASE("headered reader with the CMU M100 mapping on flight 1", "[io][data]")
     CHECK(s.back().time_us == 200700000u);
     CHECK(s.back().voltage_v == Approx(23.07279015));
     CHECK(s.back().current_a == Approx(0.143131927));
-    // Without the mapping the file is rejected with the columns it has.
-    CHECK_THROWS_WITH(read_all(p, ReaderOptions()),
-                      Catch::StartsWith(p + ":1: missing time column (expected time_s, time_ms or time_us); "
-                                            "columns found: time, wind_speed, wind_angle, battery_voltage"));
+    // Without the mapping the columns are recognised, with a note, and read the same.
+    SourceInfo auto_info;
+    const auto a = read_all(p, ReaderOptions(), &auto_info);
+    REQUIRE(a.size() == s.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        CHECK(a[i].time_us == s[i].time_us);
+        CHECK(a[i].voltage_v == s[i].voltage_v);
+        CHECK(a[i].current_a == s[i].current_a);
+    }
+    REQUIRE(auto_info.notes.size() == 1);
+    CHECK(auto_info.notes[0] ==
+          "columns read as a DJI Matrice 100 log (CMU): time \"time\" in s, voltage \"battery_voltage\" in V, "
+          "current \"battery_current\" in A");
 }

@@ -103,6 +103,16 @@ TEST_CASE("Log rows by hand: raw and headered formats from ADC counts", "[sim][s
     CHECK(csv == "12.345,16.82000,5.625,4.20000,4.20000,4.20000,4.22000,21.5\n");
     CHECK(format_header(SimLogFormat::Csv, 3) == "time_s,voltage_v,current_a,cell1_v,cell2_v,cell3_v,temperature_c\n");
     CHECK(format_header(SimLogFormat::Raw, 4).empty());
+    // A radio log: 16.820 V and 5.625 A in the battery sensor's 0.1 V and 0.1 A steps.
+    std::string radio;
+    format_record(SimLogFormat::Radio, 4, cal, r, radio);
+    CHECK(radio == "2026-01-01,00:00:12.345,16.8,5.6\n");
+    CHECK(format_header(SimLogFormat::Radio, 4) == "Date,Time,RxBt(V),Curr(A)\n");
+    LogRecord late = r;
+    late.time_ms = 86400000 + 3723004;  // the second day, 01:02:03.004
+    radio.clear();
+    format_record(SimLogFormat::Radio, 4, cal, late, radio);
+    CHECK(radio == "2026-01-02,01:02:03.004,16.8,5.6\n");
 
     // Half a 0.01 mV step rounds away from zero; the current follows the 2.5 µV count.
     r.shunt_count = -3;  // −7.5 µV
@@ -186,6 +196,41 @@ TEST_CASE("Headered log for other cell counts reads back through the standard re
     }
     CHECK(n == rows.size());
     CHECK(reader->info().format == LogFormat::Csv);
+}
+
+TEST_CASE("Radio log: one row per log interval, 0.1 V and 0.1 A steps, read back as a radio log", "[sim][sensor]") {
+    const SimulationResult full = simulate(scenario(R"({"log": {"format": "csv"}})"));
+    const SimulationResult r = simulate(scenario(R"({"log": {"format": "edgetx", "interval_s": 0.5}})"));
+    REQUIRE(r.format == SimLogFormat::Radio);
+    CHECK(truth_to_json(r)["scenario"]["log"] == json({{"format", "edgetx"}, {"interval_s", 0.5}}));
+    const auto rows = rows_of(r.log_text, true);
+    const auto full_rows = rows_of(full.log_text, true);
+    // The first reading at or after each 0.5 s mark of the logger's span.
+    const double span_s = std::stod(full_rows.back()[0]) - std::stod(full_rows.front()[0]);
+    CHECK(static_cast<double>(rows.size()) == Approx(span_s / 0.5).margin(1.5));
+    CHECK(truth_to_json(r)["log"]["rows"] == rows.size());
+    for (const auto& f : rows) {
+        REQUIRE(f.size() == 4);
+        CHECK(decimals(f[2]) == 1);
+        CHECK(decimals(f[3]) == 1);
+    }
+    const testsupport::TempDir dir("sensor");
+    const std::string path = dir.write("radio.csv", r.log_text);
+    std::unique_ptr<SampleReader> reader = open_reader(path, ReaderOptions());
+    battsim::core::Sample s;
+    std::vector<uint64_t> times;
+    while (reader->next(s)) {
+        CHECK(s.cell_count == 0);
+        times.push_back(s.time_us);
+    }
+    REQUIRE(times.size() == rows.size());
+    for (size_t i = 1; i < times.size(); ++i) {
+        // Each row falls in the next half second: at most one reading interval late.
+        CHECK(times[i] / 500000 == times[i - 1] / 500000 + 1);
+    }
+    CHECK(reader->info().notes.size() == 1);  // the "columns read as" note, nothing skipped
+    // The truth is the same flight whatever the log's format.
+    CHECK(r.truth.total_flight_time_s == full.truth.total_flight_time_s);
 }
 
 TEST_CASE("Sensor faults are visible in the log and leave the truth alone", "[sim][sensor]") {

@@ -33,6 +33,10 @@ public:
         bool valid = false;
     };
 
+    // Samples kept for the lagged difference: a lag longer than kHistory − 1 sample
+    // intervals is never reached, so a log sampled faster gives no pairs.
+    static constexpr int kHistory = 16;
+
     void configure(const Config& config);
     void update(uint64_t time_us, float voltage_v, float current_a);
     // Drops the history (after a gap or a sensor fault) without forgetting the estimate.
@@ -40,7 +44,6 @@ public:
     const Status& status() const { return status_; }
 
 private:
-    static constexpr int kHistory = 16;
     Config config_;
     Status status_;
     uint64_t t_us_[kHistory] = {};

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <initializer_list>
 
 #include "core/sensor.h"
 #include "host/io/line_reader.h"
@@ -199,6 +200,65 @@ bool ends_with(const std::string& s, const char* suffix) {
     return s.size() >= n && s.compare(s.size() - n, n, suffix) == 0;
 }
 
+// A lower-case column name carries `unit` as a suffix "_unit" or in parentheses at its end,
+// "name(unit)" or "name (unit)", as radio and blackbox_decode logs write them.
+bool has_unit(const std::string& name, const char* unit) {
+    return ends_with(name, (std::string("_") + unit).c_str()) || ends_with(name, (std::string("(") + unit + ")").c_str());
+}
+
+// Days since 1970-01-01 of a proleptic Gregorian date (counting 400-year eras of 146097
+// days from 0000-03-01, so the leap day falls at the end of each shifted year).
+long long days_from_civil(long long y, unsigned m, unsigned d) {
+    y -= m <= 2 ? 1 : 0;
+    const long long era = (y >= 0 ? y : y - 399) / 400;
+    const unsigned yoe = static_cast<unsigned>(y - era * 400);               // 0..399
+    const unsigned doy = (153 * (m > 2 ? m - 3 : m + 9) + 2) / 5 + d - 1;   // 0..365
+    const unsigned doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;              // 0..146096
+    return era * 146097 + static_cast<long long>(doe) - 719468;
+}
+
+// Parses exactly `n` decimal digits at s[pos..] into v; false if any is not a digit.
+bool digits(std::string_view s, std::size_t pos, std::size_t n, unsigned& v) {
+    if (pos + n > s.size()) return false;
+    v = 0;
+    for (std::size_t i = pos; i < pos + n; ++i) {
+        if (s[i] < '0' || s[i] > '9') return false;
+        v = v * 10 + static_cast<unsigned>(s[i] - '0');
+    }
+    return true;
+}
+
+// "YYYY-MM-DD" → days since 1970-01-01; false if malformed or not a calendar date.
+bool parse_date_days(std::string_view s, long long& days) {
+    unsigned y = 0, m = 0, d = 0;
+    if (s.size() != 10 || s[4] != '-' || s[7] != '-' || !digits(s, 0, 4, y) || !digits(s, 5, 2, m) ||
+        !digits(s, 8, 2, d) || m < 1 || m > 12 || d < 1)
+        return false;
+    static const unsigned kDays[12] = {31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+    const bool leap = (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
+    if (d > kDays[m - 1] + (m == 2 && leap ? 1u : 0u)) return false;
+    days = days_from_civil(y, m, d);
+    return true;
+}
+
+// "HH:MM:SS" with an optional fraction of 1–6 digits → microseconds since midnight.
+bool parse_clock_us(std::string_view s, std::uint64_t& us) {
+    unsigned h = 0, mi = 0, se = 0;
+    if (s.size() < 8 || s[2] != ':' || s[5] != ':' || !digits(s, 0, 2, h) || !digits(s, 3, 2, mi) ||
+        !digits(s, 6, 2, se) || h > 23 || mi > 59 || se > 60)
+        return false;
+    std::uint64_t frac_us = 0;
+    if (s.size() > 8) {
+        const std::size_t n = s.size() - 9;
+        unsigned f = 0;
+        if (s[8] != '.' || n < 1 || n > 6 || !digits(s, 9, n, f)) return false;
+        frac_us = f;
+        for (std::size_t k = n; k < 6; ++k) frac_us *= 10;
+    }
+    us = ((static_cast<std::uint64_t>(h) * 60 + mi) * 60 + se) * 1000000u + frac_us;
+    return true;
+}
+
 // Shared line loop of both CSV readers: blank lines, field count, trailing comma,
 // cut-off last line, time order and the notes.
 class TextSampleReader : public SampleReader {
@@ -256,6 +316,8 @@ protected:
     // Parses fields_ (count already checked) into `out`; false to skip a cut-off last
     // line (after get_number/get_time_us returned false). Must set out.time_us.
     virtual bool parse_row(core::Sample& out) = 0;
+    // Notes only the derived reader can give, added when the end of the file is reached.
+    virtual void finish_notes() {}
 
     // Field `idx` (0-based) as a number. Throws InputError for a bad field, except for the
     // last field of a last line without newline, which returns false (cut off).
@@ -317,6 +379,15 @@ protected:
     std::size_t expected_fields_ = 0;  // without a trailing comma
     std::string count_text_;           // "8 fields (...)" for the wrong-count message
     std::size_t time_field_ = 0;
+    bool skip_row_ = false;  // set by parse_row with a false return: leave this row out, read on
+    std::size_t cut_field_ = 0;  // 1-based field whose failure means "cut off"; 0 = none
+    long cut_line_ = 0;
+
+    void add_cut_note(const std::string& why) {
+        cut_line_ = lines_.line_number();
+        info_.notes.push_back("line " + std::to_string(cut_line_) +
+                              ": last line is cut off (no newline at the end, " + why + "); skipped");
+    }
 
 private:
     bool read_row(core::Sample& out) {
@@ -351,7 +422,11 @@ private:
                 return false;
             }
             cut_field_ = at_eof_no_newline && !trailing ? n : 0;
-            if (!parse_row(out)) return false;
+            if (!parse_row(out)) {
+                if (!skip_row_) return false;
+                skip_row_ = false;  // a row the reader leaves out on purpose (counted by it)
+                continue;
+            }
             if (!trailing) all_trailing_ = false;
             if (rows_ > 0) {
                 if (out.time_us < last_time_us_) {
@@ -372,14 +447,9 @@ private:
         return false;
     }
 
-    void add_cut_note(const std::string& why) {
-        cut_line_ = lines_.line_number();
-        info_.notes.push_back("line " + std::to_string(cut_line_) +
-                              ": last line is cut off (no newline at the end, " + why + "); skipped");
-    }
-
     void finish() {
         finished_ = true;
+        finish_notes();
         if (dup_count_ > 0) {
             info_.notes.push_back(std::to_string(dup_count_) +
                                   (dup_count_ == 1 ? " row repeats" : " rows repeat") +
@@ -397,8 +467,6 @@ private:
     bool has_pending_ = false;
     bool finished_ = false;
     bool all_trailing_ = true;
-    std::size_t cut_field_ = 0;  // 1-based field whose failure means "cut off"; 0 = none
-    long cut_line_ = 0;
     long rows_ = 0;
     std::uint64_t last_time_us_ = 0;
     long last_time_line_ = 0;
@@ -552,8 +620,73 @@ private:
         return i;
     }
 
+    // The first column (case-insensitive) whose name starts with one of `prefixes`, in the
+    // order given; -1 if none.
+    int find_prefixed(std::initializer_list<const char*> prefixes) const {
+        for (const char* p : prefixes) {
+            for (std::size_t i = 0; i < lower_names_.size(); ++i) {
+                if (lower_names_[i].compare(0, std::strlen(p), p) == 0) return static_cast<int>(i);
+            }
+        }
+        return -1;
+    }
+
+    // Logs other programs write, recognised by their column names when no column option is
+    // given and the log has none of battsim's own time columns; the note says which.
+    ColumnMapping recognise(const ColumnMapping& given) {
+        const bool mapped = !given.time.empty() || !given.voltage.empty() || !given.current.empty() ||
+                            !given.cells.empty() || !given.temperature.empty();
+        if (mapped || find("time_s") >= 0 || find("time_ms") >= 0 || find("time_us") >= 0) return given;
+        ColumnMapping m = given;
+        const auto name = [&](int i) { return names_[static_cast<std::size_t>(i)]; };
+        // EdgeTX / OpenTX radio logs: wall-clock Date and Time, the flight pack's voltage as
+        // VFAS (FrSky) or RxBt (Crossfire / ExpressLRS battery sensor; on FrSky receivers RxBt
+        // is the receiver's own supply, hence VFAS first), current as Curr.
+        const int date = find("date");
+        const int clock = find("time");
+        const int volts = find_prefixed({"vfas(", "rxbt("});
+        const int amps = find_prefixed({"curr("});
+        if (date >= 0 && clock >= 0 && volts >= 0 && amps >= 0) {
+            date_col_ = date;
+            radio_log_ = true;
+            m.time = name(clock);
+            m.voltage = name(volts);
+            m.current = name(amps);
+            info_.notes.push_back("columns read as an EdgeTX/OpenTX radio log: time from \"" + name(date) + "\" and \"" +
+                                  name(clock) + "\", voltage \"" + m.voltage + "\", current \"" + m.current +
+                                  "\"; rows without battery telemetry (empty or 0 V) are skipped");
+            return m;
+        }
+        // Betaflight / INAV blackbox logs decoded by blackbox_decode.
+        const int bb_time = find("time (us)");
+        const int bb_volts = find_prefixed({"vbatlatest"});
+        const int bb_amps = find_prefixed({"amperagelatest"});
+        if (bb_time >= 0 && bb_volts >= 0 && bb_amps >= 0) {
+            m.time = name(bb_time);
+            m.voltage = name(bb_volts);
+            m.current = name(bb_amps);
+            info_.notes.push_back("columns read as a blackbox_decode log: time \"" + m.time + "\", voltage \"" +
+                                  m.voltage + "\", current \"" + m.current + "\"");
+            return m;
+        }
+        // The CMU Matrice 100 delivery flights (seconds, volts, amps).
+        const int m100_time = find("time");
+        const int m100_volts = find("battery_voltage");
+        const int m100_amps = find("battery_current");
+        if (m100_time >= 0 && m100_volts >= 0 && m100_amps >= 0) {
+            m.time = name(m100_time);
+            m.time_scale_to_s = 1.0;
+            m.voltage = name(m100_volts);
+            m.current = name(m100_amps);
+            m.current_scale_to_a = 1.0;
+            info_.notes.push_back("columns read as a DJI Matrice 100 log (CMU): time \"" + m.time + "\" in s, voltage \"" +
+                                  m.voltage + "\" in V, current \"" + m.current + "\" in A");
+        }
+        return m;
+    }
+
     void resolve(const ReaderOptions& options) {
-        const ColumnMapping& m = options.columns;
+        const ColumnMapping m = recognise(options.columns);
 
         // Time.
         std::string time_name;
@@ -568,7 +701,9 @@ private:
             if (time_col_ < 0) missing("time", "(expected time_s, time_ms or time_us)");
             time_name = lower_names_[static_cast<std::size_t>(time_col_)];
         }
-        if (m.time_scale_to_s != 0.0) {
+        if (date_col_ >= 0) {
+            // Wall-clock time: parsed per row (parse_row).
+        } else if (m.time_scale_to_s != 0.0) {
             if (!(std::isfinite(m.time_scale_to_s) && m.time_scale_to_s > 0.0)) {
                 throw InputError(info_.path, 0, 0,
                                  "time scale must be a positive number of seconds per unit, got " +
@@ -580,24 +715,24 @@ private:
             time_factor_int_ = 0;
             if (whole >= 1.0 && whole <= 1e12 && std::fabs(time_factor_us_ - whole) <= 1e-9 * whole)
                 time_factor_int_ = static_cast<std::uint64_t>(whole);
-        } else if (ends_with(time_name, "_us")) {
+        } else if (has_unit(time_name, "us")) {
             time_factor_us_ = 1.0;
             time_factor_int_ = 1u;
-        } else if (ends_with(time_name, "_ms")) {
+        } else if (has_unit(time_name, "ms")) {
             time_factor_us_ = 1000.0;
             time_factor_int_ = 1000u;
-        } else if (ends_with(time_name, "_s")) {
+        } else if (has_unit(time_name, "s")) {
             time_factor_us_ = 1e6;
             time_factor_int_ = 1000000u;
         } else {
             throw InputError(info_.path, header_line_, time_col_ + 1,
                              "cannot tell the unit of time column \"" + names_[static_cast<std::size_t>(time_col_)] +
-                                 "\": expected a name ending in _s, _ms or _us, or a time scale (seconds per unit)");
+                                 "\": expected a name ending in _s, _ms or _us (or (s), (ms), (us)), or a time scale (seconds per unit)");
         }
 
         // Voltage (volts unless the name ends in _mv).
         voltage_col_ = m.voltage.empty() ? require("voltage", "voltage_v") : require("voltage", m.voltage);
-        voltage_scale_ = ends_with(lower_names_[static_cast<std::size_t>(voltage_col_)], "_mv") ? 1e-3 : 1.0;
+        voltage_scale_ = has_unit(lower_names_[static_cast<std::size_t>(voltage_col_)], "mv") ? 1e-3 : 1.0;
 
         // Current.
         if (options.current_source == CurrentSource::Shunt) {
@@ -625,15 +760,15 @@ private:
                     throw InputError(info_.path, 0, 0, "current scale must be a finite, non-zero number of amps per unit");
                 }
                 current_scale_ = m.current_scale_to_a;
-            } else if (ends_with(cname, "_ma")) {
+            } else if (has_unit(cname, "ma")) {
                 current_scale_ = 1e-3;
-            } else if (ends_with(cname, "_a")) {
+            } else if (has_unit(cname, "a")) {
                 current_scale_ = 1.0;
             } else {
                 throw InputError(info_.path, header_line_, current_col_ + 1,
                                  "cannot tell the unit of current column \"" +
                                      names_[static_cast<std::size_t>(current_col_)] +
-                                     "\": expected a name ending in _a or _ma, or a current scale (amps per unit)");
+                                     "\": expected a name ending in _a or _ma (or (a), (ma)), or a current scale (amps per unit)");
             }
             if (m.current_negative_is_discharge) current_scale_ = -current_scale_;
         }
@@ -683,7 +818,7 @@ private:
         }
         for (int c : cells) {
             cell_cols_.push_back(c);
-            cell_scales_.push_back(ends_with(lower_names_[static_cast<std::size_t>(c)], "_mv") ? 1e-3 : 1.0);
+            cell_scales_.push_back(has_unit(lower_names_[static_cast<std::size_t>(c)], "mv") ? 1e-3 : 1.0);
         }
         info_.cell_count = static_cast<int>(cell_cols_.size());
 
@@ -692,10 +827,61 @@ private:
         info_.has_temperature = temp_col_ >= 0;
     }
 
+    // A radio log's row before the receiver sends battery telemetry, or after it is lost.
+    bool no_battery_telemetry() {
+        const std::string_view v = fields_[static_cast<std::size_t>(voltage_col_)];
+        const std::string_view a = fields_[static_cast<std::size_t>(current_col_)];
+        double x = 0.0;
+        if (!(v.empty() || a.empty() || (text::parse_number(v, x) == NumberStatus::Ok && x == 0.0))) return false;
+        if (skipped_rows_++ == 0) first_skipped_line_ = lines_.line_number();
+        skip_row_ = true;
+        return true;
+    }
+
+    // Date and Time fields → microseconds since midnight of the first row's date.
+    bool get_clock_time_us(std::uint64_t& out) {
+        const std::size_t dc = static_cast<std::size_t>(date_col_);
+        const std::size_t tc = static_cast<std::size_t>(time_col_);
+        long long days = 0;
+        std::uint64_t clock_us = 0;
+        if (!parse_date_days(fields_[dc], days)) {
+            if (dc + 1 == cut_field_) {
+                add_cut_note("its date " + text::quote_for_message(fields_[dc]) + " is incomplete");
+                return false;
+            }
+            throw InputError(info_.path, lines_.line_number(), static_cast<long>(dc) + 1,
+                             "expected a date as YYYY-MM-DD, found " + text::quote_for_message(fields_[dc]));
+        }
+        if (!parse_clock_us(fields_[tc], clock_us)) {
+            if (tc + 1 == cut_field_) {
+                add_cut_note("its time " + text::quote_for_message(fields_[tc]) + " is incomplete");
+                return false;
+            }
+            throw InputError(info_.path, lines_.line_number(), static_cast<long>(tc) + 1,
+                             "expected a time of day as HH:MM:SS or HH:MM:SS.fff, found " +
+                                 text::quote_for_message(fields_[tc]));
+        }
+        if (!have_first_day_) {
+            first_day_ = days;
+            have_first_day_ = true;
+        }
+        if (days < first_day_) {
+            throw InputError(info_.path, lines_.line_number(), static_cast<long>(dc) + 1,
+                             "time goes backwards: date " + text::quote_for_message(fields_[dc]) +
+                                 " is earlier than the first row's");
+        }
+        out = static_cast<std::uint64_t>(days - first_day_) * 86400000000ull + clock_us;
+        return true;
+    }
+
     bool parse_row(core::Sample& out) override {
         out = core::Sample{};
-        if (!get_time_us(static_cast<std::size_t>(time_col_), time_factor_us_, time_factor_int_, out.time_us))
+        if (radio_log_ && no_battery_telemetry()) return false;
+        if (date_col_ >= 0) {
+            if (!get_clock_time_us(out.time_us)) return false;
+        } else if (!get_time_us(static_cast<std::size_t>(time_col_), time_factor_us_, time_factor_int_, out.time_us)) {
             return false;
+        }
         double v = 0.0;
         const std::size_t vc = static_cast<std::size_t>(voltage_col_);
         if (!get_number(vc, v)) return false;
@@ -730,7 +916,21 @@ private:
         return true;
     }
 
+    void finish_notes() override {
+        if (skipped_rows_ > 0) {
+            info_.notes.push_back(std::to_string(skipped_rows_) + (skipped_rows_ == 1 ? " row" : " rows") +
+                                  " without battery telemetry skipped (first on line " +
+                                  std::to_string(first_skipped_line_) + ")");
+        }
+    }
+
     long header_line_ = 0;
+    int date_col_ = -1;      // wall-clock logs: the Date column beside the Time column
+    bool radio_log_ = false;
+    long long first_day_ = 0;
+    bool have_first_day_ = false;
+    long skipped_rows_ = 0;
+    long first_skipped_line_ = 0;
     std::vector<std::string> names_;
     std::vector<std::string> lower_names_;
     int time_col_ = -1;

@@ -144,6 +144,7 @@ void resolve_defaults(Scenario& s) {
 SimLogFormat log_format_of(const Scenario& s) {
     if (s.log_format == "raw") return SimLogFormat::Raw;
     if (s.log_format == "csv") return SimLogFormat::Csv;
+    if (s.log_format == "edgetx") return SimLogFormat::Radio;
     return s.pack.cells == 4 ? SimLogFormat::Raw : SimLogFormat::Csv;
 }
 
@@ -341,8 +342,9 @@ Scenario scenario_from_json(const json& j, const std::string& origin, const std:
     if (const json* v = root.find("log")) {
         Reader r(*v, "$.log", origin);
         r.string("format", s.log_format);
-        if (s.log_format != "auto" && s.log_format != "raw" && s.log_format != "csv")
-            r.fail("$.log.format", "expected \"auto\", \"raw\" or \"csv\", found \"" + s.log_format + "\"");
+        if (s.log_format != "auto" && s.log_format != "raw" && s.log_format != "csv" && s.log_format != "edgetx")
+            r.fail("$.log.format", "expected \"auto\", \"raw\", \"csv\" or \"edgetx\", found \"" + s.log_format + "\"");
+        r.number("interval_s", s.log_interval_s, 0.05, 60.0);
         if (s.log_format == "raw" && s.pack.cells != 4)
             r.fail("$.log.format", "the raw logger format has exactly 4 cells; use \"csv\" for " + std::to_string(s.pack.cells) + " cells");
         r.finish();
@@ -491,6 +493,7 @@ json scenario_to_json(const Scenario& s) {
                   {"step_s", s.step_s},
                   {"max_continuation_s", s.max_continuation_s}};
     j["log"] = {{"format", s.log_format}};
+    if (s.log_format == "edgetx") j["log"]["interval_s"] = s.log_interval_s;
     return j;
 }
 

@@ -73,7 +73,8 @@ struct Scenario {
     double decimation_s = 1.0;       // truth series spacing
     double step_s = 0.002;           // plant integration step
     double max_continuation_s = 3600.0;
-    std::string log_format = "auto";  // auto (raw for 4 cells, csv otherwise), raw, csv
+    std::string log_format = "auto";  // auto (raw for 4 cells, csv otherwise), raw, csv, edgetx
+    double log_interval_s = 0.2;      // edgetx: the radio's log interval
 };
 
 Scenario load_scenario(const std::string& path);

@@ -219,6 +219,7 @@ void SensorChain::feed(double t_s, double dt_s, const TrueValues& v, bool airbor
 
 std::string format_header(SimLogFormat f, int cells) {
     if (f == SimLogFormat::Raw) return std::string();
+    if (f == SimLogFormat::Radio) return "Date,Time,RxBt(V),Curr(A)\n";
     std::string h = "time_s,voltage_v,current_a";
     for (int c = 1; c <= cells; ++c) h += ",cell" + std::to_string(c) + "_v";
     h += ",temperature_c\n";
@@ -237,6 +238,21 @@ void format_record(SimLogFormat f, int cells, const core::ShuntCalibration& shun
         prev = tap;
     }
     const float current_ma = firmware_current_ma(r.shunt_count, shunt);
+    if (f == SimLogFormat::Radio) {
+        // A fixed date; the clock from the log's start (the simulation starts at midnight).
+        const int64_t ms = r.time_ms;
+        char clock[40];
+        std::snprintf(clock, sizeof clock, "2026-01-%02lld,%02lld:%02lld:%02lld.%03lld,",
+                      static_cast<long long>(1 + ms / 86400000), static_cast<long long>(ms / 3600000 % 24),
+                      static_cast<long long>(ms / 60000 % 60), static_cast<long long>(ms / 1000 % 60),
+                      static_cast<long long>(ms % 1000));
+        out += clock;
+        append_fixed(out, round_div(bus, 10000), 1);  // 10 µV units → 0.1 V
+        out += ',';
+        append_fixed(out, static_cast<int64_t>(std::llround(static_cast<double>(current_ma) / 100.0)), 1);
+        out += '\n';
+        return;
+    }
     if (f == SimLogFormat::Raw) {
         append_fixed(out, r.time_ms, 0);
         out += ',';

@@ -155,7 +155,11 @@ private:
 // Text of the log. Raw: the dissertation logger's header-less 4-cell format
 // `time_ms,bus_voltage_v,cell1_v..cell4_v,current_ma,shunt_mv,`. Csv: the headered format
 // `time_s,voltage_v,current_a,cell1_v..cellN_v,temperature_c`.
-enum class SimLogFormat { Raw, Csv };
+// Raw: the reference logger's rows; Csv: battsim's CSV with cells and temperature;
+// Radio: an EdgeTX radio's telemetry log (Date, Time, RxBt(V), Curr(A)): the pack voltage
+// and current in the 0.1 V and 0.1 A steps of the Crossfire battery sensor, one row per
+// log interval (the rows are thinned by the caller), no cells.
+enum class SimLogFormat { Raw, Csv, Radio };
 std::string format_header(SimLogFormat f, int cells);
 void format_record(SimLogFormat f, int cells, const core::ShuntCalibration& shunt, const LogRecord& r,
                    std::string& out);

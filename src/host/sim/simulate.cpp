@@ -328,12 +328,22 @@ SimulationResult simulate(const Scenario& scenario, const SimulateOptions& optio
     tr.degraded = !tr.justified_warnings.empty();
     tr.sensor_unit = sensor.unit();
     tr.sensor_stats = sensor.stats();
-    tr.rows = static_cast<long>(records.size());
+    tr.rows = 0;
 
     // The log text.
     res.log_text = format_header(res.format, s.pack.cells);
     res.log_text.reserve(records.size() * (res.format == SimLogFormat::Raw ? 48 : 80));
-    for (const LogRecord& r : records) format_record(res.format, s.pack.cells, s.sensor.shunt, r, res.log_text);
+    // A radio logs on its own timer: the first reading at or after each interval's start.
+    const int64_t interval_ms = static_cast<int64_t>(std::llround(s.log_interval_s * 1000.0));
+    int64_t next_ms = 0;
+    for (const LogRecord& r : records) {
+        if (res.format == SimLogFormat::Radio) {
+            if (r.time_ms < next_ms) continue;
+            next_ms = (r.time_ms / interval_ms + 1) * interval_ms;
+        }
+        format_record(res.format, s.pack.cells, s.sensor.shunt, r, res.log_text);
+        ++tr.rows;
+    }
     return res;
 }
 
@@ -346,7 +356,8 @@ json truth_to_json(const SimulationResult& r) {
     j["battsim_version"] = BATTSIM_VERSION;
     j["scenario"] = scenario_to_json(s);
     j["monitor_config"] = config_to_json(s.config);
-    j["log"] = {{"format", r.format == SimLogFormat::Raw ? "raw" : "csv"}, {"rows", t.rows}};
+    j["log"] = {{"format", r.format == SimLogFormat::Raw ? "raw" : r.format == SimLogFormat::Csv ? "csv" : "edgetx"},
+                {"rows", t.rows}};
     json cells = json::array();
     for (int c = 0; c < t.plant.cells; ++c) {
         const CellParams& p = t.plant.cell[c];
