@@ -1,5 +1,6 @@
 #include "common_options.h"
 
+#include <cmath>
 #include <iostream>
 #include <stdexcept>
 
@@ -27,6 +28,9 @@ void add_input_options(CLI::App& sub, InputArgs& a) {
     sub.add_option("--temperature-col", a.temperature_col, "CSV: name of the temperature column (degC)");
     sub.add_option("--estimator", a.estimator, "Estimator: reference (the dissertation's) or joint (the newer one); default from the config");
     sub.add_flag("--negative-discharge", a.negative_discharge, "CSV: the log's current is negative while discharging");
+    sub.add_option("--average-ms", a.average_ms,
+                   "Average the samples over windows this long (ms) before the monitor sees them: for logs sampled "
+                   "faster than the joint estimator's resistance lags reach (blackbox logs)");
 }
 
 void add_model_job_options(CLI::App& sub, ModelJobArgs& a, const std::string& report, const std::string& plot_help) {
@@ -76,6 +80,14 @@ int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedC
     m.current_negative_is_discharge = a.negative_discharge;
     if (!unit_scale(a.time_unit, "--time-unit", m.time_scale_to_s)) return kExitUsage;
     if (!unit_scale(a.current_unit, "--current-unit", m.current_scale_to_a)) return kExitUsage;
+    if (a.average_ms != 0.0) {
+        try {
+            reader.average_us = static_cast<std::uint64_t>(std::llround(host::average_window_ms(a.average_ms) * 1000.0));
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "battsim: --average-ms: " << e.what() << "\n";
+            return kExitUsage;
+        }
+    }
     try {
         config = a.config.empty() ? host::default_config() : host::load_config_file(a.config);
     } catch (const host::ConfigError& e) {
@@ -106,6 +118,7 @@ host::LogSettingStrings setting_strings(const InputArgs& a) {
     s.temperature_col = a.temperature_col;
     s.cell_cols = a.cell_cols;
     s.negative_discharge = a.negative_discharge;
+    s.average_ms = a.average_ms;
     s.estimator = a.estimator;
     return s;
 }

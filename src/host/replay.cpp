@@ -71,9 +71,9 @@ public:
             std::snprintf(buf, sizeof buf,
                           "the samples are %.3g ms apart (median): the joint estimator's resistance compares samples "
                           "up to %.3g s apart among its last %d, so below %.3g ms it is measured late or never; "
-                          "thin the log to at least that interval",
+                          "give --average-ms %.0f (manifest: average_ms)",
                           dt_s * 1e3, fastest_s * (core::DifferenceResistanceEstimator::kHistory - 1),
-                          core::DifferenceResistanceEstimator::kHistory, fastest_s * 1e3);
+                          core::DifferenceResistanceEstimator::kHistory, fastest_s * 1e3, std::ceil(fastest_s * 1e3));
             out.push_back(buf);
         }
         return out;

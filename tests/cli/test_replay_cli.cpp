@@ -184,7 +184,15 @@ TEST_CASE("replay reads a radio's telemetry log and says what its 0.1 V steps an
     REQUIRE(f["input"]["notes"].size() == 1);
     CHECK(f["input"]["notes"][0] ==
           "the samples are 2 ms apart (median): the joint estimator's resistance compares samples up to 0.13 s apart "
-          "among its last 16, so below 8.67 ms it is measured late or never; thin the log to at least that interval");
+          "among its last 16, so below 8.67 ms it is measured late or never; give --average-ms 9 (manifest: "
+          "average_ms)");
+    // As told: averaged over 9 ms windows the note is gone and the averaging's own note says what it did.
+    const auto fa = clitest::run_json("replay " + q(dir + "/fast.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
+                                      " --estimator joint --average-ms 9 --json");
+    REQUIRE(fa["input"]["notes"].size() == 1);
+    CHECK(fa["input"]["notes"][0] == "samples averaged over 9 ms windows: 20000 read into 4000");
+    CHECK(fa["samples"]["total"] == 4000);
+    CHECK(run("replay " + q(dir + "/fast.csv") + " --average-ms -1").exit_code == 2);
     // The reference estimator's resistance has no such lag: no note.
     const auto fr = clitest::run_json("replay " + q(dir + "/fast.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
                                       " --estimator reference --json");

@@ -160,7 +160,7 @@ TEST_CASE("JSON manifest errors name the line, column and what was expected", "[
     };
     const std::string p = t.path("bad.json");
     CHECK(err("{\n  \"schema\": \"battsim.manifest\",\n  \"logs\": [\n    {\"path\": \"a.csv\", \"pak\": \"A\"}\n  ]\n}") ==
-          p + ":4:23: $.logs[0].pak: unknown key; expected one of charged_mah, columns, config, current_source, estimator, format, monitor, pack, path, test");
+          p + ":4:23: $.logs[0].pak: unknown key; expected one of average_ms, charged_mah, columns, config, current_source, estimator, format, monitor, pack, path, test");
     CHECK(err("{\"schema\": \"battsim.manifest\",\n \"logs\": [{\"path\": 3}]}") ==
           p + ":2:20: $.logs[0].path: expected a string, found 3");
     CHECK(err("{\"schema\": \"battsim.manifest\", \"logs\": [{\"test\": \"x\"}]}") ==
@@ -188,6 +188,18 @@ TEST_CASE("JSON manifest errors name the line, column and what was expected", "[
               .find("$.defaults.charged_mah: unknown key") != std::string::npos);
     const std::string ok = t.write("ok.json", "{\"schema\": \"battsim.manifest\", \"logs\": [{\"path\": \"a\", \"charged_mah\": 912.5}]}");
     CHECK(*load_manifest(ok).logs[0].settings.charged_mah == 912.5);
+    // The averaging window (blackbox logs): in the defaults or per log, in ms.
+    const std::string avg = t.write("avg.json", "{\"schema\": \"battsim.manifest\", \"defaults\": {\"average_ms\": 10}, "
+                                                "\"logs\": [{\"path\": \"a\"}, {\"path\": \"b\", \"average_ms\": 2.5}]}");
+    const Manifest am = load_manifest(avg);
+    CHECK(am.defaults.reader_options().average_us == 10000u);
+    LogSettings b = am.defaults;
+    b.overlay(am.logs[1].settings);
+    CHECK(b.reader_options().average_us == 2500u);
+    CHECK(err("{\"schema\": \"battsim.manifest\", \"logs\": [{\"path\": \"a\", \"average_ms\": 0}]}") ==
+          p + ":1:69: $.logs[0].average_ms: expected an averaging window of 0.001 to 60000 ms, found 0");
+    CHECK(err("{\"schema\": \"battsim.manifest\", \"logs\": [{\"path\": \"a\", \"average_ms\": \"9\"}]}") ==
+          p + ":1:69: $.logs[0].average_ms: expected a number of ms, found \"9\"");
 }
 
 TEST_CASE("CSV manifest: header, comments, quoting and errors with line and field", "[batch]") {
@@ -218,12 +230,14 @@ TEST_CASE("CSV manifest: header, comments, quoting and errors with line and fiel
     const std::string p = t.path("bad.csv");
     CHECK(err("path,pak\n") == p + ":1:2: unknown column \"pak\" in the header; expected some of path, test, pack, config, "
                                    "estimator, format, current_source, time_col, time_unit, voltage_col, current_col, current_unit, "
-                                   "cell_cols, temperature_col, negative_discharge, charged_mah, monitor");
+                                   "cell_cols, temperature_col, negative_discharge, charged_mah, monitor, average_ms");
     CHECK(err("pack,test\nA,1\n") == p + ":1: expected a header row with a \"path\" column (the first non-comment line)");
     CHECK(err("path,charged_mah\na.csv,900mAh\n") == p + ":2:2: charged_mah: expected a positive number of mAh, found \"900mAh\"");
     CHECK(err("path,charged_mah\na.csv,0\n") == p + ":2:2: charged_mah: expected a positive number of mAh, found \"0\"");
     CHECK(*load_manifest(t.write("c.csv", "path,charged_mah\na.csv,1043.5\n")).logs[0].settings.charged_mah == 1043.5);
     CHECK(*load_manifest(t.write("d.csv", "path,monitor\na.csv,quad 7\n")).logs[0].settings.monitor == "quad 7");
+    CHECK(*load_manifest(t.write("e.csv", "path,average_ms\na.csv,8\n")).logs[0].settings.average_ms == 8.0);
+    CHECK(err("path,average_ms\na.csv,fast\n") == p + ":2:2: average_ms: expected a number of ms, found \"fast\"");
     CHECK(err("path,pack\na.csv\n") == p + ":2:2: expected 2 fields as in the header, found 1");
     CHECK(err("path,current_unit\na.csv,amps\n") == p + ":2:2: current_unit: unknown current unit \"amps\"; expected A or mA");
     CHECK(err("path,negative_discharge\na.csv,maybe\n") ==
@@ -251,6 +265,12 @@ TEST_CASE("command-line settings are validated and win over the manifest", "[bat
     CHECK(*man.voltage_col == "battery_voltage");
     a.current_unit = "kA";
     CHECK_THROWS_WITH(settings_from_strings(a), "--current-unit: unknown current unit \"kA\"; expected A or mA");
+    a.current_unit.clear();
+    a.average_ms = 9;
+    CHECK(settings_from_strings(a).reader_options().average_us == 9000u);
+    a.average_ms = 1e6;
+    CHECK_THROWS_WITH(settings_from_strings(a),
+                      "--average-ms: expected an averaging window of 0.001 to 60000 ms, found 1e+06");
 }
 
 TEST_CASE("plan: manifest order, settings per file, paths matched to entries", "[batch]") {

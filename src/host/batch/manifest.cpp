@@ -1,5 +1,7 @@
 #include "host/batch/manifest.h"
 
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -38,6 +40,7 @@ void LogSettings::overlay(const LogSettings& t) {
     take(current_scale_to_a, t.current_scale_to_a);
     take(cell_cols, t.cell_cols);
     take(negative_discharge, t.negative_discharge);
+    take(average_ms, t.average_ms);
     take(charged_mah, t.charged_mah);
 }
 
@@ -52,6 +55,7 @@ ReaderOptions LogSettings::reader_options(ReaderOptions r) const {
     if (current_scale_to_a) r.columns.current_scale_to_a = *current_scale_to_a;
     if (cell_cols) r.columns.cells = *cell_cols;
     if (negative_discharge) r.columns.current_negative_is_discharge = *negative_discharge;
+    if (average_ms) r.average_us = static_cast<std::uint64_t>(std::llround(*average_ms * 1000.0));
     return r;
 }
 
@@ -66,6 +70,15 @@ double current_unit_scale(const std::string& unit) {
     if (unit == "A") return 1.0;
     if (unit == "mA") return 1e-3;
     throw std::invalid_argument("unknown current unit \"" + unit + "\"; expected A or mA");
+}
+
+double average_window_ms(double ms) {
+    if (!(ms >= 0.001 && ms <= 60000.0)) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%g", ms);
+        throw std::invalid_argument(std::string("expected an averaging window of 0.001 to 60000 ms, found ") + buf);
+    }
+    return ms;
 }
 
 CurrentSource parse_current_source(const std::string& name) {
@@ -102,6 +115,7 @@ LogSettings settings_from_strings(const LogSettingStrings& a) {
         s.current_scale_to_a = with("--current-unit", [&] { return current_unit_scale(a.current_unit); });
     if (!a.cell_cols.empty()) s.cell_cols = a.cell_cols;
     if (a.negative_discharge) s.negative_discharge = true;
+    if (a.average_ms != 0.0) s.average_ms = with("--average-ms", [&] { return average_window_ms(a.average_ms); });
     return s;
 }
 
@@ -182,7 +196,8 @@ public:
 
     LogSettings settings(const json& obj, const std::string& where, bool entry, const std::string& log_base,
                          std::string* log_path) const {
-        std::set<std::string> allowed = {"test", "pack", "monitor", "config", "estimator", "format", "current_source", "columns"};
+        std::set<std::string> allowed = {"test",   "pack",           "monitor", "config",    "estimator",
+                                         "format", "current_source", "columns", "average_ms"};
         if (entry) allowed.insert({"path", "charged_mah"});  // a charger's count belongs to one log
         check_keys(obj, where, allowed);
         LogSettings s;
@@ -201,6 +216,15 @@ public:
             s.charged_mah = v.get<double>();
         }
         if (obj.contains("config")) s.config = path_value(obj["config"], where + ".config", dir);
+        if (obj.contains("average_ms")) {
+            const json& v = obj["average_ms"];
+            try {
+                if (!v.is_number()) throw std::invalid_argument("expected a number of ms, found " + v.dump());
+                s.average_ms = average_window_ms(v.get<double>());
+            } catch (const std::invalid_argument& e) {
+                fail(where + ".average_ms", e.what());
+            }
+        }
         if (obj.contains("estimator")) {
             try {
                 s.estimator = parse_estimator(string_value(obj["estimator"], where + ".estimator"));
@@ -363,7 +387,7 @@ Manifest parse_manifest_csv(const std::string& text, const std::string& path) {
     static const std::vector<std::string> kColumns = {
         "path",     "test",        "pack",         "config",    "estimator",   "format",          "current_source", "time_col",
         "time_unit", "voltage_col", "current_col", "current_unit", "cell_cols", "temperature_col", "negative_discharge",
-        "charged_mah", "monitor"};
+        "charged_mah", "monitor", "average_ms"};
     Manifest m;
     m.path = path;
     const std::string dir = manifest_dir(path);
@@ -449,6 +473,10 @@ Manifest parse_manifest_csv(const std::string& text, const std::string& path) {
                     bool b = false;
                     if (!parse_bool(v, b)) throw std::invalid_argument("expected true or false, found \"" + v + "\"");
                     s.negative_discharge = b;
+                } else if (name == "average_ms") {
+                    double ms = 0.0;
+                    if (!parse_finite_number(v, &ms)) throw std::invalid_argument("expected a number of ms, found \"" + v + "\"");
+                    s.average_ms = average_window_ms(ms);
                 } else if (name == "charged_mah") {
                     double mah = 0.0;
                     if (!parse_finite_number(v, &mah) || !(mah > 0.0))

@@ -33,6 +33,7 @@ struct LogSettings {
     std::optional<double> time_scale_to_s, current_scale_to_a;
     std::optional<std::vector<std::string>> cell_cols;
     std::optional<bool> negative_discharge;
+    std::optional<double> average_ms;  // ReaderOptions::average_us, in ms
     // What the charger put back after this log (a single log's entry only): the current
     // sensor is checked against it (`charger_check` in the summary).
     std::optional<double> charged_mah;
@@ -63,6 +64,7 @@ struct LogSettingStrings {
     std::string time_col, time_unit, voltage_col, current_col, current_unit, temperature_col;
     std::vector<std::string> cell_cols;
     bool negative_discharge = false;  // a flag: only "given" when set
+    double average_ms = 0.0;          // 0 = not given
 };
 // Validated like manifest fields; throws std::invalid_argument naming the option.
 LogSettings settings_from_strings(const LogSettingStrings& s);
@@ -78,6 +80,8 @@ Manifest parse_manifest_csv(const std::string& text, const std::string& path);
 double time_unit_scale(const std::string& unit);
 double current_unit_scale(const std::string& unit);
 CurrentSource parse_current_source(const std::string& name);
+// An averaging window (ms) as given: returned if in [0.001, 60000], else std::invalid_argument.
+double average_window_ms(double ms);
 // "reference" or "joint".
 core::EstimatorKind parse_estimator(const std::string& name);
 const char* to_string(core::EstimatorKind kind);

@@ -150,7 +150,64 @@ double log_parameter(const SourceInfo& info, const std::string& name) {
     return std::nan("");
 }
 
-std::unique_ptr<SampleReader> open_reader(const std::string& path, const ReaderOptions& options) {
+namespace {
+
+// Means of consecutive samples over windows of a fixed length (ReaderOptions::average_us).
+class AveragingReader final : public SampleReader {
+public:
+    AveragingReader(std::unique_ptr<SampleReader> inner, std::uint64_t window_us)
+        : inner_(std::move(inner)), window_us_(window_us) {
+        have_next_ = inner_->next(next_);
+    }
+
+    bool next(core::Sample& out) override {
+        if (!have_next_) return false;
+        const core::Sample first = next_;
+        double v = 0.0, a = 0.0, t = 0.0, cells[core::kMaxCells] = {};
+        bool all_temperature = true;
+        long n = 0;
+        core::Sample last = first;
+        // Samples with another cell count start a new window: they are not one sensor's.
+        while (have_next_ && next_.time_us - first.time_us < window_us_ && next_.cell_count == first.cell_count) {
+            last = next_;
+            v += next_.voltage_v;
+            a += next_.current_a;
+            for (int c = 0; c < next_.cell_count; ++c) cells[c] += next_.cell_voltage_v[c];
+            all_temperature = all_temperature && next_.has_temperature;
+            t += next_.temperature_c;
+            ++n;
+            have_next_ = inner_->next(next_);
+        }
+        out = last;
+        out.voltage_v = static_cast<float>(v / static_cast<double>(n));
+        out.current_a = static_cast<float>(a / static_cast<double>(n));
+        for (int c = 0; c < out.cell_count; ++c) out.cell_voltage_v[c] = static_cast<float>(cells[c] / static_cast<double>(n));
+        out.has_temperature = all_temperature;
+        out.temperature_c = all_temperature ? static_cast<float>(t / static_cast<double>(n)) : 0.0f;
+        samples_in_ += n;
+        ++samples_out_;
+        return true;
+    }
+
+    const SourceInfo& info() const override {
+        info_ = inner_->info();
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "samples averaged over %.6g ms windows: %ld read into %ld",
+                      static_cast<double>(window_us_) * 1e-3, samples_in_, samples_out_);
+        info_.notes.push_back(buf);
+        return info_;
+    }
+
+private:
+    std::unique_ptr<SampleReader> inner_;
+    std::uint64_t window_us_;
+    core::Sample next_;
+    bool have_next_ = false;
+    long samples_in_ = 0, samples_out_ = 0;
+    mutable SourceInfo info_;
+};
+
+std::unique_ptr<SampleReader> open_format(const std::string& path, const ReaderOptions& options) {
     const std::vector<unsigned char> head = peek(path);
     LogFormat format = options.format;
     if (format == LogFormat::Auto) format = detect(path, head);
@@ -163,6 +220,14 @@ std::unique_ptr<SampleReader> open_reader(const std::string& path, const ReaderO
         case LogFormat::Auto: break;
     }
     throw InputError(path, 0, 0, "cannot detect the log format");
+}
+
+}  // namespace
+
+std::unique_ptr<SampleReader> open_reader(const std::string& path, const ReaderOptions& options) {
+    std::unique_ptr<SampleReader> reader = open_format(path, options);
+    if (options.average_us == 0) return reader;
+    return std::unique_ptr<SampleReader>(new AveragingReader(std::move(reader), options.average_us));
 }
 
 }  // namespace host

@@ -65,6 +65,11 @@ struct ReaderOptions {
     CurrentSource current_source = CurrentSource::Auto;  // raw logs: Auto = logged current_ma
     core::ShuntCalibration shunt;
     ColumnMapping columns;
+    // > 0: consecutive samples are averaged over windows this long (a window starts at its
+    // first sample and takes every sample before start + average_us), one sample per window
+    // at its last sample's time. For logs sampled faster than the joint estimator's
+    // resistance lags reach (blackbox logs at hundreds of hertz).
+    std::uint64_t average_us = 0;
 };
 
 // What the reader found out about the log, for summaries and the README tables.
