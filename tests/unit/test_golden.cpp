@@ -54,23 +54,30 @@ TEST_CASE("Golden summaries of the predictive-bms flights", "[golden][data]") {
 }
 
 // The scoreboard as change indication: every estimator's numbers on both simulated suites,
-// the last-cell set (a weak cell read across the positive lead) and the rest-polarisation
-// stress suite (the real packs' polarisation time constants).
+// the last-cell set (a weak cell read across the positive lead), the rest-polarisation
+// stress suite (the real packs' polarisation time constants) and the tuning suite flown
+// through a radio's telemetry log (the reader's wall clock, the 0.1 V steps).
 // A change is either a bug or an intended change of the numbers (scripts/update-goldens.sh;
 // say in the commit what moved and why).
 TEST_CASE("Golden scoreboards of the simulated suites", "[golden]") {
-    for (const char* suite : {"scenarios", "scenarios-holdout", "scenarios-last-cell", "scenarios-rest-polarisation"}) {
+    for (const std::string golden :
+         {"scenarios", "scenarios-holdout", "scenarios-last-cell", "scenarios-rest-polarisation", "scenarios-edgetx"}) {
+        const bool radio = golden == "scenarios-edgetx";
+        const std::string suite = radio ? "scenarios" : golden;
         const std::string dir = std::string(BATTSIM_SOURCE_DIR) + "/configs/" + suite;
         std::vector<sim::Scenario> scenarios;
-        for (const std::string& f : sim::find_scenario_files({dir})) scenarios.push_back(sim::load_scenario(f));
+        for (const std::string& f : sim::find_scenario_files({dir})) {
+            scenarios.push_back(sim::load_scenario(f));
+            if (radio) scenarios.back().log_format = "edgetx";  // as `battsim score --log-format edgetx`
+        }
         score::ScoreOptions so;
         so.jobs = 2;
         const nlohmann::json actual = score::to_json(score::score_scenarios(scenarios, score::standard_columns(), so));
         CompareOptions co;
         co.ignore = {"/battsim_version"};
         const std::string report =
-            golden_diff(std::string(BATTSIM_SOURCE_DIR) + "/tests/golden/score/" + suite + ".json", actual, co);
-        INFO(suite << " changed:\n" << report);
+            golden_diff(std::string(BATTSIM_SOURCE_DIR) + "/tests/golden/score/" + golden + ".json", actual, co);
+        INFO(golden << " changed:\n" << report);
         CHECK(report.empty());
     }
 }
