@@ -21,6 +21,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                                  LogFormat::DataflashBinary, LogFormat::Ulog};
     battsim::host::ReaderOptions opt;
     opt.format = formats[size ? data[0] % 6 : 0];
+    // The second byte switches the averaging reader on for one input in four.
+    if (size > 1 && data[1] % 4 == 0) opt.average_us = 1000u * (1u + data[1] % 64u);
     try {
         auto reader = battsim::host::open_reader(path, opt);
         battsim::core::Sample s;
