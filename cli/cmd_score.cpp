@@ -9,6 +9,7 @@
 #include "host/io/atomic_file.h"
 #include "host/io/sample_reader.h"
 #include "host/score/scoreboard.h"
+#include "host/sim/scenario.h"
 
 namespace battsim {
 namespace cli {
@@ -53,9 +54,9 @@ std::function<int()> setup(CLI::App& sub) {
         }
         for (host::sim::Scenario& s : scenarios) {
             if (a->log_format.empty()) continue;
-            if (a->log_format == "raw" && s.pack.cells != 4) {
-                std::cerr << "battsim score: --log-format raw: " << s.source_path << " has " << s.pack.cells
-                          << " cells; the raw format has 4\n";
+            const std::string problem = host::sim::log_format_problem(a->log_format, s.pack.cells);
+            if (!problem.empty()) {
+                std::cerr << "battsim score: --log-format: " << s.source_path << ": " << problem << "\n";
                 return kExitUsage;
             }
             s.log_format = a->log_format;

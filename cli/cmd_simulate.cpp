@@ -47,10 +47,6 @@ std::function<int()> setup(CLI::App& sub) {
             std::cerr << "battsim simulate: --truth goes with -o/--output\n";
             return kExitUsage;
         }
-        if (!a->format.empty() && a->format != "raw" && a->format != "csv" && a->format != "edgetx" && a->format != "auto") {
-            std::cerr << "battsim simulate: --format: expected auto, raw, csv or edgetx, found \"" << a->format << "\"\n";
-            return kExitUsage;
-        }
         if (a->cutoff != 0 && !(a->cutoff >= 2.0 && a->cutoff <= 4.5)) {
             std::cerr << "battsim simulate: --cutoff-v-per-cell: expected a voltage in [2, 4.5]\n";
             return kExitUsage;
@@ -72,9 +68,9 @@ std::function<int()> setup(CLI::App& sub) {
         for (host::sim::Scenario& s : scenarios) {
             if (a->seed >= 0) s.seed = static_cast<uint64_t>(a->seed);
             if (!a->format.empty()) {
-                if (a->format == "raw" && s.pack.cells != 4) {
-                    std::cerr << "battsim simulate: " << s.source_path << ": the raw format has 4 cells, the pack has "
-                              << s.pack.cells << "\n";
+                const std::string problem = host::sim::log_format_problem(a->format, s.pack.cells);
+                if (!problem.empty()) {
+                    std::cerr << "battsim simulate: --format: " << s.source_path << ": " << problem << "\n";
                     return kExitUsage;
                 }
                 s.log_format = a->format;

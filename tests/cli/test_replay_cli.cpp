@@ -213,7 +213,8 @@ TEST_CASE("score --log-format edgetx flies the suite through a radio's telemetry
     CHECK(bad.exit_code == 2);
     const auto raw6 = run("score " + q(kSource + "/configs/scenarios/6s-hover-healthy.json") + " --log-format raw");
     CHECK(raw6.exit_code == 2);
-    CHECK(raw6.err.find("the raw format has 4") != std::string::npos);
+    CHECK(raw6.err.find("6s-hover-healthy.json: the raw logger format has exactly 4 cells; use \"csv\" for 6 cells") !=
+          std::string::npos);
 }
 
 TEST_CASE("replay writes series and summary files atomically", "[cli]") {

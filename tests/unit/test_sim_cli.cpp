@@ -56,7 +56,10 @@ TEST_CASE("battsim simulate: usage and scenario errors", "[cli][sim]") {
     clitest::write_file(d.at("b.json"), scenario_json("b", 2, R"(, "pack": {"capacity_factor": 0.8})"));
     CHECK(run("simulate " + q(d.at("a.json"))).exit_code == 2);  // neither -o nor --out-dir
     CHECK(run("simulate " + q(d.path) + " -o " + q(d.at("x.csv"))).exit_code == 2);  // two scenarios, one file
-    CHECK(run("simulate " + q(d.at("a.json")) + " -o " + q(d.at("x.csv")) + " --format xml").exit_code == 2);
+    const auto xml = run("simulate " + q(d.at("a.json")) + " -o " + q(d.at("x.csv")) + " --format xml");
+    CHECK(xml.exit_code == 2);
+    CHECK(xml.err == "battsim simulate: --format: " + d.at("a.json") +
+                         ": expected \"auto\", \"raw\", \"csv\" or \"edgetx\", found \"xml\"\n");
     const auto missing = run("simulate " + q(d.at("none.json")) + " -o " + q(d.at("x.csv")));
     CHECK(missing.exit_code == 4);
     CHECK(missing.err.find(d.at("none.json") + ": no such scenario file or directory") != std::string::npos);

@@ -313,9 +313,12 @@ protected:
         }
     }
 
-    // Parses fields_ (count already checked) into `out`; false to skip a cut-off last
-    // line (after get_number/get_time_us returned false). Must set out.time_us.
-    virtual bool parse_row(core::Sample& out) = 0;
+    // What parse_row made of a row: a sample (its time set), a cut-off last line (after
+    // get_number/get_time_us returned false: reading ends), or a row the reader leaves out
+    // on purpose and counts itself (reading goes on).
+    enum class Row { Kept, CutOff, Skipped };
+    // Parses fields_ (count already checked) into `out`.
+    virtual Row parse_row(core::Sample& out) = 0;
     // Notes only the derived reader can give, added when the end of the file is reached.
     virtual void finish_notes() {}
 
@@ -379,7 +382,6 @@ protected:
     std::size_t expected_fields_ = 0;  // without a trailing comma
     std::string count_text_;           // "8 fields (...)" for the wrong-count message
     std::size_t time_field_ = 0;
-    bool skip_row_ = false;  // set by parse_row with a false return: leave this row out, read on
     std::size_t cut_field_ = 0;  // 1-based field whose failure means "cut off"; 0 = none
     long cut_line_ = 0;
 
@@ -422,11 +424,9 @@ private:
                 return false;
             }
             cut_field_ = at_eof_no_newline && !trailing ? n : 0;
-            if (!parse_row(out)) {
-                if (!skip_row_) return false;
-                skip_row_ = false;  // a row the reader leaves out on purpose (counted by it)
-                continue;
-            }
+            const Row row = parse_row(out);
+            if (row == Row::CutOff) return false;
+            if (row == Row::Skipped) continue;
             if (!trailing) all_trailing_ = false;
             if (rows_ > 0) {
                 if (out.time_us < last_time_us_) {
@@ -500,12 +500,12 @@ public:
 private:
     static constexpr std::size_t kFields = 8;
 
-    bool parse_row(core::Sample& out) override {
+    Row parse_row(core::Sample& out) override {
         out = core::Sample{};
-        if (!get_time_us(0, 1000.0, 1000u, out.time_us)) return false;
+        if (!get_time_us(0, 1000.0, 1000u, out.time_us)) return Row::CutOff;
         double v[kFields];
         for (std::size_t i = 1; i < kFields; ++i) {
-            if (!get_number(i, v[i])) return false;
+            if (!get_number(i, v[i])) return Row::CutOff;
         }
         out.voltage_v = to_float(v[1], 1);
         out.cell_count = 4;
@@ -524,7 +524,7 @@ private:
             (void)current_ma;
             out.current_a = static_cast<float>(v[6] / 1000.0);
         }
-        return true;
+        return Row::Kept;
     }
 
     bool use_shunt_;
@@ -827,14 +827,14 @@ private:
         info_.has_temperature = temp_col_ >= 0;
     }
 
-    // A radio log's row before the receiver sends battery telemetry, or after it is lost.
+    // A radio log's row before the receiver sends battery telemetry, or after it is lost;
+    // counted for the note at the end.
     bool no_battery_telemetry() {
         const std::string_view v = fields_[static_cast<std::size_t>(voltage_col_)];
         const std::string_view a = fields_[static_cast<std::size_t>(current_col_)];
         double x = 0.0;
         if (!(v.empty() || a.empty() || (text::parse_number(v, x) == NumberStatus::Ok && x == 0.0))) return false;
         if (skipped_rows_++ == 0) first_skipped_line_ = lines_.line_number();
-        skip_row_ = true;
         return true;
     }
 
@@ -874,21 +874,21 @@ private:
         return true;
     }
 
-    bool parse_row(core::Sample& out) override {
+    Row parse_row(core::Sample& out) override {
         out = core::Sample{};
-        if (radio_log_ && no_battery_telemetry()) return false;
+        if (radio_log_ && no_battery_telemetry()) return Row::Skipped;
         if (date_col_ >= 0) {
-            if (!get_clock_time_us(out.time_us)) return false;
+            if (!get_clock_time_us(out.time_us)) return Row::CutOff;
         } else if (!get_time_us(static_cast<std::size_t>(time_col_), time_factor_us_, time_factor_int_, out.time_us)) {
-            return false;
+            return Row::CutOff;
         }
         double v = 0.0;
         const std::size_t vc = static_cast<std::size_t>(voltage_col_);
-        if (!get_number(vc, v)) return false;
+        if (!get_number(vc, v)) return Row::CutOff;
         out.voltage_v = to_float(v * voltage_scale_, vc);
         if (shunt_col_ >= 0) {
             const std::size_t sc = static_cast<std::size_t>(shunt_col_);
-            if (!get_number(sc, v)) return false;
+            if (!get_number(sc, v)) return Row::CutOff;
             const float ma = core::current_ma_from_shunt_mv(to_float(v, sc), cal_);
             if (!std::isfinite(ma)) {
                 throw InputError(info_.path, lines_.line_number(), shunt_col_ + 1,
@@ -898,22 +898,22 @@ private:
             out.current_a = ma / 1000.0f;
         } else {
             const std::size_t cc = static_cast<std::size_t>(current_col_);
-            if (!get_number(cc, v)) return false;
+            if (!get_number(cc, v)) return Row::CutOff;
             out.current_a = to_float(v * current_scale_, cc);
         }
         out.cell_count = static_cast<std::uint8_t>(cell_cols_.size());
         for (std::size_t k = 0; k < cell_cols_.size(); ++k) {
             const std::size_t c = static_cast<std::size_t>(cell_cols_[k]);
-            if (!get_number(c, v)) return false;
+            if (!get_number(c, v)) return Row::CutOff;
             out.cell_voltage_v[k] = to_float(v * cell_scales_[k], c);
         }
         if (temp_col_ >= 0) {
             const std::size_t tc = static_cast<std::size_t>(temp_col_);
-            if (!get_number(tc, v)) return false;
+            if (!get_number(tc, v)) return Row::CutOff;
             out.temperature_c = to_float(v, tc);
             out.has_temperature = true;
         }
-        return true;
+        return Row::Kept;
     }
 
     void finish_notes() override {

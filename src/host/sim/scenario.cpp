@@ -141,6 +141,14 @@ void resolve_defaults(Scenario& s) {
     if (!s.initial_temperature_given) s.initial_temperature_c = s.ambient_c;
 }
 
+std::string log_format_problem(const std::string& format, int cells) {
+    if (format != "auto" && format != "raw" && format != "csv" && format != "edgetx")
+        return "expected \"auto\", \"raw\", \"csv\" or \"edgetx\", found \"" + format + "\"";
+    if (format == "raw" && cells != 4)
+        return "the raw logger format has exactly 4 cells; use \"csv\" for " + std::to_string(cells) + " cells";
+    return std::string();
+}
+
 SimLogFormat log_format_of(const Scenario& s) {
     if (s.log_format == "raw") return SimLogFormat::Raw;
     if (s.log_format == "csv") return SimLogFormat::Csv;
@@ -342,11 +350,9 @@ Scenario scenario_from_json(const json& j, const std::string& origin, const std:
     if (const json* v = root.find("log")) {
         Reader r(*v, "$.log", origin);
         r.string("format", s.log_format);
-        if (s.log_format != "auto" && s.log_format != "raw" && s.log_format != "csv" && s.log_format != "edgetx")
-            r.fail("$.log.format", "expected \"auto\", \"raw\", \"csv\" or \"edgetx\", found \"" + s.log_format + "\"");
+        const std::string problem = log_format_problem(s.log_format, s.pack.cells);
+        if (!problem.empty()) r.fail("$.log.format", problem);
         r.number("interval_s", s.log_interval_s, 0.05, 60.0);
-        if (s.log_format == "raw" && s.pack.cells != 4)
-            r.fail("$.log.format", "the raw logger format has exactly 4 cells; use \"csv\" for " + std::to_string(s.pack.cells) + " cells");
         r.finish();
     }
     root.finish();

@@ -103,6 +103,10 @@ void resolve_defaults(Scenario& s);
 // degraded flight's length is compared with.
 PlantParams make_plant_params(const Scenario& s, bool healthy);
 SimLogFormat log_format_of(const Scenario& s);
+// Why `format` cannot be the log format of a pack of `cells` cells, "" if it can: it must
+// be auto, raw, csv or edgetx, and the raw logger's rows hold exactly 4 cells. The scenario
+// files and the commands that override the format (simulate, score) ask this one question.
+std::string log_format_problem(const std::string& format, int cells);
 
 }  // namespace sim
 }  // namespace host
