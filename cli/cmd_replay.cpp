@@ -1,6 +1,9 @@
 // battsim replay LOG: one log through the core monitor; series CSV and summary JSON; with
-// --charged-mah, the current sensor checked against the charger's count.
+// --charged-mah, the current sensor checked against the charger's count; with --mavlink/--tlog, what the
+// monitor's telemetry UART sends.
 #include <iostream>
+#include <memory>
+#include <vector>
 #include <stdexcept>
 
 #include "command.h"
@@ -10,6 +13,7 @@
 #include "host/plot/plot.h"
 #include "host/replay.h"
 #include "host/report/charger_check.h"
+#include "host/report/telemetry_writer.h"
 
 namespace battsim {
 namespace cli {
@@ -20,6 +24,8 @@ struct ReplayArgs {
     std::string series;
     std::string summary;
     std::string plot;
+    std::string mavlink;
+    std::string tlog;
     bool json = false;
     double realtime = 0;
     bool realtime_flag = false;
@@ -37,6 +43,10 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--plot", a->plot,
                    "Plot measured and model voltage, capacity and resistance estimates, flight time and cell "
                    "voltages (.png or .svg)");
+    sub.add_option("--mavlink", a->mavlink,
+                   "Write the MAVLink stream the monitor's telemetry UART sends for this log (raw bytes; "
+                   "docs/telemetry.md)");
+    sub.add_option("--tlog", a->tlog, "Write that stream as a .tlog, which ground stations open to replay");
     sub.add_flag("--json", a->json, "Print the summary JSON on standard output");
     sub.add_flag("--realtime", a->realtime_flag, "Pace the replay to wall-clock time (the monitor still uses the log's time stamps)");
     sub.add_option("--speed", a->realtime, "With --realtime: speed-up factor (default 1)");
@@ -60,8 +70,24 @@ std::function<int()> setup(CLI::App& sub) {
         nlohmann::json summary;
         host::plot::ReplaySeries plotted;
         host::SampleObserver observer;
-        if (!a->plot.empty()) {
-            observer = [&plotted](const core::Sample& s, const core::MonitorStatus& st) { plotted.add(s, st); };
+        std::vector<std::unique_ptr<host::TelemetryWriter>> streams;
+        try {
+            if (!a->mavlink.empty())
+                streams.push_back(std::make_unique<host::TelemetryWriter>(a->mavlink, host::TelemetryWriter::Format::Raw,
+                                                                          opt.config.telemetry, opt.config.monitor));
+            if (!a->tlog.empty())
+                streams.push_back(std::make_unique<host::TelemetryWriter>(a->tlog, host::TelemetryWriter::Format::Tlog,
+                                                                          opt.config.telemetry, opt.config.monitor));
+        } catch (const std::runtime_error& e) {
+            std::cerr << "battsim replay: " << e.what() << "\n";
+            return kExitOutputError;
+        }
+        if (!a->plot.empty() || !streams.empty()) {
+            const bool plot = !a->plot.empty();
+            observer = [&plotted, &streams, plot](const core::Sample& s, const core::MonitorStatus& st) {
+                if (plot) plotted.add(s, st);
+                for (auto& w : streams) w->add(s, st);
+            };
         }
         try {
             summary = host::replay_log(a->log, opt, observer);
@@ -96,6 +122,7 @@ std::function<int()> setup(CLI::App& sub) {
         const std::string text = summary.dump(2) + "\n";
         try {
             if (!a->summary.empty()) host::write_file_atomic(a->summary, text);
+            for (auto& w : streams) w->commit();
             if (!a->config_out.empty() && !refuse_config)
                 host::write_file_atomic(a->config_out, host::config_to_json(corrected).dump(2) + "\n");
             if (!a->plot.empty()) {
@@ -111,7 +138,8 @@ std::function<int()> setup(CLI::App& sub) {
             return kExitOutputError;
         }
         if (a->json) std::cout << text;
-        if (!a->json && a->summary.empty() && a->series.empty() && a->plot.empty()) print_brief(summary, std::cout);
+        if (!a->json && a->summary.empty() && a->series.empty() && a->plot.empty() && streams.empty())
+            print_brief(summary, std::cout);
         if (!a->json && summary.contains("charger_check")) {
             const auto& c = summary["charger_check"];
             std::cout << "  charger check: counted " << c["counted_ah"] << " Ah against " << c["charged_ah"]

@@ -1,5 +1,5 @@
 #!/bin/sh
-# Cross-compiles the core (src/core) and the firmware application (firmware/src/app, all
+# Cross-compiles the core (src/core), the telemetry (src/telemetry) and the firmware application (firmware/src/app, all
 # of the firmware that needs no ESP8266 Arduino core) with Debian's xtensa-lx106 GCC, as
 # for the NodeMCU, and reports flash (text: code, literals, read-only data) and static
 # RAM (data + bss) with xtensa-lx106-elf-size. Fails when the core is over its budget:
@@ -45,7 +45,7 @@ if [ -z "$out" ]; then
   out=$(mktemp -d)
   trap 'rm -rf "$out"' EXIT INT TERM
 fi
-mkdir -p "$out/core" "$out/app"
+mkdir -p "$out/core" "$out/app" "$out/telemetry"
 
 # As the ESP8266 Arduino core builds: long calls, literals beside the code, sections per
 # function; plus the core's own rules (no exceptions, no RTTI, no double promotion).
@@ -61,8 +61,10 @@ compile_dir() {  # compile_dir SRC_DIR OUT_DIR: every .cpp below SRC_DIR
   done
 }
 compile_dir "$root/src/core" "$out/core"
+compile_dir "$root/src/telemetry" "$out/telemetry"
 compile_dir "$root/firmware/src/app" "$out/app"
 "$ar_tool" rcs "$out/libbattsim_core.a" "$out"/core/*.o
+"$ar_tool" rcs "$out/libbattsim_telemetry.a" "$out"/telemetry/*.o
 "$ar_tool" rcs "$out/libbattsim_fw_app.a" "$out"/app/*.o
 
 # Sizes of the objects the firmware keeps in RAM, read from symbol sizes on the target.
@@ -96,6 +98,8 @@ totals() {  # totals ARCHIVE -> "text data bss"
 }
 set -- $(totals "$out/libbattsim_core.a")
 core_text=$1 core_data=$2 core_bss=$3
+set -- $(totals "$out/libbattsim_telemetry.a")
+tel_text=$1 tel_data=$2 tel_bss=$3
 set -- $(totals "$out/libbattsim_fw_app.a")
 app_text=$1 app_data=$2 app_bss=$3
 core_ram=$((core_data + core_bss))
@@ -104,9 +108,11 @@ rodata() {  # rodata OBJ_DIR: bytes of .rodata* (inside "text" above)
 }
 core_rodata=$(rodata "$out/core")
 app_rodata=$(rodata "$out/app")
+tel_rodata=$(rodata "$out/telemetry")
 
 echo "xtensa-lx106 ($("$cxx" -dumpversion)), -Os, per object (text = flash incl. literals and read-only data):"
 "$size_tool" -t "$out/libbattsim_core.a" | sed 's/^/  /'
+"$size_tool" -t "$out/libbattsim_telemetry.a" | sed 's/^/  /'
 "$size_tool" -t "$out/libbattsim_fw_app.a" | sed 's/^/  /'
 echo "library functions the core needs from the C library (not counted above):"
 "$nm_tool" -u "$out/libbattsim_core.a" | awk 'NF && $NF !~ /:$/ {print $NF}' | sort -u > "$out/undef.txt"
@@ -115,10 +121,11 @@ echo "  $(comm -23 "$out/undef.txt" "$out/def.txt" | tr '\n' ' ')"
 echo "sizeof on the target:"
 "$nm_tool" -S -t d "$out/sizes.o" | awk '/size_of_/ {sub("size_of_", "", $4); printf "  %-22s %6d bytes\n", $4, $2 + 0}'
 echo "core:     text $core_text B (budget $text_budget), static RAM $core_ram B = data $core_data + bss $core_bss (budget $ram_budget)"
+echo "telemetry (MAVLink): text $tel_text B, static RAM $((tel_data + tel_bss)) B"
 echo "firmware app: text $app_text B, static RAM $((app_data + app_bss)) B = data $app_data + bss $app_bss"
 # The ESP8266 Arduino core's linker script keeps .rodata in RAM (hence PROGMEM), so these
 # bytes cost RAM there too, on top of data + bss.
-echo "read-only data within text (in RAM on the ESP8266 unless PROGMEM): core $core_rodata B, firmware app $app_rodata B"
+echo "read-only data within text (in RAM on the ESP8266 unless PROGMEM): core $core_rodata B, telemetry $tel_rodata B, firmware app $app_rodata B"
 
 status=0
 if [ "$core_text" -gt "$text_budget" ]; then

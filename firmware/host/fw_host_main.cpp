@@ -1,7 +1,7 @@
 // battsim_fw_host: runs the firmware application on the host against the mocks, fed by a
 // raw predictive-bms log at the log's own timing. The monitor writes what the device
 // would: the SD card's series CSV (and averages file) under --sd DIR, the UART bytes to
-// --uart FILE, the OLED frames to --oled FILE.
+// --uart FILE, the OLED frames to --oled FILE, the telemetry UART's MAVLink to --mavlink FILE.
 #include <sys/stat.h>
 
 #include <cstdio>
@@ -31,6 +31,7 @@ const char* kUsage =
     "  --sd DIR                  directory standing in for the SD card (default: no card)\n"
     "  --uart FILE               write the device's UART output here\n"
     "  --oled FILE               write every OLED frame here as text\n"
+    "  --mavlink FILE            write the telemetry UART's MAVLink bytes here (monitor)\n"
     "  --no-hello                do not greet the device: it then only prompts \"BMS\"\n"
     "  --no-sd-output, --no-uart-output, --no-oled-output   switch an output off\n"
     "  --forget-averages         neither read nor write the averages file on the card\n";
@@ -41,6 +42,7 @@ struct Args {
     std::string sd;
     std::string uart;
     std::string oled;
+    std::string mavlink;
     bool hello = true;
     bool sd_out = true;
     bool uart_out = true;
@@ -67,6 +69,8 @@ bool parse_args(int argc, char** argv, Args& a) {
             if (!value(a.uart)) return false;
         } else if (s == "--oled") {
             if (!value(a.oled)) return false;
+        } else if (s == "--mavlink") {
+            if (!value(a.mavlink)) return false;
         } else if (s == "--no-hello") {
             a.hello = false;
         } else if (s == "--no-sd-output") {
@@ -125,6 +129,7 @@ int main(int argc, char** argv) {
     host::DirectoryStorage storage(a.sd.empty() ? std::string(".") : a.sd, !a.sd.empty());
     host::TextDisplay display(clock, a.oled);
     host::ScriptedSerial serial;
+    host::ScriptedSerial telemetry;  // transmit only, as the device's second UART
     // The host's greeting arrives before the first reading, as when `battsim log` is
     // already waiting when the device boots.
     if (a.hello) serial.feed("hello\n");
@@ -141,6 +146,9 @@ int main(int argc, char** argv) {
         cfg.outputs.uart = a.uart_out;
         cfg.outputs.display = a.oled_out;
         cfg.remember_averages = a.remember;
+        cfg.telemetry = battsim_generated::telemetry_config();
+        cfg.outputs.mavlink = !a.mavlink.empty();
+        app.attach_telemetry(telemetry);
         app.begin(cfg);
         while (!sensors.finished()) {
             if (app.step() == MonitorApp::Step::Sample) ++samples;
@@ -182,6 +190,15 @@ int main(int argc, char** argv) {
         out.close();
         if (!out) {
             std::cerr << "battsim_fw_host: cannot write " << a.uart << "\n";
+            rc = kExitOutputError;
+        }
+    }
+    if (!a.mavlink.empty()) {
+        std::ofstream out(a.mavlink, std::ios::binary | std::ios::trunc);
+        out << telemetry.output();
+        out.close();
+        if (!out) {
+            std::cerr << "battsim_fw_host: cannot write " << a.mavlink << "\n";
             rc = kExitOutputError;
         }
     }

@@ -281,6 +281,18 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("max_cell_voltage_v", m.sensor.max_cell_voltage_v, 0, 100);
         r.number("max_cell_sum_error_v", m.sensor.max_cell_sum_error_v, 0, 100);
     }
+    if (const json* s = root.member("telemetry")) {
+        ObjectReader r(*s, root.child("telemetry"), origin);
+        telemetry::TelemetryConfig& t = out.telemetry;
+        r.number("system_id", t.system_id, 1, 255);
+        r.number("component_id", t.component_id, 1, 255);
+        r.number("battery_id", t.battery_id, 0, 255);
+        r.number("interval_s", t.interval_s, 0.05, 3600);
+        r.number("low_time_s", t.low_time_s, 0, 36000);
+        r.number("critical_time_s", t.critical_time_s, 0, 36000);
+        if (t.critical_time_s > t.low_time_s)
+            r.fail(r.child("critical_time_s"), "expected at most low_time_s (" + json(t.low_time_s).dump() + ")");
+    }
     return out;
 }
 
@@ -422,6 +434,14 @@ json config_to_json(const LoadedConfig& c) {
         {"max_cell_voltage_v", m.sensor.max_cell_voltage_v},
         {"max_cell_sum_error_v", m.sensor.max_cell_sum_error_v},
     };
+    // Only when set: configs that never mention the telemetry read back as they were.
+    const telemetry::TelemetryConfig& t = c.telemetry;
+    const telemetry::TelemetryConfig d;
+    if (t.system_id != d.system_id || t.component_id != d.component_id || t.battery_id != d.battery_id ||
+        t.interval_s != d.interval_s || t.low_time_s != d.low_time_s || t.critical_time_s != d.critical_time_s) {
+        j["telemetry"] = {{"system_id", t.system_id},   {"component_id", t.component_id}, {"battery_id", t.battery_id},
+                          {"interval_s", t.interval_s}, {"low_time_s", t.low_time_s},     {"critical_time_s", t.critical_time_s}};
+    }
     shorten_floats(j);
     return j;
 }

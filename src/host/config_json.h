@@ -9,6 +9,7 @@
 
 #include "core/config.h"
 #include "host/config_reader.h"  // ConfigError
+#include "telemetry/mavlink.h"
 
 namespace battsim {
 namespace host {
@@ -17,6 +18,7 @@ struct LoadedConfig {
     std::string name;
     std::string description;
     core::MonitorConfig monitor;
+    telemetry::TelemetryConfig telemetry;  // the MAVLink output (section "telemetry")
 };
 
 // `origin` names the source in messages (a file path).

@@ -105,12 +105,23 @@ std::string firmware_config_header(const LoadedConfig& config, const std::string
     h += "// Do not edit: change the JSON and export again, so the firmware and `battsim` share one\n";
     h += "// configuration. Config \"" + comment_safe(config.name) + "\".\n";
     if (!config.description.empty()) h += "// " + comment_safe(config.description) + "\n";
-    h += "#pragma once\n\n#include \"core/config.h\"\n\nnamespace battsim_generated {\n\n";
+    h += "#pragma once\n\n#include \"core/config.h\"\n#include \"telemetry/mavlink.h\"\n\nnamespace battsim_generated {\n\n";
     h += "constexpr const char* kConfigName = " + string_literal(config.name) + ";\n\n";
     h += "constexpr battsim::core::MonitorConfig monitor_config() {\n";
     h += "    battsim::core::MonitorConfig c{};\n";
     for (const ConfigField& f : fields) h += "    c." + f.path + " = " + f.cpp_value + ";\n";
-    h += "    return c;\n}\n\n}  // namespace battsim_generated\n";
+    h += "    return c;\n}\n\n";
+    // The MAVLink output's settings (section "telemetry").
+    const telemetry::TelemetryConfig& t = config.telemetry;
+    h += "constexpr battsim::telemetry::TelemetryConfig telemetry_config() {\n";
+    h += "    battsim::telemetry::TelemetryConfig t{};\n";
+    h += "    t.system_id = " + std::to_string(t.system_id) + "u;\n";
+    h += "    t.component_id = " + std::to_string(t.component_id) + "u;\n";
+    h += "    t.battery_id = " + std::to_string(t.battery_id) + "u;\n";
+    h += "    t.interval_s = " + float_literal(t.interval_s) + ";\n";
+    h += "    t.low_time_s = " + float_literal(t.low_time_s) + ";\n";
+    h += "    t.critical_time_s = " + float_literal(t.critical_time_s) + ";\n";
+    h += "    return t;\n}\n\n}  // namespace battsim_generated\n";
     return h;
 }
 

@@ -1,12 +1,14 @@
 // libFuzzer harness for the monitor's per-sample update: bytes become samples (time
 // steps, voltages, currents, cells — NaN, inf and absurd values included). Whatever comes
-// in, the status must stay finite and within physical bounds.
+// in, the status must stay finite and within physical bounds, and the MAVLink telemetry
+// built from it must fit its buffer as whole, well-formed frames.
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
 
 #include "core/monitor.h"
+#include "telemetry/mavlink.h"
 
 namespace {
 bool finite_status(const battsim::core::MonitorStatus& s) {
@@ -27,6 +29,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     battsim::core::MonitorConfig cfg;
     if (size && (data[0] & 1)) cfg.estimator = battsim::core::EstimatorKind::Joint;
     monitor.configure(cfg);
+    static battsim::telemetry::MavlinkTelemetry telemetry;
+    telemetry.configure(battsim::telemetry::TelemetryConfig{}, cfg);
+    uint8_t frames[battsim::telemetry::MavlinkTelemetry::kMaxBytesPerUpdate];
     battsim::core::Sample s;
     uint64_t t = 0;
     // 16 bytes a sample: dt (2), voltage (4), current (4), 6 bytes picking cell values.
@@ -45,6 +50,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             s.cell_voltage_v[c] = std::isfinite(v) ? v / s.cell_count + (static_cast<int8_t>(data[off + 11 + c % 5]) * 0.01f) : v;
         const battsim::core::MonitorStatus& st = monitor.update(s);
         if (!finite_status(st)) std::abort();
+        const size_t n = telemetry.update(s, st, frames);
+        if (n > sizeof frames) std::abort();
+        for (size_t at = 0; at < n; at += frames[at + 1] + battsim::telemetry::kFrameOverheadBytes) {
+            if (frames[at] != 0xFD || at + frames[at + 1] + battsim::telemetry::kFrameOverheadBytes > n) std::abort();
+        }
     }
     return 0;
 }

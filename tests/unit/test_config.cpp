@@ -28,7 +28,18 @@ TEST_CASE("Config JSON round-trips", "[config]") {
     c.monitor.joint.verdict.enabled = false;            // default true
     c.monitor.joint.verdict.polarisation_slow_time_s = 90.0f;  // default 150
     c.monitor.joint.verdict.ekf.capacity_sigma0_fraction = 0.12f;
+    CHECK_FALSE(config_to_json(c).contains("telemetry"));  // written only when set
+    c.telemetry.system_id = 42;
+    c.telemetry.battery_id = 1;
+    c.telemetry.interval_s = 0.25f;
+    c.telemetry.low_time_s = 90.0f;
     LoadedConfig back = config_from_json(config_to_json(c), "test");
+    CHECK(back.telemetry.system_id == 42);
+    CHECK(back.telemetry.component_id == 180);
+    CHECK(back.telemetry.battery_id == 1);
+    CHECK(back.telemetry.interval_s == 0.25f);
+    CHECK(back.telemetry.low_time_s == 90.0f);
+    CHECK(back.telemetry.critical_time_s == 20.0f);
     CHECK_FALSE(back.monitor.joint.health.enabled);
     CHECK(back.monitor.joint.health.ekf.voltage_sigma_v == 0.031f);
     CHECK(back.monitor.joint.health.polarisation_slow_share == 0.35f);

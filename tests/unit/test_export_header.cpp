@@ -97,11 +97,21 @@ TEST_CASE("export: the firmware's compiled-in config equals the JSON battsim loa
     CHECK(std::string(battsim_generated::kConfigName) == loaded.name);
     // The loaded config is not just the defaults, so the comparison has teeth.
     CHECK_FALSE(first_difference(core::MonitorConfig{}, loaded.monitor).empty());
+    // The telemetry's settings come from the same JSON.
+    constexpr telemetry::TelemetryConfig t = battsim_generated::telemetry_config();
+    CHECK(t.system_id == loaded.telemetry.system_id);
+    CHECK(t.component_id == loaded.telemetry.component_id);
+    CHECK(t.battery_id == loaded.telemetry.battery_id);
+    CHECK(t.interval_s == loaded.telemetry.interval_s);
+    CHECK(t.low_time_s == loaded.telemetry.low_time_s);
+    CHECK(t.critical_time_s == loaded.telemetry.critical_time_s);
 }
 
 TEST_CASE("export: every number the JSON can set reaches the header", "[export]") {
-    const host::LoadedConfig base = host::load_config_file(fwtest::reference_config_path());
+    host::LoadedConfig base = host::load_config_file(fwtest::reference_config_path());
+    base.telemetry.system_id = 3;  // a telemetry section in the JSON, so its keys are perturbed too
     const nlohmann::json j = host::config_to_json(base);
+    REQUIRE(j.contains("telemetry"));
     const std::string base_header = host::firmware_config_header(base, "x.json");
 
     // Every numeric leaf, by JSON pointer.

@@ -26,6 +26,7 @@
 #include "host/config_json.h"
 #include "host/replay.h"
 #include "host/serial/line_protocol.h"
+#include "mavlink_decode.h"
 #include "mock_hardware.h"
 #include "test_firmware_support.h"
 
@@ -42,13 +43,15 @@ struct FirmwareRun {
     fw::MonitorAppState state;
     core::MonitorConfig config_used;
     std::string uart;
+    std::string mavlink;  // the telemetry UART's bytes (with `telemetry`)
     long display_frames = 0;
 };
 
 // Runs the monitor program in-process over `log`. `sd_dir` empty = no card. `commands`
 // maps a sample count to host input fed after that many samples.
 FirmwareRun run_monitor(const std::string& log, const std::string& sd_dir,
-                        const std::vector<std::pair<size_t, std::string>>& commands = {{0, "hello\n"}}) {
+                        const std::vector<std::pair<size_t, std::string>>& commands = {{0, "hello\n"}},
+                        bool telemetry = false) {
     fw::host::RawLogSource source(log);
     fw::host::MockClock clock;
     fw::host::LogSensors sensors(source, clock);
@@ -58,6 +61,8 @@ FirmwareRun run_monitor(const std::string& log, const std::string& sd_dir,
     auto app = std::make_unique<fw::MonitorApp>(sensors, clock, storage, display, serial);
     fw::MonitorAppConfig cfg;
     cfg.monitor = battsim_generated::monitor_config();
+    fw::host::ScriptedSerial telemetry_port;
+    if (telemetry) app->attach_telemetry(telemetry_port);
     app->begin(cfg);
     FirmwareRun r;
     size_t next_command = 0;
@@ -78,6 +83,7 @@ FirmwareRun run_monitor(const std::string& log, const std::string& sd_dir,
     r.state = app->state();
     r.config_used = app->monitor_config();
     r.uart = serial.output();
+    r.mavlink = telemetry_port.output();
     r.display_frames = display.frames();
     return r;
 }
@@ -186,10 +192,13 @@ TEST_CASE("firmware monitor's SD series equals battsim replay of the firmware lo
         const std::string sd = dir + "/sd" + std::to_string(flight);
         REQUIRE(mkdir(sd.c_str(), 0755) == 0);
         const std::string monitor_uart = dir + "/monitor-" + std::to_string(flight) + ".uart";
-        run_fw_host("--sd " + fwtest::q(sd) + " --uart " + fwtest::q(monitor_uart) + " " + fwtest::q(flight_path(flight)));
+        const std::string fw_mavlink = dir + "/monitor-" + std::to_string(flight) + ".mavlink";
+        const std::string replay_mavlink = dir + "/replay-" + std::to_string(flight) + ".mavlink";
+        run_fw_host("--sd " + fwtest::q(sd) + " --uart " + fwtest::q(monitor_uart) + " --mavlink " + fwtest::q(fw_mavlink) +
+                    " " + fwtest::q(flight_path(flight)));
         size_t logged_rows = 0;
         const std::string logged = logger_record(flight_path(flight), dir, std::to_string(flight), &logged_rows);
-        const std::string expected = replay_series(logged, fwtest::reference_config_path(), "");
+        const std::string expected = replay_series(logged, fwtest::reference_config_path(), "--mavlink " + fwtest::q(replay_mavlink));
         const std::string sd_series = fwtest::read_file(sd + "/battsim/log0001.csv");
         REQUIRE(std::count(expected.begin(), expected.end(), '\n') == static_cast<long>(logged_rows));
         REQUIRE(sd_series.size() == expected.size());
@@ -201,6 +210,17 @@ TEST_CASE("firmware monitor's SD series equals battsim replay of the firmware lo
         std::string uart_series;
         for (const std::string& l : mon.csv_lines) uart_series += l + "\n";
         REQUIRE(uart_series == expected);
+
+        // The telemetry UART's MAVLink: the same bytes as `battsim replay --mavlink`, about
+        // one heartbeat and battery status a second, every checksum right.
+        const std::string mav = fwtest::read_file(fw_mavlink);
+        REQUIRE(mav == fwtest::read_file(replay_mavlink));
+        const mavtest::Stream m = mavtest::decode(mav, false);
+        REQUIRE(m.error.empty());
+        const double log_s = static_cast<double>(logged_rows) * 0.067;
+        const long pairs = std::count_if(m.frames.begin(), m.frames.end(), [](const mavtest::Frame& f) { return f.msgid == 147; });
+        CHECK(pairs > 0.9 * log_s);
+        CHECK(pairs < 1.1 * log_s);
     }
 }
 
@@ -244,10 +264,14 @@ TEST_CASE("firmware built with the joint estimator runs it, cell check included,
         const std::string tag = std::to_string(n);
         const std::string sd = dir + "/sd" + tag;
         REQUIRE(mkdir(sd.c_str(), 0755) == 0);
-        const fwtest::Run m = fwtest::run(BATTSIM_FW_HOST_JOINT_BINARY, "--sd " + fwtest::q(sd) + " " + fwtest::q(log));
+        const std::string fw_mavlink = dir + "/monitor-" + tag + ".mavlink";
+        const std::string replay_mavlink = dir + "/replay-" + tag + ".mavlink";
+        const fwtest::Run m = fwtest::run(BATTSIM_FW_HOST_JOINT_BINARY,
+                                          "--sd " + fwtest::q(sd) + " --mavlink " + fwtest::q(fw_mavlink) + " " + fwtest::q(log));
         INFO(m.err);
         REQUIRE(m.exit_code == 0);
-        const std::string expected = replay_series(logger_record(log, dir, tag), BATTSIM_FW_JOINT_CONFIG, "--estimator joint");
+        const std::string expected = replay_series(logger_record(log, dir, tag), BATTSIM_FW_JOINT_CONFIG,
+                                                   "--estimator joint --mavlink " + fwtest::q(replay_mavlink));
         const std::string sd_series = fwtest::read_file(sd + "/battsim/log0001.csv");
         REQUIRE(sd_series.size() == expected.size());
         REQUIRE(sd_series == expected);
@@ -277,6 +301,17 @@ TEST_CASE("firmware built with the joint estimator runs it, cell check included,
         // Flight 34's cell 1 reads 23 % more resistance than cells 2 and 3; with the logger's
         // ground path declared it is not blamed.
         CHECK(cell_outlier == (log == weak));
+        // The device's MAVLink equals replay's, and a ground station is told of the weak cell
+        // (named for resistance: the simulated spread also puts its R0 10.8 % above the others').
+        const std::string mav = fwtest::read_file(fw_mavlink);
+        REQUIRE(mav == fwtest::read_file(replay_mavlink));
+        const mavtest::Stream stream = mavtest::decode(mav, false);
+        REQUIRE(stream.error.empty());
+        bool texted = false;
+        for (const mavtest::Frame& f : stream.frames) {
+            if (f.msgid == 253 && mavtest::text(f).rfind("battsim: cell 2 weak", 0) == 0) texted = true;
+        }
+        CHECK(texted == (log == weak));
     }
 }
 
@@ -412,6 +447,21 @@ TEST_CASE("firmware outputs switch on and off from the serial line", "[firmware]
     // About two frames a second while on (300 samples × 67 ms ≈ 20 s), none after.
     CHECK(fw.display_frames >= 30);
     CHECK(fw.display_frames <= 45);
+}
+
+TEST_CASE("firmware's MAVLink output switches off and on from the serial line", "[firmware][telemetry][data]") {
+    const FirmwareRun fw = run_monitor(flight_path(32), "", {{0, "hello\nstatus\n"}, {150, "out mavlink off\n"}, {300, "out mavlink on\n"}},
+                                       true);
+    CHECK(fw.uart.find(" out=uart,sd,oled,mavlink") != std::string::npos);  // the first status note
+    CHECK(fw.uart.find(" out=uart,sd,oled\n") != std::string::npos);       // after "off"
+    const mavtest::Stream m = mavtest::decode(fw.mavlink, false);
+    REQUIRE(m.error.empty());
+    // A battery status a second while on, none from sample 150 to sample 300 (about 10 s).
+    const auto seconds = [&fw](size_t k) { return static_cast<double>(fw.samples[k].time_us) * 1e-6; };
+    const double on_s = (seconds(150) - seconds(0)) + (seconds(fw.samples.size() - 1) - seconds(300));
+    const long statuses = std::count_if(m.frames.begin(), m.frames.end(), [](const mavtest::Frame& f) { return f.msgid == 147; });
+    CHECK(statuses == Approx(on_s).margin(2.5));
+    CHECK(seconds(300) - seconds(150) > 8.0);  // so the pause is visible in the count
 }
 
 TEST_CASE("firmware sends no data before a host says hello", "[firmware][data]") {

@@ -72,6 +72,7 @@ void MonitorApp::begin(const MonitorAppConfig& config) {
     }
     monitor_.configure(mc);
     current_average_.configure(mc.current_average);
+    telemetry_.configure(config.telemetry, mc);
     sample_ = core::Sample{};
     series_cells_ = series_cells_for(mc.cells_in_series);
     format_series_header(series_cells_, header_);
@@ -141,6 +142,11 @@ void MonitorApp::write_outputs() {
     const core::MonitorStatus& s = monitor_.status();
     format_series_line(sample_, s, series_cells_, line_);
     if (state_.outputs.uart && link_.connected()) link_.send_data(line_.c_str(), line_.size());
+    if (state_.outputs.mavlink && telemetry_port_ != nullptr) {
+        uint8_t frames[telemetry::MavlinkTelemetry::kMaxBytesPerUpdate];
+        const size_t n = telemetry_.update(sample_, s, frames);
+        if (n > 0) telemetry_port_->write(reinterpret_cast<const char*>(frames), n);
+    }
     const uint32_t now_ms = clock_.millis();
     if (state_.outputs.sd && state_.sd_ok) {
         if (!storage_.append(line_.c_str(), line_.size())) {
@@ -214,6 +220,7 @@ void MonitorApp::handle_command(const char* cmd) {
         if (strcmp(what, "uart") == 0) target = &state_.outputs.uart;
         if (strcmp(what, "sd") == 0) target = &state_.outputs.sd;
         if (strcmp(what, "oled") == 0) target = &state_.outputs.display;
+        if (strcmp(what, "mavlink") == 0) target = &state_.outputs.mavlink;
         if (target != nullptr && parse_switch(how, on)) {
             const bool uart_turned_on = target == &state_.outputs.uart && on && !*target;
             *target = on;
@@ -234,7 +241,7 @@ void MonitorApp::handle_command(const char* cmd) {
         link_.send_note(save_averages() ? "averages saved" : "averages not saved (no card or no flight yet)");
         return;
     }
-    link_.send_note("unknown command; try: status, save, out uart|sd|oled on|off");
+    link_.send_note("unknown command; try: status, save, out uart|sd|oled|mavlink on|off");
 }
 
 void MonitorApp::send_status_note() {
@@ -256,6 +263,7 @@ void MonitorApp::send_status_note() {
     t.append(state_.outputs.uart ? "uart," : "");
     t.append(state_.outputs.sd ? "sd," : "");
     t.append(state_.outputs.display ? "oled" : "");
+    if (state_.outputs.mavlink && telemetry_port_ != nullptr) t.append(state_.outputs.display ? ",mavlink" : "mavlink");
     link_.send_note(t.c_str());
 }
 

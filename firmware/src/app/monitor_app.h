@@ -1,6 +1,6 @@
 // The monitor program: every INA226 reading goes through core::Monitor, and its status
 // goes to the UART (series lines after a host's hello), to a series CSV on the SD card
-// and to the OLED, each switchable. Landing saves the long-term current and power
+// to the OLED and, as MAVLink, to a second (telemetry) UART, each switchable. Landing saves the long-term current and power
 // averages to the card; the next boot starts its rolling averages from them.
 #pragma once
 #include <stdint.h>
@@ -13,6 +13,7 @@
 #include "core/config.h"
 #include "core/estimate/rolling_average.h"
 #include "core/monitor.h"
+#include "telemetry/mavlink.h"
 
 namespace battsim {
 namespace fw {
@@ -21,10 +22,12 @@ struct Outputs {
     bool uart = true;
     bool sd = true;
     bool display = true;
+    bool mavlink = true;  // only with a telemetry port attached
 };
 
 struct MonitorAppConfig {
     core::MonitorConfig monitor;  // from the generated battsim_config.h
+    telemetry::TelemetryConfig telemetry;  // the MAVLink output's, from the same header
     Outputs outputs;
     bool remember_averages = true;       // read/write kAveragesPath
     uint32_t sd_sync_interval_ms = 5000; // card writes stall the loop; batch them
@@ -53,6 +56,9 @@ public:
         : sensors_(sensors), clock_(clock), storage_(storage), display_(display), link_(serial),
           readings_(sensors, clock) {}
 
+    // The UART the MAVLink telemetry goes to (to an autopilot's or a telemetry radio's
+    // serial port); before begin(). Without it there is no MAVLink output.
+    void attach_telemetry(SerialPort& port) { telemetry_port_ = &port; }
     void begin(const MonitorAppConfig& config);
     // One pass of the loop: serial input, wait for a conversion, estimate, outputs.
     Step step();
@@ -85,11 +91,13 @@ private:
     Storage& storage_;
     Display& display_;
     LineLink link_;
+    SerialPort* telemetry_port_ = nullptr;
     ReadingLoop readings_;
     MonitorAppConfig config_;
     MonitorAppState state_;
     core::Monitor monitor_;
     core::RollingAverage current_average_;
+    telemetry::MavlinkTelemetry telemetry_;
     core::Sample sample_;
     Reading reading_;
     int series_cells_ = -1;  // fixed by the first sample, as in battsim replay

@@ -18,6 +18,13 @@
 #ifndef BATTSIM_OLED_OUT
 #define BATTSIM_OLED_OUT 1
 #endif
+#ifndef BATTSIM_MAVLINK_OUT
+#define BATTSIM_MAVLINK_OUT 1
+#endif
+// The telemetry UART (D4): 57600 is the autopilots' default for a telemetry port.
+#ifndef BATTSIM_MAVLINK_BAUD
+#define BATTSIM_MAVLINK_BAUD 57600
+#endif
 #ifndef BATTSIM_BAUD
 #define BATTSIM_BAUD 115200
 #endif

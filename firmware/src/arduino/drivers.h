@@ -79,6 +79,17 @@ public:
     }
 };
 
+// The ESP8266's second UART: transmit only, on D4 (GPIO2), for the MAVLink telemetry to an
+// autopilot's or a telemetry radio's RX. (D4 also drives the NodeMCU's blue LED, which
+// flickers with the traffic.)
+class TelemetryUartPort : public SerialPort {
+public:
+    int read_byte() override { return -1; }
+    void write(const char* data, size_t len) override {
+        Serial1.write(reinterpret_cast<const uint8_t*>(data), len);
+    }
+};
+
 // Wi-Fi off: it is not used, and its current spikes show up on the shunt.
 void radio_off();
 

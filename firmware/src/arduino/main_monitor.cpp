@@ -13,6 +13,7 @@ battsim::fw::ArduinoClock g_clock;
 battsim::fw::SdStorage g_storage;
 battsim::fw::OledDisplay g_display;
 battsim::fw::UartPort g_serial;
+battsim::fw::TelemetryUartPort g_telemetry;
 // Static, not on the stack: the app holds the whole core::Monitor (~3 KiB).
 battsim::fw::MonitorApp g_app(g_sensors, g_clock, g_storage, g_display, g_serial);
 
@@ -20,12 +21,16 @@ battsim::fw::MonitorApp g_app(g_sensors, g_clock, g_storage, g_display, g_serial
 
 void setup() {
     Serial.begin(BATTSIM_BAUD);
+    Serial1.begin(BATTSIM_MAVLINK_BAUD);
     battsim::fw::radio_off();
     battsim::fw::MonitorAppConfig config;
     config.monitor = battsim_generated::monitor_config();
     config.outputs.uart = BATTSIM_UART_OUT != 0;
     config.outputs.sd = BATTSIM_SD_OUT != 0;
     config.outputs.display = BATTSIM_OLED_OUT != 0;
+    config.outputs.mavlink = BATTSIM_MAVLINK_OUT != 0;
+    config.telemetry = battsim_generated::telemetry_config();
+    g_app.attach_telemetry(g_telemetry);
     g_app.begin(config);
 }
 

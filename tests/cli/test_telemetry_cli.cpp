@@ -1,0 +1,130 @@
+// battsim replay --mavlink / --tlog from the outside: the stream read back by the tests' own
+// decoder (tests/support/mavlink_decode.h), against the summary JSON of the same run.
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <map>
+#include <string>
+
+#include "cli_util.h"
+#include "mavlink_decode.h"
+
+using clitest::q;
+using clitest::run;
+using nlohmann::json;
+
+namespace {
+const std::string kSource = BATTSIM_SOURCE_DIR;
+
+// A config: configs/sim-4s.json with `telemetry` set.
+std::string config_with(const std::string& dir, const json& telemetry) {
+    json c = json::parse(clitest::read_file(kSource + "/configs/sim-4s.json"));
+    c["telemetry"] = telemetry;
+    const std::string path = dir + "/telemetry-config.json";
+    clitest::write_file(path, c.dump(2));
+    return path;
+}
+}  // namespace
+
+TEST_CASE("replay --mavlink and --tlog tell a ground station what the summary says", "[cli][telemetry]") {
+    const std::string dir = clitest::temp_dir();
+    // A pack at 75 % of its capacity: the joint estimator warns early in the flight.
+    const std::string log = dir + "/cap75.csv";
+    const clitest::Result sim = run("simulate " + q(kSource + "/configs/scenarios/4s-racing-capacity-75.json") + " -o " + q(log));
+    INFO(sim.err);
+    REQUIRE(sim.exit_code == 0);
+    const std::string config = config_with(dir, {{"system_id", 7}, {"battery_id", 1}, {"interval_s", 0.5}});
+    const std::string raw = dir + "/out.mavlink", tlog = dir + "/out.tlog";
+    const json summary = clitest::run_json("replay " + q(log) + " -c " + q(config) + " --estimator joint --json --mavlink " +
+                                           q(raw) + " --tlog " + q(tlog));
+
+    const mavtest::Stream r = mavtest::decode(clitest::read_file(raw), false);
+    const mavtest::Stream t = mavtest::decode(clitest::read_file(tlog), true);
+    REQUIRE(r.error.empty());
+    REQUIRE(t.error.empty());
+    REQUIRE(r.frames.size() == t.frames.size());
+    uint64_t last_us = 0;
+    long statuses = 0;
+    int32_t last_consumed = -1;
+    std::map<std::string, double> texts;  // sentence → log time sent (s)
+    for (size_t i = 0; i < r.frames.size(); ++i) {
+        const mavtest::Frame& f = r.frames[i];
+        CHECK(f.payload == t.frames[i].payload);  // the same frames, stamped
+        CHECK(f.seq == static_cast<uint8_t>(i));
+        CHECK(f.sysid == 7);
+        CHECK(f.compid == 180);
+        CHECK(t.frames[i].tlog_time_us >= last_us);
+        last_us = t.frames[i].tlog_time_us;
+        if (f.msgid == 147) {
+            ++statuses;
+            const mavtest::Battery b = mavtest::battery(f);
+            CHECK(b.id == 1);
+            CHECK(b.voltages_mv[3] != 0xFFFF);  // the simulated log has four cells
+            CHECK(b.voltages_mv[4] == 0xFFFF);
+            if (b.current_consumed_mah >= 0) {
+                CHECK(b.current_consumed_mah >= last_consumed);  // charge only flows out
+                last_consumed = b.current_consumed_mah;
+            }
+        }
+        if (f.msgid == 253) texts[mavtest::text(f)] = static_cast<double>(t.frames[i].tlog_time_us) * 1e-6;
+    }
+    // Two a second, over the whole log.
+    const double log_s = summary["flight"]["end_s"].get<double>() + 60.0;  // 60 s on the ground after landing
+    CHECK(statuses == Approx(2.0 * log_s).margin(4));
+    CHECK(last_consumed > 1000);
+
+    // The short-flight warning, with its cause, at the very sample the summary raised it.
+    bool short_flight = false;
+    for (const json& w : summary["warnings"]) {
+        if (w["name"] != "short_flight") continue;
+        short_flight = true;
+        bool found = false;
+        for (const auto& [sentence, time_s] : texts) {
+            if (sentence.rfind("battsim: flight ", 0) == 0 && sentence.find("short, capacity") != std::string::npos) {
+                found = true;
+                CHECK(time_s == Approx(w["first_time_s"].get<double>()).margin(1e-3));
+            }
+        }
+        CHECK(found);
+    }
+    CHECK(short_flight);
+    // Its cause was raised with it, so it has no sentence of its own.
+    for (const auto& [sentence, time_s] : texts) CHECK(sentence.rfind("battsim: low capacity", 0) != 0);
+}
+
+TEST_CASE("replay --mavlink: a bad telemetry section or an unwritable path is a clear error", "[cli][telemetry]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string log = dir + "/healthy.csv";
+    REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/4s-racing-healthy-a.json") + " -o " + q(log)).exit_code == 0);
+
+    const std::string bad = config_with(dir, {{"low_time_s", 30}, {"critical_time_s", 45}});
+    clitest::Result r = run("replay " + q(log) + " -c " + q(bad) + " --mavlink " + q(dir + "/x.mavlink"));
+    CHECK(r.exit_code != 0);
+    CHECK(r.err.find("$.telemetry.critical_time_s") != std::string::npos);
+    CHECK(r.err.find("expected at most low_time_s") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir + "/x.mavlink"));
+
+    const std::string typo = config_with(dir, {{"sysid", 3}});
+    r = run("replay " + q(log) + " -c " + q(typo) + " --mavlink " + q(dir + "/x.mavlink"));
+    CHECK(r.exit_code != 0);
+    CHECK(r.err.find("$.telemetry.sysid") != std::string::npos);
+
+    r = run("replay " + q(log) + " --mavlink " + q(dir + "/no-such-dir/x.mavlink"));
+    CHECK(r.exit_code == 5);
+    CHECK(r.err.find("no-such-dir") != std::string::npos);
+
+    // A healthy pack: no text at all, and the stream ends OK.
+    const std::string ok = dir + "/ok.mavlink";
+    r = run("replay " + q(log) + " -c " + q(kSource + "/configs/sim-4s.json") + " --estimator joint --mavlink " + q(ok));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const mavtest::Stream s = mavtest::decode(clitest::read_file(ok), false);
+    REQUIRE(s.error.empty());
+    uint8_t last_state = 0;
+    for (const mavtest::Frame& f : s.frames) {
+        CHECK(f.msgid != 253);
+        if (f.msgid == 147) last_state = mavtest::battery(f).charge_state;
+    }
+    CHECK(last_state == 1);  // MAV_BATTERY_CHARGE_STATE_OK, on the ground after the landing
+}

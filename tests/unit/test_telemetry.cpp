@@ -1,0 +1,273 @@
+// The MAVLink telemetry (src/telemetry): checksum against a published frame, frames by
+// hand, BATTERY_STATUS fields from a status, when frames go out, and the warnings' texts.
+// The stream is read back with tests/support/mavlink_decode.h, written apart from the encoder.
+#include <catch2/catch.hpp>
+
+#include <string>
+#include <vector>
+
+#include "core/cells/cell_analyzer.h"
+#include "core/estimate/joint_estimator.h"
+#include "mavlink_decode.h"
+#include "telemetry/mavlink.h"
+
+using namespace battsim;
+
+namespace {
+
+std::string run(telemetry::MavlinkTelemetry& t, const core::Sample& s, const core::MonitorStatus& st) {
+    uint8_t out[telemetry::MavlinkTelemetry::kMaxBytesPerUpdate];
+    const size_t n = t.update(s, st, out);
+    return std::string(reinterpret_cast<const char*>(out), n);
+}
+
+core::MonitorConfig rated_4s() {
+    core::MonitorConfig m;
+    m.battery.capacity_ah = 1.55f;
+    m.battery.internal_resistance_ohm = 0.02f;
+    return m;
+}
+
+}  // namespace
+
+TEST_CASE("Telemetry: the checksum reproduces a published heartbeat frame's", "[telemetry]") {
+    // A MAVLink 1 heartbeat as printed in a public walk-through of the protocol:
+    // FE 09 4E 01 01 00 | 00 00 00 00 02 03 51 04 03 | 1C 7F. The checksum covers every
+    // byte after the start byte and then HEARTBEAT's CRC_EXTRA, 50; it is sent low byte first.
+    const uint8_t covered[] = {0x09, 0x4E, 0x01, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x02, 0x03, 0x51, 0x04, 0x03};
+    uint16_t crc = telemetry::mavlink_crc(covered, sizeof covered);
+    const uint8_t extra = 50;
+    crc = telemetry::mavlink_crc(&extra, 1, crc);
+    CHECK(crc == 0x7F1C);
+    // The tests' own decoder (bitwise, reflected polynomial) agrees.
+    CHECK(mavtest::crc_bitwise(&extra, 1, mavtest::crc_bitwise(covered, sizeof covered)) == 0x7F1C);
+}
+
+TEST_CASE("Telemetry: the first sample sends a heartbeat and a battery status, byte for byte", "[telemetry]") {
+    telemetry::MavlinkTelemetry t;
+    t.configure(telemetry::TelemetryConfig{}, rated_4s());
+    core::Sample s;
+    s.voltage_v = 16.0f;
+    core::MonitorStatus st;  // not initialised yet: everything unknown but the readings
+    const std::string bytes = run(t, s, st);
+    // HEARTBEAT from system 1, component 180 (MAV_COMP_ID_BATTERY), sequence 0: custom_mode 0,
+    // MAV_TYPE_BATTERY (36), MAV_AUTOPILOT_INVALID (8), base_mode 0, MAV_STATE_STANDBY (3),
+    // MAVLink version 3; checksum worked out by hand from the spec's accumulate.
+    const uint8_t heartbeat[] = {0xFD, 0x09, 0x00, 0x00, 0x00, 0x01, 0xB4, 0x00, 0x00, 0x00, 0x00,
+                                 0x00, 0x00, 0x00, 0x24, 0x08, 0x00, 0x03, 0x03, 0xDC, 0xF9};
+    REQUIRE(bytes.size() > sizeof heartbeat);
+    CHECK(bytes.substr(0, sizeof heartbeat) == std::string(reinterpret_cast<const char*>(heartbeat), sizeof heartbeat));
+
+    const mavtest::Stream m = mavtest::decode(bytes, false);
+    REQUIRE(m.error.empty());
+    REQUIRE(m.frames.size() == 2);
+    CHECK(m.frames[1].msgid == 147);
+    CHECK(m.frames[1].seq == 1);
+    const mavtest::Battery b = mavtest::battery(m.frames[1]);
+    CHECK(b.voltages_mv[0] == 16000);  // no cells: the pack in cell 0, the others "none"
+    CHECK(b.voltages_mv[1] == 0xFFFF);
+    CHECK(b.current_consumed_mah == -1);
+    CHECK(b.energy_consumed_hj == -1);
+    CHECK(b.remaining_pct == -1);
+    CHECK(b.time_remaining_s == 0);
+    CHECK(b.temperature_cdegc == 0x7FFF);
+    CHECK(b.charge_state == telemetry::kChargeUndefined);
+    CHECK(b.function == 1);
+    CHECK(b.type == 1);
+    // Trailing zero bytes are not sent: charge_state (offset 40) is the last non-zero
+    // field that could be, and here it is 0 too, so the payload ends at remaining_pct.
+    CHECK(m.frames[1].wire_length == 36);
+}
+
+TEST_CASE("Telemetry: BATTERY_STATUS fields from a monitor status", "[telemetry]") {
+    telemetry::TelemetryConfig cfg;
+    cfg.battery_id = 2;
+    core::Sample s;
+    s.voltage_v = 15.2f;
+    s.current_a = 23.456f;
+    s.cell_count = 4;
+    const float cells[] = {3.8004f, 3.7996f, 3.8f, 3.8012f};
+    for (int c = 0; c < 4; ++c) s.cell_voltage_v[c] = cells[c];
+    s.has_temperature = true;
+    s.temperature_c = 21.5f;
+    core::MonitorStatus st;
+    st.initialised = true;
+    st.cells_valid = true;
+    st.flying = true;
+    st.consumed_mah = 812.4f;
+    st.consumed_mwh = 12000.0f;  // 12 Wh = 43.2 kJ = 432 hJ
+    st.soc = 0.4761f;
+    st.time_valid = true;
+    st.remaining_time_s = 143.4f;
+
+    telemetry::BatteryStatusFields f = telemetry::battery_status_fields(cfg, s, st);
+    CHECK(f.id == 2);
+    CHECK(f.voltages_mv[0] == 3800);
+    CHECK(f.voltages_mv[1] == 3800);  // to the nearest millivolt
+    CHECK(f.voltages_mv[2] == 3800);
+    CHECK(f.voltages_mv[3] == 3801);
+    CHECK(f.voltages_mv[4] == 0xFFFF);
+    CHECK(f.current_ca == 2346);
+    CHECK(f.temperature_cdegc == 2150);
+    CHECK(f.current_consumed_mah == 812);
+    CHECK(f.energy_consumed_hj == 432);
+    CHECK(f.remaining_pct == 48);
+    CHECK(f.time_remaining_s == 143);
+    CHECK(f.charge_state == telemetry::kChargeOk);
+    CHECK(f.fault_bitmask == 0);
+
+    SECTION("charge state from the remaining flight time") {
+        st.remaining_time_s = 59.0f;
+        CHECK(telemetry::battery_status_fields(cfg, s, st).charge_state == telemetry::kChargeLow);
+        st.remaining_time_s = 19.0f;
+        CHECK(telemetry::battery_status_fields(cfg, s, st).charge_state == telemetry::kChargeCritical);
+        st.remaining_time_s = 0.2f;  // an estimate of "none left" is not MAVLink's 0 = "no estimate"
+        CHECK(telemetry::battery_status_fields(cfg, s, st).time_remaining_s == 1);
+    }
+    SECTION("a health verdict is UNHEALTHY on the ground only; a weak cell is CELL_FAIL") {
+        st.warnings = 1u << core::kWarnShortFlight;
+        CHECK(telemetry::battery_status_fields(cfg, s, st).charge_state == telemetry::kChargeOk);
+        st.flying = false;
+        CHECK(telemetry::battery_status_fields(cfg, s, st).charge_state == telemetry::kChargeUnhealthy);
+        st.warnings = 1u << core::kWarnSensorFault;  // not the pack's health
+        CHECK(telemetry::battery_status_fields(cfg, s, st).charge_state == telemetry::kChargeOk);
+        st.warnings = 1u << core::kWarnCellOutlier;
+        CHECK(telemetry::battery_status_fields(cfg, s, st).fault_bitmask == telemetry::kFaultCellFail);
+    }
+    SECTION("cells kept out, a pack above 65.534 V, and cells 11 and 12") {
+        st.cells_valid = false;
+        CHECK(telemetry::battery_status_fields(cfg, s, st).voltages_mv[0] == 15200);
+        CHECK(telemetry::battery_status_fields(cfg, s, st).voltages_mv[1] == 0xFFFF);
+        s.voltage_v = 70.0f;
+        f = telemetry::battery_status_fields(cfg, s, st);
+        CHECK(f.voltages_mv[0] == 65534);
+        CHECK(f.voltages_mv[1] == 70000 - 65534);
+        st.cells_valid = true;
+        s.cell_count = 12;
+        for (int c = 0; c < 12; ++c) s.cell_voltage_v[c] = 3.5f + 0.01f * static_cast<float>(c);
+        f = telemetry::battery_status_fields(cfg, s, st);
+        CHECK(f.voltages_mv[9] == 3590);
+        CHECK(f.voltages_ext_mv[0] == 3600);
+        CHECK(f.voltages_ext_mv[1] == 3610);
+        CHECK(f.voltages_ext_mv[2] == 0);
+    }
+    SECTION("the wire layout, read back by the separate decoder") {
+        uint8_t payload[telemetry::kBatteryStatusLength];
+        f.fault_bitmask = 0x01020304u;
+        f.voltages_ext_mv[3] = 4321;
+        telemetry::pack_battery_status(f, payload);
+        telemetry::MavlinkFramer framer;
+        framer.configure(9, 181);
+        uint8_t frame[telemetry::kMaxFrameBytes];
+        const size_t n = framer.frame(telemetry::kBatteryStatusId, telemetry::kBatteryStatusCrcExtra, payload,
+                                      telemetry::kBatteryStatusLength, frame);
+        CHECK(n == telemetry::kMaxFrameBytes);  // nothing trailing to drop
+        const mavtest::Stream m = mavtest::decode(std::string(reinterpret_cast<const char*>(frame), n), false);
+        REQUIRE(m.error.empty());
+        REQUIRE(m.frames.size() == 1);
+        CHECK(m.frames[0].sysid == 9);
+        CHECK(m.frames[0].compid == 181);
+        const mavtest::Battery b = mavtest::battery(m.frames[0]);
+        CHECK(b.current_consumed_mah == 812);
+        CHECK(b.energy_consumed_hj == 432);
+        CHECK(b.temperature_cdegc == 2150);
+        CHECK(b.voltages_mv[3] == 3801);
+        CHECK(b.current_ca == 2346);
+        CHECK(b.id == 2);
+        CHECK(b.remaining_pct == 48);
+        CHECK(b.time_remaining_s == 143);
+        CHECK(b.charge_state == telemetry::kChargeOk);
+        CHECK(b.voltages_ext_mv[3] == 4321);
+        CHECK(b.fault_bitmask == 0x01020304u);
+    }
+}
+
+TEST_CASE("Telemetry: one heartbeat and battery status per interval of the samples' time", "[telemetry]") {
+    telemetry::MavlinkTelemetry t;
+    t.configure(telemetry::TelemetryConfig{}, rated_4s());
+    core::Sample s;
+    s.voltage_v = 16.0f;
+    core::MonitorStatus st;
+    std::string all;
+    // 10 Hz for 3.05 s: sends at 0, 1, 2 and 3 s.
+    for (int k = 0; k <= 30; ++k) {
+        st.time_us = 5000000u + 100000u * static_cast<uint64_t>(k) + 500u;
+        all += run(t, s, st);
+    }
+    // A 10 s gap: one pair, not ten.
+    st.time_us += 10000000u;
+    all += run(t, s, st);
+    st.time_us += 100000u;
+    all += run(t, s, st);
+    const mavtest::Stream m = mavtest::decode(all, false);
+    REQUIRE(m.error.empty());
+    REQUIRE(m.frames.size() == 10);
+    for (size_t i = 0; i < m.frames.size(); ++i) {
+        CHECK(m.frames[i].seq == i);
+        CHECK(m.frames[i].msgid == (i % 2 == 0 ? 0u : 147u));
+    }
+}
+
+TEST_CASE("Telemetry: each warning is texted once, the short flight with its cause", "[telemetry]") {
+    telemetry::MavlinkTelemetry t;
+    t.configure(telemetry::TelemetryConfig{}, rated_4s());
+    core::Sample s;
+    core::MonitorStatus st;
+    st.time_us = 1;
+    run(t, s, st);  // the first pair
+    st.time_us = 2;
+    CHECK(run(t, s, st).empty());
+
+    // The joint estimator raises short flight and its cause in the same update.
+    st.warnings_raised = st.warnings = (1u << core::kWarnShortFlight) | (1u << core::kWarnLowCapacity);
+    st.short_flight_cause = core::JointEstimator::kCauseCapacity;
+    st.expected_time_s = 300.0f;
+    st.total_time_s = 222.0f;  // 26 % short
+    st.capacity_ah = 1.05f;    // 67.7 % of 1.55 Ah
+    st.resistance_ohm = 0.041f;
+    mavtest::Stream m = mavtest::decode(run(t, s, st), false);
+    REQUIRE(m.error.empty());
+    REQUIRE(m.frames.size() == 1);
+    uint8_t severity = 0;
+    CHECK(mavtest::text(m.frames[0], &severity) == "battsim: flight 26% short, capacity 68%");
+    CHECK(severity == telemetry::kMavSeverityWarning);
+    CHECK(run(t, s, st).empty());  // once
+
+    // Later the resistance joins the cause, and a cell is named: their own texts.
+    st.warnings_raised |= (1u << core::kWarnHighResistance) | (1u << core::kWarnCellOutlier);
+    st.outlier_cell = 2;
+    st.cell_finding = core::CellAnalyzer::kHighResistance;
+    m = mavtest::decode(run(t, s, st), false);
+    REQUIRE(m.frames.size() == 2);
+    CHECK(mavtest::text(m.frames[0]) == "battsim: high resistance 41 mOhm (205%)");
+    CHECK(mavtest::text(m.frames[1]) == "battsim: cell 3 weak: high resistance");
+}
+
+TEST_CASE("Telemetry: the warnings' sentences, by hand", "[telemetry]") {
+    char text[telemetry::kStatusTextChars + 1];
+    core::MonitorStatus st;
+    st.capacity_ah = 1.05f;
+    st.resistance_ohm = 0.0336f;
+    CHECK(std::string(text, telemetry::warning_text(core::kWarnLowCapacity, 1.55f, 0.02f, st, text)) ==
+          "battsim: low capacity 1.05 Ah (68% of rated)");
+    CHECK(std::string(text) == "battsim: low capacity 1.05 Ah (68% of rated)");
+    st.capacity_ah = 0.999f;  // 1.00 Ah: the hundredths carried
+    telemetry::warning_text(core::kWarnLowCapacity, 1.55f, 0.02f, st, text);
+    CHECK(std::string(text) == "battsim: low capacity 1.00 Ah (64% of rated)");
+    telemetry::warning_text(core::kWarnHighResistance, 1.55f, 0.02f, st, text);
+    CHECK(std::string(text) == "battsim: high resistance 34 mOhm (168%)");
+    telemetry::warning_text(core::kWarnSensorFault, 1.55f, 0.02f, st, text);
+    CHECK(std::string(text) == "battsim: sensor fault, readings kept out");
+    st.outlier_cell = 0;
+    st.cell_finding = core::CellAnalyzer::kNone;  // the reference estimator's Piao score
+    telemetry::warning_text(core::kWarnCellOutlier, 1.55f, 0.02f, st, text);
+    CHECK(std::string(text) == "battsim: cell 1 differs from the others");
+    st.short_flight_cause = core::JointEstimator::kCauseCapacity | core::JointEstimator::kCauseResistance;
+    st.expected_time_s = 300.0f;
+    st.total_time_s = 100.0f;
+    st.capacity_ah = 100.0f;  // absurd on purpose: the sentence stays within 50 characters
+    st.resistance_ohm = 10.0f;
+    const size_t n = telemetry::warning_text(core::kWarnShortFlight, 1.55f, 0.02f, st, text);
+    CHECK(n == telemetry::kStatusTextChars);
+    CHECK(std::string(text) == std::string("battsim: flight 67% short, capacity 6452%, R 50000").substr(0, 50));
+}
