@@ -20,6 +20,8 @@ import subprocess
 import sys
 import tempfile
 
+from mavlink_stream import BATTERY_STATUS, frames, text
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BATTSIM = os.path.join(ROOT, "build", "battsim")
 DATA = os.environ.get("BATTSIM_DATA_DIR", os.path.join(ROOT, "..", "shared", "data"))
@@ -44,32 +46,14 @@ createMavLinkStream(createReadStream(process.argv[2]))
   .on('end', () => console.log(JSON.stringify(out)))
 """
 
-CRC_EXTRA = {0: 50, 147: 154, 253: 83}
-FULL_LENGTH = {0: 9, 147: 54, 253: 54}
-
-
-def crc(data, c=0xFFFF):
-    for b in data:
-        c ^= b
-        for _ in range(8):
-            c = (c >> 1) ^ 0x8408 if c & 1 else c >> 1
-    return c
-
-
 def own_reading(data):
     out = {"ids": {}, "battery": [], "texts": []}
-    i = 0
-    while i < len(data):
-        n, msgid = data[i + 1], data[i + 7] | data[i + 8] << 8 | data[i + 9] << 16
-        if data[i] != 0xFD or crc(data[i + 1:i + 10 + n] + bytes([CRC_EXTRA[msgid]])) != struct.unpack_from("<H", data, i + 10 + n)[0]:
-            raise ValueError("bad frame at byte %d" % i)
-        p = data[i + 10:i + 10 + n] + bytes(FULL_LENGTH[msgid] - n)
+    for _, msgid, p in frames(data):
         out["ids"][str(msgid)] = out["ids"].get(str(msgid), 0) + 1
         if msgid == 147:
-            out["battery"].append(list(struct.unpack_from("<iih10HhBBBbiB4HBI", p)))
+            out["battery"].append(list(struct.unpack_from(BATTERY_STATUS, p)))
         if msgid == 253:
-            out["texts"].append([p[0], p[1:51].split(b"\0")[0].decode()])
-        i += 12 + n
+            out["texts"].append([p[0], text(p)])
     return out
 
 

@@ -20,37 +20,12 @@ import subprocess
 import sys
 import tempfile
 
+from mavlink_stream import frames, text as status_text
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BATTSIM = os.path.join(ROOT, "build", "battsim")
 DATA = os.environ.get("BATTSIM_DATA_DIR", os.path.join(ROOT, "..", "shared", "data"))
-CRC_EXTRA = {0: 50, 147: 154, 253: 83}
-FULL_LENGTH = {0: 9, 147: 54, 253: 54}
 CHARGE = {0: "undefined", 1: "ok", 2: "low", 3: "critical", 6: "unhealthy"}
-
-
-def crc(data, c=0xFFFF):
-    for b in data:
-        c ^= b
-        for _ in range(8):
-            c = (c >> 1) ^ 0x8408 if c & 1 else c >> 1
-    return c
-
-
-def frames(tlog):
-    """(time_s, msgid, payload zero-filled) for every frame; raises on a bad one."""
-    out, i = [], 0
-    while i < len(tlog):
-        t = struct.unpack_from(">Q", tlog, i)[0] * 1e-6
-        i += 8
-        if tlog[i] != 0xFD:
-            raise ValueError("no frame at byte %d" % i)
-        n = tlog[i + 1]
-        msgid = tlog[i + 7] | tlog[i + 8] << 8 | tlog[i + 9] << 16
-        if crc(tlog[i + 1:i + 10 + n] + bytes([CRC_EXTRA[msgid]])) != struct.unpack_from("<H", tlog, i + 10 + n)[0]:
-            raise ValueError("bad checksum at byte %d" % i)
-        out.append((t, msgid, tlog[i + 10:i + 10 + n] + bytes(FULL_LENGTH[msgid] - n)))
-        i += 12 + n
-    return out
 
 
 def check(log, config, tmp):
@@ -61,14 +36,14 @@ def check(log, config, tmp):
         return "%s: replay failed: %s" % (os.path.basename(log), r.stderr.strip())
     summary = json.loads(r.stdout)
     data = open(tlog, "rb").read()
-    fr = frames(data)
+    fr = frames(data, tlog=True)
     span = fr[-1][0] - fr[0][0] if len(fr) > 1 else 1.0
     start = (summary.get("flight") or {}).get("start_s")
     lines = ["%s: %d frames, %.0f B/s on the wire" % (os.path.basename(log), len(fr), (len(data) - 8 * len(fr)) / span)]
     warned = {w["name"]: w for w in summary.get("warnings", [])}
     for t, msgid, p in fr:
         if msgid == 253:
-            text = p[1:51].split(b"\0")[0].decode()
+            text = status_text(p)
             at = "flight %.1f s" % (t - start) if start is not None and t >= start else "log %.1f s (on the ground)" % t
             lines.append("  %s  \"%s\"" % (at, text))
     batt = [p for t, m, p in fr if m == 147][-1]

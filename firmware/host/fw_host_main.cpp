@@ -184,24 +184,19 @@ int main(int argc, char** argv) {
         std::cerr << "battsim_fw_host: writing the SD log under " << a.sd << " failed\n";
         rc = kExitOutputError;
     }
-    if (!a.uart.empty()) {
-        std::ofstream out(a.uart, std::ios::binary | std::ios::trunc);
-        out << serial.output();
+    // What a serial port sent, to the file named by an option (none: not asked for).
+    auto write_port = [&rc](const std::string& path, const std::string& bytes) {
+        if (path.empty()) return;
+        std::ofstream out(path, std::ios::binary | std::ios::trunc);
+        out << bytes;
         out.close();
         if (!out) {
-            std::cerr << "battsim_fw_host: cannot write " << a.uart << "\n";
+            std::cerr << "battsim_fw_host: cannot write " << path << "\n";
             rc = kExitOutputError;
         }
-    }
-    if (!a.mavlink.empty()) {
-        std::ofstream out(a.mavlink, std::ios::binary | std::ios::trunc);
-        out << telemetry.output();
-        out.close();
-        if (!out) {
-            std::cerr << "battsim_fw_host: cannot write " << a.mavlink << "\n";
-            rc = kExitOutputError;
-        }
-    }
+    };
+    write_port(a.uart, serial.output());
+    write_port(a.mavlink, telemetry.output());
     if (display.write_failed()) {
         std::cerr << "battsim_fw_host: cannot write " << a.oled << "\n";
         rc = kExitOutputError;
