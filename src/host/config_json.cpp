@@ -290,6 +290,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("interval_s", t.interval_s, 0.05, 3600);
         r.number("low_time_s", t.low_time_s, 0, 36000);
         r.number("critical_time_s", t.critical_time_s, 0, 36000);
+        r.number("text_repeat_s", t.text_repeat_s, 0, 36000);
         if (t.critical_time_s > t.low_time_s)
             r.fail(r.child("critical_time_s"), "expected at most low_time_s (" + json(t.low_time_s).dump() + ")");
     }
@@ -438,9 +439,11 @@ json config_to_json(const LoadedConfig& c) {
     const telemetry::TelemetryConfig& t = c.telemetry;
     const telemetry::TelemetryConfig d;
     if (t.system_id != d.system_id || t.component_id != d.component_id || t.battery_id != d.battery_id ||
-        t.interval_s != d.interval_s || t.low_time_s != d.low_time_s || t.critical_time_s != d.critical_time_s) {
+        t.interval_s != d.interval_s || t.low_time_s != d.low_time_s || t.critical_time_s != d.critical_time_s ||
+        t.text_repeat_s != d.text_repeat_s) {
         j["telemetry"] = {{"system_id", t.system_id},   {"component_id", t.component_id}, {"battery_id", t.battery_id},
-                          {"interval_s", t.interval_s}, {"low_time_s", t.low_time_s},     {"critical_time_s", t.critical_time_s}};
+                          {"interval_s", t.interval_s}, {"low_time_s", t.low_time_s},     {"critical_time_s", t.critical_time_s},
+                          {"text_repeat_s", t.text_repeat_s}};
     }
     shorten_floats(j);
     return j;

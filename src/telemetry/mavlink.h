@@ -98,6 +98,7 @@ struct TelemetryConfig {
     float interval_s = 1.0f;                   // HEARTBEAT and BATTERY_STATUS period
     float low_time_s = 60.0f;                  // charge_state LOW below this remaining flight time
     float critical_time_s = 20.0f;             // CRITICAL below this
+    float text_repeat_s = 30.0f;               // in flight, a warning still active is texted again after this (0: once)
 };
 
 // The monitor's status in BATTERY_STATUS terms (docs/telemetry.md gives each field's source).
@@ -113,7 +114,8 @@ size_t warning_text(core::Warning w, float rated_capacity_ah, float rated_resist
 
 // What goes out after each monitor update: HEARTBEAT and BATTERY_STATUS every interval
 // of the samples' own time (the first sample sends at once), and a STATUSTEXT at severity
-// WARNING the first time each warning is raised.
+// WARNING when a warning is first raised, and in flight again every text_repeat_s while it
+// stays active (a telemetry link loses frames, and in the air this is the only word of a verdict).
 class MavlinkTelemetry {
 public:
     static constexpr size_t kMaxBytesPerUpdate = (2 + core::kWarnCount) * kMaxFrameBytes;
@@ -131,7 +133,9 @@ private:
     uint64_t interval_us_ = 1000000u;
     uint64_t next_us_ = 0;
     bool started_ = false;
+    uint64_t repeat_us_ = 0;
     uint8_t announced_ = 0;  // warnings already sent as text (bit per core::Warning)
+    uint64_t texted_us_[core::kWarnCount] = {};  // when each was last sent
 };
 
 }  // namespace telemetry

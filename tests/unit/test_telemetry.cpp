@@ -208,9 +208,11 @@ TEST_CASE("Telemetry: one heartbeat and battery status per interval of the sampl
     }
 }
 
-TEST_CASE("Telemetry: each warning is texted once, the short flight with its cause", "[telemetry]") {
+TEST_CASE("Telemetry: a warning is texted when raised and again while active, the short flight with its cause", "[telemetry]") {
     telemetry::MavlinkTelemetry t;
-    t.configure(telemetry::TelemetryConfig{}, rated_4s());
+    telemetry::TelemetryConfig cfg;
+    cfg.interval_s = 1000.0f;  // no battery status in the way after the first
+    t.configure(cfg, rated_4s());
     core::Sample s;
     core::MonitorStatus st;
     st.time_us = 1;
@@ -231,16 +233,62 @@ TEST_CASE("Telemetry: each warning is texted once, the short flight with its cau
     uint8_t severity = 0;
     CHECK(mavtest::text(m.frames[0], &severity) == "battsim: flight 26% short, capacity 68%");
     CHECK(severity == telemetry::kMavSeverityWarning);
-    CHECK(run(t, s, st).empty());  // once
+    CHECK(run(t, s, st).empty());  // not again at once
 
     // Later the resistance joins the cause, and a cell is named: their own texts.
     st.warnings_raised |= (1u << core::kWarnHighResistance) | (1u << core::kWarnCellOutlier);
     st.outlier_cell = 2;
     st.cell_finding = core::CellAnalyzer::kHighResistance;
+    st.time_us = 3;
     m = mavtest::decode(run(t, s, st), false);
     REQUIRE(m.frames.size() == 2);
     CHECK(mavtest::text(m.frames[0]) == "battsim: high resistance 41 mOhm (205%)");
     CHECK(mavtest::text(m.frames[1]) == "battsim: cell 3 weak: high resistance");
+
+    // 30 s after its first text the short flight is said again, now with both causes,
+    // which have no repeat of their own; the cell 30 s after its own first text.
+    st.warnings = st.warnings_raised;
+    st.flying = true;
+    st.short_flight_cause = core::JointEstimator::kCauseCapacity | core::JointEstimator::kCauseResistance;
+    st.time_us = 2 + 30000000u - 1;
+    CHECK(run(t, s, st).empty());
+    st.time_us = 2 + 30000000u;
+    m = mavtest::decode(run(t, s, st), false);
+    REQUIRE(m.frames.size() == 1);
+    CHECK(mavtest::text(m.frames[0]) == "battsim: flight 26% short, capacity 68%, R 205%");
+    st.time_us = 3 + 30000000u;
+    m = mavtest::decode(run(t, s, st), false);
+    REQUIRE(m.frames.size() == 1);
+    CHECK(mavtest::text(m.frames[0]) == "battsim: cell 3 weak: high resistance");
+    // A warning no longer active is not repeated.
+    st.warnings = 1u << core::kWarnCellOutlier;
+    st.time_us = 3 + 60000000u;
+    m = mavtest::decode(run(t, s, st), false);
+    REQUIRE(m.frames.size() == 1);
+    CHECK(mavtest::text(m.frames[0]) == "battsim: cell 3 weak: high resistance");
+    // Landed: the charge state says it from now on, the text is not repeated.
+    st.flying = false;
+    st.time_us = 3 + 90000000u;
+    CHECK(run(t, s, st).empty());
+}
+
+TEST_CASE("Telemetry: text_repeat_s 0 texts each warning once", "[telemetry]") {
+    telemetry::MavlinkTelemetry t;
+    telemetry::TelemetryConfig cfg;
+    cfg.interval_s = 1000.0f;
+    cfg.text_repeat_s = 0.0f;
+    t.configure(cfg, rated_4s());
+    core::Sample s;
+    core::MonitorStatus st;
+    run(t, s, st);
+    st.warnings_raised = st.warnings = 1u << core::kWarnSensorFault;
+    st.flying = true;
+    int texts = 0;
+    for (int k = 1; k <= 400; ++k) {
+        st.time_us = 1000000u * static_cast<uint64_t>(k);
+        texts += static_cast<int>(mavtest::decode(run(t, s, st), false).frames.size());
+    }
+    CHECK(texts == 1);
 }
 
 TEST_CASE("Telemetry: the warnings' sentences, by hand", "[telemetry]") {
