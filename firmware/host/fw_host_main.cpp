@@ -1,7 +1,8 @@
 // battsim_fw_host: runs the firmware application on the host against the mocks, fed by a
 // raw predictive-bms log at the log's own timing. The monitor writes what the device
 // would: the SD card's series CSV (and averages file) under --sd DIR, the UART bytes to
-// --uart FILE, the OLED frames to --oled FILE, the telemetry UART's MAVLink to --mavlink FILE.
+// --uart FILE, the OLED frames to --oled FILE, the telemetry UART's MAVLink to --mavlink FILE,
+// the buzzer's switchings to --buzzer FILE.
 #include <sys/stat.h>
 
 #include <cstdio>
@@ -32,6 +33,7 @@ const char* kUsage =
     "  --uart FILE               write the device's UART output here\n"
     "  --oled FILE               write every OLED frame here as text\n"
     "  --mavlink FILE            write the telemetry UART's MAVLink bytes here (monitor)\n"
+    "  --buzzer FILE             write the buzzer's switchings here as time_s,on (monitor)\n"
     "  --no-hello                do not greet the device: it then only prompts \"BMS\"\n"
     "  --no-sd-output, --no-uart-output, --no-oled-output   switch an output off\n"
     "  --forget-averages         neither read nor write the averages file on the card\n";
@@ -43,6 +45,7 @@ struct Args {
     std::string uart;
     std::string oled;
     std::string mavlink;
+    std::string buzzer;
     bool hello = true;
     bool sd_out = true;
     bool uart_out = true;
@@ -71,6 +74,8 @@ bool parse_args(int argc, char** argv, Args& a) {
             if (!value(a.oled)) return false;
         } else if (s == "--mavlink") {
             if (!value(a.mavlink)) return false;
+        } else if (s == "--buzzer") {
+            if (!value(a.buzzer)) return false;
         } else if (s == "--no-hello") {
             a.hello = false;
         } else if (s == "--no-sd-output") {
@@ -130,6 +135,7 @@ int main(int argc, char** argv) {
     host::TextDisplay display(clock, a.oled);
     host::ScriptedSerial serial;
     host::ScriptedSerial telemetry;  // transmit only, as the device's second UART
+    host::RecordingBuzzer buzzer(clock);
     // The host's greeting arrives before the first reading, as when `battsim log` is
     // already waiting when the device boots.
     if (a.hello) serial.feed("hello\n");
@@ -149,6 +155,7 @@ int main(int argc, char** argv) {
         cfg.telemetry = battsim_generated::telemetry_config();
         cfg.outputs.mavlink = !a.mavlink.empty();
         app.attach_telemetry(telemetry);
+        if (!a.buzzer.empty()) app.attach_buzzer(buzzer);
         app.begin(cfg);
         while (!sensors.finished()) {
             if (app.step() == MonitorApp::Step::Sample) ++samples;
@@ -184,7 +191,7 @@ int main(int argc, char** argv) {
         std::cerr << "battsim_fw_host: writing the SD log under " << a.sd << " failed\n";
         rc = kExitOutputError;
     }
-    // What a serial port sent, to the file named by an option (none: not asked for).
+    // What a port sent, to the file named by an option (none: not asked for).
     auto write_port = [&rc](const std::string& path, const std::string& bytes) {
         if (path.empty()) return;
         std::ofstream out(path, std::ios::binary | std::ios::trunc);
@@ -197,6 +204,7 @@ int main(int argc, char** argv) {
     };
     write_port(a.uart, serial.output());
     write_port(a.mavlink, telemetry.output());
+    write_port(a.buzzer, buzzer.record());
     if (display.write_failed()) {
         std::cerr << "battsim_fw_host: cannot write " << a.oled << "\n";
         rc = kExitOutputError;

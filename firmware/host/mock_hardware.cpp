@@ -260,6 +260,12 @@ void TextDisplay::show() {
     if (!out_) write_failed_ = true;
 }
 
+void RecordingBuzzer::set(bool on) {
+    char line[48];
+    std::snprintf(line, sizeof line, "%.3f,%d\n", static_cast<double>(clock_.now_us()) * 1e-6, on ? 1 : 0);
+    record_ += line;
+}
+
 int ScriptedSerial::read_byte() {
     if (read_pos_ >= input_.size()) return -1;
     return static_cast<unsigned char>(input_[read_pos_++]);

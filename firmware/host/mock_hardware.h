@@ -130,6 +130,18 @@ private:
 };
 
 // Bytes the host "sends" are queued with feed(); what the device writes collects in output().
+// Keeps the buzzer's switchings with the mock clock's time: "time_s,on" lines.
+class RecordingBuzzer : public Buzzer {
+public:
+    explicit RecordingBuzzer(const MockClock& clock) : clock_(clock) {}
+    void set(bool on) override;
+    const std::string& record() const { return record_; }
+
+private:
+    const MockClock& clock_;
+    std::string record_ = "time_s,on\n";
+};
+
 class ScriptedSerial : public SerialPort {
 public:
     void feed(const std::string& bytes) { input_ += bytes; }

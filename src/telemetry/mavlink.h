@@ -105,8 +105,9 @@ struct TelemetryConfig {
 BatteryStatusFields battery_status_fields(const TelemetryConfig& config, const core::Sample& sample,
                                           const core::MonitorStatus& status);
 
-// The sentence a ground station shows and speaks when warning `w` is first raised
-// (NUL-terminated, at most kStatusTextChars characters); returns its length.
+// The sentence a ground station shows and speaks when warning `w` is raised, written to
+// `text` (room for kStatusTextChars + 1: at most that many characters and a NUL); returns
+// its length.
 // The rated capacity and resistance are the config's (`battery`), against which the
 // monitor judged the pack.
 size_t warning_text(core::Warning w, float rated_capacity_ah, float rated_resistance_ohm,

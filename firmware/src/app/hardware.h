@@ -80,6 +80,15 @@ protected:
 constexpr uint8_t kDisplayColumns = 21;
 constexpr uint8_t kDisplayRows = 6;
 
+// An active buzzer on a GPIO (through a transistor): on or off until told otherwise.
+class Buzzer {
+public:
+    virtual void set(bool on) = 0;
+
+protected:
+    ~Buzzer() = default;
+};
+
 class SerialPort {
 public:
     virtual int read_byte() = 0;  // −1 when nothing is waiting

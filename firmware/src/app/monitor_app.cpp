@@ -73,6 +73,10 @@ void MonitorApp::begin(const MonitorAppConfig& config) {
     monitor_.configure(mc);
     current_average_.configure(mc.current_average);
     telemetry_.configure(config.telemetry, mc);
+    beeper_.configure(BeeperConfig{config.telemetry.low_time_s, config.telemetry.critical_time_s,
+                                   config.telemetry.text_repeat_s});
+    buzzing_ = false;
+    if (buzzer_ != nullptr) buzzer_->set(false);
     sample_ = core::Sample{};
     series_cells_ = series_cells_for(mc.cells_in_series);
     format_series_header(series_cells_, header_);
@@ -146,6 +150,12 @@ void MonitorApp::write_outputs() {
         uint8_t frames[telemetry::MavlinkTelemetry::kMaxBytesPerUpdate];
         const size_t n = telemetry_.update(sample_, s, frames);
         if (n > 0) telemetry_port_->write(reinterpret_cast<const char*>(frames), n);
+    }
+    if (buzzer_ != nullptr) {
+        // The beeper follows every sample, so switching it back on resumes in step.
+        const bool on = beeper_.update(s) && state_.outputs.buzzer;
+        if (on != buzzing_) buzzer_->set(on);
+        buzzing_ = on;
     }
     const uint32_t now_ms = clock_.millis();
     if (state_.outputs.sd && state_.sd_ok) {
@@ -221,12 +231,17 @@ void MonitorApp::handle_command(const char* cmd) {
         if (strcmp(what, "sd") == 0) target = &state_.outputs.sd;
         if (strcmp(what, "oled") == 0) target = &state_.outputs.display;
         if (strcmp(what, "mavlink") == 0) target = &state_.outputs.mavlink;
+        if (strcmp(what, "buzzer") == 0) target = &state_.outputs.buzzer;
         if (target != nullptr && parse_switch(how, on)) {
             const bool uart_turned_on = target == &state_.outputs.uart && on && !*target;
             *target = on;
             if (uart_turned_on && link_.connected()) link_.send_data(header_.c_str(), header_.size());
             if (target == &state_.outputs.sd && !on) sync_storage();
             if (target == &state_.outputs.sd && on && card_ok_ && !log_opened_) open_sd_log();
+            if (target == &state_.outputs.buzzer && !on && buzzer_ != nullptr && buzzing_) {
+                buzzer_->set(false);
+                buzzing_ = false;
+            }
             if (target == &state_.outputs.display && !on && state_.display_ok) {
                 display_.clear();
                 display_.show();
@@ -241,7 +256,7 @@ void MonitorApp::handle_command(const char* cmd) {
         link_.send_note(save_averages() ? "averages saved" : "averages not saved (no card or no flight yet)");
         return;
     }
-    link_.send_note("unknown command; try: status, save, out uart|sd|oled|mavlink on|off");
+    link_.send_note("unknown command; try: status, save, out uart|sd|oled|mavlink|buzzer on|off");
 }
 
 void MonitorApp::send_status_note() {
@@ -264,6 +279,7 @@ void MonitorApp::send_status_note() {
     t.append(state_.outputs.sd ? "sd," : "");
     t.append(state_.outputs.display ? "oled" : "");
     if (state_.outputs.mavlink && telemetry_port_ != nullptr) t.append(state_.outputs.display ? ",mavlink" : "mavlink");
+    if (state_.outputs.buzzer && buzzer_ != nullptr) t.append(",buzzer");
     link_.send_note(t.c_str());
 }
 

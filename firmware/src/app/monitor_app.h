@@ -1,10 +1,11 @@
 // The monitor program: every INA226 reading goes through core::Monitor, and its status
 // goes to the UART (series lines after a host's hello), to a series CSV on the SD card
-// to the OLED and, as MAVLink, to a second (telemetry) UART, each switchable. Landing saves the long-term current and power
+// to the OLED, as MAVLink to a second (telemetry) UART and as beeps to a buzzer, each switchable. Landing saves the long-term current and power
 // averages to the card; the next boot starts its rolling averages from them.
 #pragma once
 #include <stdint.h>
 
+#include "app/beeper.h"
 #include "app/hardware.h"
 #include "app/line_link.h"
 #include "app/reading_loop.h"
@@ -23,6 +24,7 @@ struct Outputs {
     bool sd = true;
     bool display = true;
     bool mavlink = true;  // only with a telemetry port attached
+    bool buzzer = true;   // only with a buzzer attached
 };
 
 struct MonitorAppConfig {
@@ -59,6 +61,8 @@ public:
     // The UART the MAVLink telemetry goes to (to an autopilot's or a telemetry radio's
     // serial port); before begin(). Without it there is no MAVLink output.
     void attach_telemetry(SerialPort& port) { telemetry_port_ = &port; }
+    // The buzzer (app/beeper.h; thresholds from the config's telemetry section); before begin().
+    void attach_buzzer(Buzzer& buzzer) { buzzer_ = &buzzer; }
     void begin(const MonitorAppConfig& config);
     // One pass of the loop: serial input, wait for a conversion, estimate, outputs.
     Step step();
@@ -92,6 +96,9 @@ private:
     Display& display_;
     LineLink link_;
     SerialPort* telemetry_port_ = nullptr;
+    Buzzer* buzzer_ = nullptr;
+    Beeper beeper_;
+    bool buzzing_ = false;
     ReadingLoop readings_;
     MonitorAppConfig config_;
     MonitorAppState state_;

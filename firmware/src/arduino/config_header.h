@@ -18,6 +18,9 @@
 #ifndef BATTSIM_OLED_OUT
 #define BATTSIM_OLED_OUT 1
 #endif
+#ifndef BATTSIM_BUZZER_OUT
+#define BATTSIM_BUZZER_OUT 1
+#endif
 #ifndef BATTSIM_MAVLINK_OUT
 #define BATTSIM_MAVLINK_OUT 1
 #endif

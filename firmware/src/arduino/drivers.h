@@ -90,6 +90,20 @@ public:
     }
 };
 
+// An active 3.3 V buzzer on D0 (GPIO16) through an NPN transistor (the pin gives 12 mA at
+// most). GPIO16 has no role at boot, unlike D3/D4/D8.
+class GpioBuzzer : public Buzzer {
+public:
+    void begin() {
+        pinMode(kBuzzerPin, OUTPUT);
+        digitalWrite(kBuzzerPin, LOW);
+    }
+    void set(bool on) override { digitalWrite(kBuzzerPin, on ? HIGH : LOW); }
+
+private:
+    static constexpr uint8_t kBuzzerPin = D0;
+};
+
 // Wi-Fi off: it is not used, and its current spikes show up on the shunt.
 void radio_off();
 

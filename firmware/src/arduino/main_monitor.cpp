@@ -14,6 +14,7 @@ battsim::fw::SdStorage g_storage;
 battsim::fw::OledDisplay g_display;
 battsim::fw::UartPort g_serial;
 battsim::fw::TelemetryUartPort g_telemetry;
+battsim::fw::GpioBuzzer g_buzzer;
 // Static, not on the stack: the app holds the whole core::Monitor (~3 KiB).
 battsim::fw::MonitorApp g_app(g_sensors, g_clock, g_storage, g_display, g_serial);
 
@@ -29,8 +30,11 @@ void setup() {
     config.outputs.sd = BATTSIM_SD_OUT != 0;
     config.outputs.display = BATTSIM_OLED_OUT != 0;
     config.outputs.mavlink = BATTSIM_MAVLINK_OUT != 0;
+    config.outputs.buzzer = BATTSIM_BUZZER_OUT != 0;
     config.telemetry = battsim_generated::telemetry_config();
     g_app.attach_telemetry(g_telemetry);
+    g_buzzer.begin();
+    g_app.attach_buzzer(g_buzzer);
     g_app.begin(config);
 }
 

@@ -1,0 +1,46 @@
+// The buzzer: a LiPo alarm that knows what the monitor knows. FPV pilots fly with a
+// balance-lead voltage alarm; this one also beeps a verdict the voltage cannot give yet.
+//
+// In flight, below the remaining-flight-time thresholds: a chirp every 2 s (LOW), fast
+// beeping (CRITICAL). When a warning is raised, long beeps: three for a short flight (or,
+// with the reference estimator, low capacity or high resistance), two for a weak cell, one
+// for a sensor fault; again every repeat_s while it stays active in flight. Time is the
+// samples' own, so the pattern is the same on the device and on the host.
+#pragma once
+#include <stdint.h>
+
+#include "core/monitor.h"
+
+namespace battsim {
+namespace fw {
+
+struct BeeperConfig {
+    float low_time_s = 60.0f;       // a chirp every 2 s in flight below this remaining flight time
+    float critical_time_s = 20.0f;  // fast beeping in flight below this
+    float repeat_s = 30.0f;         // a warning still active in flight is beeped again after this (0: once)
+};
+
+class Beeper {
+public:
+    static constexpr uint32_t kLongOnMs = 400;   // a long beep
+    static constexpr uint32_t kLongGapMs = 500;  // between long beeps (and after the last): longer than the logger's 0.35 s gaps
+    static constexpr uint32_t kChirpOnMs = 100, kChirpPeriodMs = 2000;  // LOW
+    static constexpr uint32_t kFastOnMs = 200, kFastPeriodMs = 400;     // CRITICAL
+
+    void configure(const BeeperConfig& config);
+    // After each monitor update: whether the buzzer sounds until the next sample.
+    bool update(const core::MonitorStatus& status);
+    // Long beeps announcing warning `w`.
+    static int long_beeps(core::Warning w);
+
+private:
+    BeeperConfig config_;
+    uint8_t announced_ = 0;  // warnings raised so far (bit per core::Warning)
+    uint8_t pending_ = 0;    // warnings waiting for their pattern
+    uint64_t beeped_us_[core::kWarnCount] = {};
+    uint64_t pattern_start_us_ = 0;
+    int pattern_beeps_ = 0;  // long beeps of the pattern under way (0: none)
+};
+
+}  // namespace fw
+}  // namespace battsim

@@ -1,0 +1,121 @@
+// The buzzer's patterns (firmware/src/app/beeper.h), on statuses made by hand at 10 ms
+// steps, and on a simulated flight through the firmware build (battsim_fw_host --buzzer).
+#include <catch2/catch.hpp>
+
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "app/beeper.h"
+#include "core/estimate/joint_estimator.h"
+#include "test_firmware_support.h"
+
+using namespace battsim;
+
+namespace {
+
+// The beeps (start, length in ms) while `status` is held from `from_ms` to `to_ms`.
+using Beeps = std::vector<std::pair<long, long>>;
+Beeps listen(fw::Beeper& b, core::MonitorStatus& status, long from_ms, long to_ms) {
+    Beeps out;
+    long on_since = -1;
+    for (long t = from_ms; t < to_ms; t += 10) {
+        status.time_us = static_cast<uint64_t>(t) * 1000u;
+        const bool on = b.update(status);
+        if (on && on_since < 0) on_since = t;
+        if (!on && on_since >= 0) {
+            out.emplace_back(on_since, t - on_since);
+            on_since = -1;
+        }
+    }
+    if (on_since >= 0) out.emplace_back(on_since, to_ms - on_since);
+    return out;
+}
+
+core::MonitorStatus flying_status() {
+    core::MonitorStatus s;
+    s.initialised = true;
+    s.flying = true;
+    s.time_valid = true;
+    s.remaining_time_s = 200.0f;
+    return s;
+}
+
+}  // namespace
+
+TEST_CASE("Beeper: silent on a healthy flight; chirps when LOW, fast when CRITICAL", "[firmware][beeper]") {
+    fw::Beeper b;
+    b.configure(fw::BeeperConfig{});
+    core::MonitorStatus s = flying_status();
+    CHECK(listen(b, s, 0, 10000).empty());
+    s.remaining_time_s = 59.0f;  // LOW: 100 ms every 2 s
+    CHECK(listen(b, s, 10000, 20000) == Beeps{{10000, 100}, {12000, 100}, {14000, 100}, {16000, 100}, {18000, 100}});
+    s.remaining_time_s = 19.0f;  // CRITICAL: 200 ms every 400 ms
+    const Beeps fast = listen(b, s, 20000, 22000);
+    CHECK(fast == Beeps{{20000, 200}, {20400, 200}, {20800, 200}, {21200, 200}, {21600, 200}});
+    s.flying = false;  // landed: the ground station's charge state says it, the buzzer stops
+    CHECK(listen(b, s, 22000, 30000).empty());
+}
+
+TEST_CASE("Beeper: long beeps announce a warning, most beeps first, and again while active in flight", "[firmware][beeper]") {
+    fw::Beeper b;
+    b.configure(fw::BeeperConfig{});
+    core::MonitorStatus s = flying_status();
+    // A weak cell and a short flight with its cause, raised at once: three long beeps, then two.
+    s.warnings_raised = s.warnings = (1u << core::kWarnCellOutlier) | (1u << core::kWarnShortFlight) |
+                                     (1u << core::kWarnLowCapacity);
+    const Beeps announced = listen(b, s, 1000, 7000);
+    CHECK(announced == Beeps{{1000, 400}, {1900, 400}, {2800, 400}, {3700, 400}, {4600, 400}});
+    // 30 s after each began: the short flight at 31.0 s, the cell after it at 33.7 s.
+    CHECK(listen(b, s, 7000, 31000).empty());
+    CHECK(listen(b, s, 31000, 36000) == Beeps{{31000, 400}, {31900, 400}, {32800, 400}, {33700, 400}, {34600, 400}});
+    // With the reference estimator a low capacity alone is three long beeps too, a sensor fault one.
+    fw::Beeper r;
+    r.configure(fw::BeeperConfig{0, 0, 0});  // no thresholds, no repeats
+    core::MonitorStatus q = flying_status();
+    q.warnings_raised = q.warnings = 1u << core::kWarnLowCapacity;
+    CHECK(listen(r, q, 0, 5000).size() == 3);
+    q.warnings_raised = q.warnings = q.warnings | (1u << core::kWarnSensorFault);
+    CHECK(listen(r, q, 5000, 10000) == Beeps{{5000, 400}});
+    CHECK(listen(r, q, 10000, 100000).empty());  // repeat_s 0: once
+}
+
+TEST_CASE("Beeper: the firmware build beeps a simulated weak cell and short flight as the monitor raises them",
+          "[firmware][beeper]") {
+    // 4S racing flight with cell 3 at 70 %: named at 104.65 s of the log, the flight short
+    // at 118.43 s (the joint build's summary says so; the firmware equals replay, tested elsewhere).
+    const std::string dir = fwtest::temp_dir("fwbuzzer");
+    const std::string log = dir + "/weak3.csv", record = dir + "/buzzer.csv";
+    const fwtest::Run sim = fwtest::run(
+        BATTSIM_BINARY, "simulate " + fwtest::q(std::string(BATTSIM_SOURCE_DIR) + "/configs/scenarios/4s-racing-weak-cell3-capacity-70.json") +
+                            " --format raw -o " + fwtest::q(log));
+    INFO(sim.err);
+    REQUIRE(sim.exit_code == 0);
+    const fwtest::Run fw = fwtest::run(BATTSIM_FW_HOST_JOINT_BINARY, "--buzzer " + fwtest::q(record) + " " + fwtest::q(log));
+    INFO(fw.err);
+    REQUIRE(fw.exit_code == 0);
+    std::istringstream in(fwtest::read_file(record));
+    std::string line;
+    std::getline(in, line);
+    REQUIRE(line == "time_s,on");
+    std::vector<std::pair<double, double>> beeps;  // start, length (s)
+    double on_since = -1;
+    while (std::getline(in, line)) {
+        const double t = std::stod(line.substr(0, line.find(',')));
+        if (line.back() == '1') on_since = t;
+        if (line.back() == '0' && on_since >= 0) {
+            beeps.emplace_back(on_since, t - on_since);
+            on_since = -1;
+        }
+    }
+    REQUIRE(beeps.size() >= 5);
+    // Nothing before the cell is named; then two long beeps, and at the short flight three.
+    CHECK(beeps[0].first == Approx(104.65).margin(0.07));
+    CHECK(beeps[0].second == Approx(0.4).margin(0.07));
+    CHECK(beeps[1].first - beeps[0].first == Approx(0.9).margin(0.07));
+    CHECK(beeps[2].first == Approx(118.43).margin(0.07));
+    CHECK(beeps[3].first - beeps[2].first == Approx(0.9).margin(0.07));
+    CHECK(beeps[4].first - beeps[3].first == Approx(0.9).margin(0.07));
+    for (const auto& [start, length] : beeps) CHECK(length < 0.5);  // every gap heard, despite the log's gaps
+}
