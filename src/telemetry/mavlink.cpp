@@ -235,11 +235,9 @@ void MavlinkTelemetry::configure(const TelemetryConfig& config, const core::Moni
     framer_.configure(config.system_id, config.component_id);
     const float interval_us = config.interval_s > 0.0f ? config.interval_s * 1.0e6f : 1.0e6f;
     interval_us_ = static_cast<uint64_t>(interval_us);
-    repeat_us_ = config.text_repeat_s > 0.0f ? static_cast<uint64_t>(config.text_repeat_s * 1.0e6f) : 0u;
+    schedule_.configure(config.text_repeat_s);
     next_us_ = 0;
     started_ = false;
-    announced_ = 0;
-    for (uint64_t& t : texted_us_) t = 0;
 }
 
 size_t MavlinkTelemetry::update(const core::Sample& sample, const core::MonitorStatus& status, uint8_t* out) {
@@ -260,23 +258,10 @@ size_t MavlinkTelemetry::update(const core::Sample& sample, const core::MonitorS
         pack_battery_status(battery_status_fields(config_, sample, status), payload);
         n += framer_.frame(kBatteryStatusId, kBatteryStatusCrcExtra, payload, kBatteryStatusLength, out + n);
     }
-    constexpr uint8_t kShort = 1u << core::kWarnShortFlight;
-    constexpr uint8_t kCauses = (1u << core::kWarnLowCapacity) | (1u << core::kWarnHighResistance);
-    uint8_t fresh = static_cast<uint8_t>(status.warnings_raised & ~announced_);
-    // The short-flight sentence names its cause: one message, not three at once.
-    if (fresh & kShort) fresh = static_cast<uint8_t>(fresh & ~kCauses);
-    uint8_t again = 0;
-    // Repeated in the air only: on the ground the charge state (UNHEALTHY) keeps saying it.
-    for (int w = 0; w < core::kWarnCount && repeat_us_ > 0 && status.flying; ++w) {
-        const uint8_t bit = static_cast<uint8_t>(1u << w);
-        if ((announced_ & bit) && (status.warnings & bit) && status.time_us >= texted_us_[w] + repeat_us_) again |= bit;
-    }
-    if (status.warnings & kShort) again = static_cast<uint8_t>(again & ~kCauses);
-    const uint8_t due = static_cast<uint8_t>(fresh | again);
-    announced_ = status.warnings_raised;
+    const uint8_t due = schedule_.due(status);
     for (int w = 0; w < core::kWarnCount; ++w) {
         if (!(due & (1u << w))) continue;
-        texted_us_[w] = status.time_us;
+        schedule_.told(w, status.time_us);
         memset(payload, 0, kStatusTextLength);
         payload[0] = kMavSeverityWarning;
         warning_text(static_cast<core::Warning>(w), rated_capacity_ah_, rated_resistance_ohm_, status,

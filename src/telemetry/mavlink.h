@@ -16,6 +16,7 @@
 #include "core/config.h"
 #include "core/monitor.h"
 #include "core/sample.h"
+#include "telemetry/warning_schedule.h"
 
 namespace battsim {
 namespace telemetry {
@@ -115,8 +116,7 @@ size_t warning_text(core::Warning w, float rated_capacity_ah, float rated_resist
 
 // What goes out after each monitor update: HEARTBEAT and BATTERY_STATUS every interval
 // of the samples' own time (the first sample sends at once), and a STATUSTEXT at severity
-// WARNING when a warning is first raised, and in flight again every text_repeat_s while it
-// stays active (a telemetry link loses frames, and in the air this is the only word of a verdict).
+// WARNING when WarningSchedule says a warning is due (raised; repeated in flight).
 class MavlinkTelemetry {
 public:
     static constexpr size_t kMaxBytesPerUpdate = (2 + core::kWarnCount) * kMaxFrameBytes;
@@ -134,9 +134,7 @@ private:
     uint64_t interval_us_ = 1000000u;
     uint64_t next_us_ = 0;
     bool started_ = false;
-    uint64_t repeat_us_ = 0;
-    uint8_t announced_ = 0;  // warnings already sent as text (bit per core::Warning)
-    uint64_t texted_us_[core::kWarnCount] = {};  // when each was last sent
+    WarningSchedule schedule_;
 };
 
 }  // namespace telemetry

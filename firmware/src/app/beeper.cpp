@@ -4,19 +4,14 @@ namespace battsim {
 namespace fw {
 namespace {
 
-constexpr uint8_t bit(core::Warning w) { return static_cast<uint8_t>(1u << w); }
-constexpr uint8_t kCauses = bit(core::kWarnLowCapacity) | bit(core::kWarnHighResistance);
-
 uint64_t us(uint32_t ms) { return static_cast<uint64_t>(ms) * 1000u; }
-uint64_t us(float s) { return s > 0.0f ? static_cast<uint64_t>(s * 1.0e6f) : 0u; }
 
 }  // namespace
 
 void Beeper::configure(const BeeperConfig& config) {
     config_ = config;
-    announced_ = 0;
+    schedule_.configure(config.repeat_s);
     pending_ = 0;
-    for (uint64_t& t : beeped_us_) t = 0;
     pattern_start_us_ = 0;
     pattern_beeps_ = 0;
 }
@@ -38,20 +33,7 @@ int Beeper::long_beeps(core::Warning w) {
 
 bool Beeper::update(const core::MonitorStatus& status) {
     const uint64_t t = status.time_us;
-    uint8_t fresh = static_cast<uint8_t>(status.warnings_raised & ~announced_);
-    // A short flight's causes come with it: one pattern says all three.
-    if (fresh & bit(core::kWarnShortFlight)) fresh = static_cast<uint8_t>(fresh & ~kCauses);
-    announced_ = status.warnings_raised;
-    pending_ |= fresh;
-    const uint64_t repeat_us = us(config_.repeat_s);
-    if (status.flying && repeat_us > 0) {
-        for (int w = 0; w < core::kWarnCount; ++w) {
-            const uint8_t b = static_cast<uint8_t>(1u << w);
-            if ((status.warnings & b) && !(fresh & b) && t >= beeped_us_[w] + repeat_us) pending_ |= b;
-        }
-        if (status.warnings & bit(core::kWarnShortFlight)) pending_ = static_cast<uint8_t>(pending_ & ~(kCauses & ~fresh));
-    }
-
+    pending_ |= schedule_.due(status);
     const uint64_t long_us = us(kLongOnMs + kLongGapMs);
     if (pattern_beeps_ > 0 && t >= pattern_start_us_ + static_cast<uint64_t>(pattern_beeps_) * long_us) pattern_beeps_ = 0;
     if (pattern_beeps_ == 0 && pending_ != 0) {
@@ -63,7 +45,7 @@ bool Beeper::update(const core::MonitorStatus& status) {
                 best = w;
         }
         pending_ = static_cast<uint8_t>(pending_ & ~(1u << best));
-        beeped_us_[best] = t;
+        schedule_.told(best, t);
         pattern_start_us_ = t;
         pattern_beeps_ = long_beeps(static_cast<core::Warning>(best));
     }

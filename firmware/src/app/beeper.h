@@ -10,6 +10,7 @@
 #include <stdint.h>
 
 #include "core/monitor.h"
+#include "telemetry/warning_schedule.h"
 
 namespace battsim {
 namespace fw {
@@ -35,9 +36,8 @@ public:
 
 private:
     BeeperConfig config_;
-    uint8_t announced_ = 0;  // warnings raised so far (bit per core::Warning)
-    uint8_t pending_ = 0;    // warnings waiting for their pattern
-    uint64_t beeped_us_[core::kWarnCount] = {};
+    telemetry::WarningSchedule schedule_;  // the same rule as the ground station's texts
+    uint8_t pending_ = 0;                  // warnings waiting for their pattern
     uint64_t pattern_start_us_ = 0;
     int pattern_beeps_ = 0;  // long beeps of the pattern under way (0: none)
 };
