@@ -23,7 +23,6 @@ void TelemetryWriter::add(const core::Sample& sample, const core::MonitorStatus&
         }
         file_.write(reinterpret_cast<const char*>(bytes + at), length);
         at += length;
-        ++frames_;
     }
 }
 

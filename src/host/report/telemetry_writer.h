@@ -22,13 +22,11 @@ public:
     // After each Monitor::update, in order.
     void add(const core::Sample& sample, const core::MonitorStatus& status);
     void commit();  // throws std::runtime_error on failure
-    long frames() const { return frames_; }
 
 private:
     AtomicFile file_;
     Format format_;
     std::unique_ptr<telemetry::MavlinkTelemetry> telemetry_;
-    long frames_ = 0;
 };
 
 }  // namespace host
