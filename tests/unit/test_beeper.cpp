@@ -2,12 +2,16 @@
 // steps, and on a simulated flight through the firmware build (battsim_fw_host --buzzer).
 #include <catch2/catch.hpp>
 
+#include <memory>
 #include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "app/beeper.h"
+#include "app/monitor_app.h"
+#include "host/config_json.h"
+#include "mock_hardware.h"
 #include "core/estimate/joint_estimator.h"
 #include "test_firmware_support.h"
 
@@ -118,4 +122,70 @@ TEST_CASE("Beeper: the firmware build beeps a simulated weak cell and short flig
     CHECK(beeps[3].first - beeps[2].first == Approx(0.9).margin(0.07));
     CHECK(beeps[4].first - beeps[3].first == Approx(0.9).margin(0.07));
     for (const auto& [start, length] : beeps) CHECK(length < 0.5);  // every gap heard, despite the log's gaps
+}
+
+namespace {
+
+// The log's sensors until the reading at `die_after_s` of log time; then the INA226 stops
+// answering, as a loose I²C lead would.
+class DyingSensors : public fw::Sensors {
+public:
+    DyingSensors(fw::host::LogSensors& inner, fw::host::MockClock& clock, double die_after_s)
+        : inner_(inner), clock_(clock), die_after_s_(die_after_s) {}
+    bool begin() override { return !dead(); }
+    bool conversion_ready() override { return dead() ? true : inner_.conversion_ready(); }
+    bool read_pack(fw::PackReading& out) override { return !dead() && inner_.read_pack(out); }
+    bool read_taps(fw::TapReading& out) override { return !dead() && inner_.read_taps(out); }
+
+private:
+    bool dead() const { return static_cast<double>(clock_.now_us()) * 1e-6 > die_after_s_; }
+    fw::host::LogSensors& inner_;
+    fw::host::MockClock& clock_;
+    double die_after_s_;
+};
+
+}  // namespace
+
+TEST_CASE("Beeper: the firmware silences the buzzer when the sensor dies mid-beep, or when told to", "[firmware][beeper]") {
+    const std::string dir = fwtest::temp_dir("fwbuzzdie");
+    const std::string log = dir + "/weak3.csv";
+    REQUIRE(fwtest::run(BATTSIM_BINARY, "simulate " +
+                                            fwtest::q(std::string(BATTSIM_SOURCE_DIR) + "/configs/scenarios/4s-racing-weak-cell3-capacity-70.json") +
+                                            " --format raw -o " + fwtest::q(log))
+                .exit_code == 0);
+    for (const bool told : {false, true}) {
+        INFO((told ? "out buzzer off" : "sensor dies"));
+        fw::host::RawLogSource source(log);
+        fw::host::MockClock clock;
+        fw::host::LogSensors log_sensors(source, clock);
+        // 0.2 s into the first long beep (the weak cell, named at 104.65 s).
+        DyingSensors sensors(log_sensors, clock, told ? 1e9 : 104.85);
+        fw::host::DirectoryStorage storage(".", false);
+        fw::host::TextDisplay display(clock);
+        fw::host::ScriptedSerial serial;
+        fw::host::RecordingBuzzer buzzer(clock);
+        auto app = std::make_unique<fw::MonitorApp>(sensors, clock, storage, display, serial);
+        fw::MonitorAppConfig cfg;
+        cfg.monitor = host::load_config_file(BATTSIM_FW_JOINT_CONFIG).monitor;  // as the joint build
+        cfg.monitor.estimator = core::EstimatorKind::Joint;
+        app->attach_buzzer(buzzer);
+        app->begin(cfg);
+        bool commanded = false;
+        for (int steps = 0; steps < 200000 && !log_sensors.finished(); ++steps) {
+            app->step();
+            if (told && !commanded && clock.now_us() > 104850000u) {
+                serial.feed("out buzzer off\n");
+                commanded = true;
+            }
+            if (!told && clock.now_us() > 110000000u) break;  // well after the sensor died
+        }
+        const std::string record = buzzer.record();
+        const std::string last = record.substr(record.rfind('\n', record.size() - 2) + 1);
+        INFO(record.substr(0, 200));
+        CHECK(record.find(",1\n") != std::string::npos);  // it did beep
+        CHECK(last.back() == '\n');
+        CHECK(last.substr(last.find(',')) == ",0\n");
+        const double silenced_s = std::stod(last.substr(0, last.find(',')));
+        CHECK(silenced_s == Approx(104.9).margin(0.1));
+    }
 }

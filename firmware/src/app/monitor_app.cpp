@@ -119,13 +119,17 @@ MonitorApp::Step MonitorApp::step() {
             state_.sensors_ok = sensors_.begin();
         }
         if (!state_.sensors_ok) {
+            silence_buzzer();
             clock_.sleep_us(10000);
             return Step::SensorError;
         }
     }
     const ReadingLoop::Result r = readings_.next(reading_, config_.poll_us);
     if (r == ReadingLoop::Result::Timeout) return Step::Timeout;
-    if (r == ReadingLoop::Result::PackError) return Step::SensorError;
+    if (r == ReadingLoop::Result::PackError) {
+        silence_buzzer();  // no samples, no pattern: not stuck on mid-beep
+        return Step::SensorError;
+    }
 
     make_sample(reading_.time_us, reading_.pack, reading_.taps_ok ? &reading_.taps : nullptr,
                 monitor_.config().cells_in_series, monitor_.config().shunt, sample_);
@@ -238,10 +242,7 @@ void MonitorApp::handle_command(const char* cmd) {
             if (uart_turned_on && link_.connected()) link_.send_data(header_.c_str(), header_.size());
             if (target == &state_.outputs.sd && !on) sync_storage();
             if (target == &state_.outputs.sd && on && card_ok_ && !log_opened_) open_sd_log();
-            if (target == &state_.outputs.buzzer && !on && buzzer_ != nullptr && buzzing_) {
-                buzzer_->set(false);
-                buzzing_ = false;
-            }
+            if (target == &state_.outputs.buzzer && !on) silence_buzzer();
             if (target == &state_.outputs.display && !on && state_.display_ok) {
                 display_.clear();
                 display_.show();
@@ -257,6 +258,11 @@ void MonitorApp::handle_command(const char* cmd) {
         return;
     }
     link_.send_note("unknown command; try: status, save, out uart|sd|oled|mavlink|buzzer on|off");
+}
+
+void MonitorApp::silence_buzzer() {
+    if (buzzer_ != nullptr && buzzing_) buzzer_->set(false);
+    buzzing_ = false;
 }
 
 void MonitorApp::send_status_note() {

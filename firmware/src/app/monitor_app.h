@@ -89,6 +89,7 @@ private:
     void write_outputs();
     void draw_display();
     void send_status_note();
+    void silence_buzzer();
 
     Sensors& sensors_;
     Clock& clock_;
