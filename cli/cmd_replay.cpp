@@ -3,7 +3,6 @@
 // monitor's telemetry UART sends.
 #include <iostream>
 #include <memory>
-#include <vector>
 #include <stdexcept>
 
 #include "command.h"
@@ -70,23 +69,23 @@ std::function<int()> setup(CLI::App& sub) {
         nlohmann::json summary;
         host::plot::ReplaySeries plotted;
         host::SampleObserver observer;
-        std::vector<std::unique_ptr<host::TelemetryWriter>> streams;
+        if (!a->mavlink.empty() && a->mavlink == a->tlog) {
+            std::cerr << "battsim replay: --mavlink and --tlog: expected two files, found " << a->mavlink << " twice\n";
+            return kExitUsage;
+        }
+        std::unique_ptr<host::TelemetryWriter> stream;
         try {
-            if (!a->mavlink.empty())
-                streams.push_back(std::make_unique<host::TelemetryWriter>(a->mavlink, host::TelemetryWriter::Format::Raw,
-                                                                          opt.config.telemetry, opt.config.monitor));
-            if (!a->tlog.empty())
-                streams.push_back(std::make_unique<host::TelemetryWriter>(a->tlog, host::TelemetryWriter::Format::Tlog,
-                                                                          opt.config.telemetry, opt.config.monitor));
+            if (!a->mavlink.empty() || !a->tlog.empty())
+                stream = std::make_unique<host::TelemetryWriter>(a->mavlink, a->tlog, opt.config.telemetry, opt.config.monitor);
         } catch (const std::runtime_error& e) {
             std::cerr << "battsim replay: " << e.what() << "\n";
             return kExitOutputError;
         }
-        if (!a->plot.empty() || !streams.empty()) {
+        if (!a->plot.empty() || stream) {
             const bool plot = !a->plot.empty();
-            observer = [&plotted, &streams, plot](const core::Sample& s, const core::MonitorStatus& st) {
+            observer = [&plotted, &stream, plot](const core::Sample& s, const core::MonitorStatus& st) {
                 if (plot) plotted.add(s, st);
-                for (auto& w : streams) w->add(s, st);
+                if (stream) stream->add(s, st);
             };
         }
         try {
@@ -122,7 +121,7 @@ std::function<int()> setup(CLI::App& sub) {
         const std::string text = summary.dump(2) + "\n";
         try {
             if (!a->summary.empty()) host::write_file_atomic(a->summary, text);
-            for (auto& w : streams) w->commit();
+            if (stream) stream->commit();
             if (!a->config_out.empty() && !refuse_config)
                 host::write_file_atomic(a->config_out, host::config_to_json(corrected).dump(2) + "\n");
             if (!a->plot.empty()) {
@@ -138,7 +137,7 @@ std::function<int()> setup(CLI::App& sub) {
             return kExitOutputError;
         }
         if (a->json) std::cout << text;
-        if (!a->json && a->summary.empty() && a->series.empty() && a->plot.empty() && streams.empty())
+        if (!a->json && a->summary.empty() && a->series.empty() && a->plot.empty() && !stream)
             print_brief(summary, std::cout);
         if (!a->json && summary.contains("charger_check")) {
             const auto& c = summary["charger_check"];

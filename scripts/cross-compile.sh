@@ -121,7 +121,7 @@ echo "  $(comm -23 "$out/undef.txt" "$out/def.txt" | tr '\n' ' ')"
 echo "sizeof on the target:"
 "$nm_tool" -S -t d "$out/sizes.o" | awk '/size_of_/ {sub("size_of_", "", $4); printf "  %-22s %6d bytes\n", $4, $2 + 0}'
 echo "core:     text $core_text B (budget $text_budget), static RAM $core_ram B = data $core_data + bss $core_bss (budget $ram_budget)"
-echo "telemetry (MAVLink): text $tel_text B, static RAM $((tel_data + tel_bss)) B"
+echo "telemetry (src/telemetry): text $tel_text B, static RAM $((tel_data + tel_bss)) B"
 echo "firmware app: text $app_text B, static RAM $((app_data + app_bss)) B = data $app_data + bss $app_bss"
 # The ESP8266 Arduino core's linker script keeps .rodata in RAM (hence PROGMEM), so these
 # bytes cost RAM there too, on top of data + bss.

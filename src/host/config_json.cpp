@@ -436,15 +436,13 @@ json config_to_json(const LoadedConfig& c) {
         {"max_cell_sum_error_v", m.sensor.max_cell_sum_error_v},
     };
     // Only when set: configs that never mention the telemetry read back as they were.
-    const telemetry::TelemetryConfig& t = c.telemetry;
-    const telemetry::TelemetryConfig d;
-    if (t.system_id != d.system_id || t.component_id != d.component_id || t.battery_id != d.battery_id ||
-        t.interval_s != d.interval_s || t.low_time_s != d.low_time_s || t.critical_time_s != d.critical_time_s ||
-        t.text_repeat_s != d.text_repeat_s) {
-        j["telemetry"] = {{"system_id", t.system_id},   {"component_id", t.component_id}, {"battery_id", t.battery_id},
-                          {"interval_s", t.interval_s}, {"low_time_s", t.low_time_s},     {"critical_time_s", t.critical_time_s},
-                          {"text_repeat_s", t.text_repeat_s}};
-    }
+    const auto telemetry_json = [](const telemetry::TelemetryConfig& t) {
+        return json{{"system_id", t.system_id},   {"component_id", t.component_id}, {"battery_id", t.battery_id},
+                    {"interval_s", t.interval_s}, {"low_time_s", t.low_time_s},     {"critical_time_s", t.critical_time_s},
+                    {"text_repeat_s", t.text_repeat_s}};
+    };
+    const json tj = telemetry_json(c.telemetry);
+    if (tj != telemetry_json(telemetry::TelemetryConfig{})) j["telemetry"] = tj;
     shorten_floats(j);
     return j;
 }

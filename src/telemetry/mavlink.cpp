@@ -5,6 +5,7 @@
 
 #include "core/cells/cell_analyzer.h"
 #include "core/estimate/joint_estimator.h"
+#include "telemetry/text_buffer.h"
 
 namespace battsim {
 namespace telemetry {
@@ -31,35 +32,6 @@ int32_t rounded(float v, int32_t lo, int32_t hi, int32_t fallback) {
 uint16_t millivolts(float voltage_v) {
     return static_cast<uint16_t>(rounded(voltage_v * 1000.0f, 0, 0xFFFE, 0xFFFF));
 }
-
-// A bounded text with integer formatting only: no printf, whose float support costs
-// flash on the ESP8266.
-struct Text {
-    char* out;
-    size_t length = 0;
-    void add(const char* s) {
-        while (*s && length < kStatusTextChars) out[length++] = *s++;
-        out[length] = '\0';
-    }
-    void add_uint(uint32_t v) {
-        char digits[11];
-        int n = 0;
-        do {
-            digits[n++] = static_cast<char>('0' + v % 10);
-            v /= 10;
-        } while (v > 0);
-        char s[11];
-        for (int i = 0; i < n; ++i) s[i] = digits[n - 1 - i];
-        s[n] = '\0';
-        add(s);
-    }
-    void add_hundredths(uint32_t v) {  // 105 → "1.05"
-        add_uint(v / 100);
-        add(".");
-        if (v % 100 < 10) add("0");
-        add_uint(v % 100);
-    }
-};
 
 uint32_t percent_of(float value, float rated) {
     if (!(rated > 0.0f)) return 0;
@@ -172,60 +144,61 @@ BatteryStatusFields battery_status_fields(const TelemetryConfig& config, const c
 
 size_t warning_text(core::Warning w, float rated_capacity_ah, float rated_resistance_ohm,
                     const core::MonitorStatus& status, char* out) {
-    Text t{out};
-    t.out[0] = '\0';
-    t.add("battsim: ");
+    // Integer formatting only: printf's float support costs flash on the ESP8266. What does
+    // not fit the message's 50 characters is cut off.
+    TextBuffer t(out, kStatusTextChars + 1);
+    t.append("battsim: ");
     switch (w) {
         case core::kWarnShortFlight:
-            t.add("flight ");
+            t.append("flight ");
             if (status.expected_time_s > 0.0f && status.total_time_s > 0.0f && status.total_time_s < status.expected_time_s) {
-                t.add_uint(percent_of(status.expected_time_s - status.total_time_s, status.expected_time_s));
-                t.add("% ");
+                t.append_uint(percent_of(status.expected_time_s - status.total_time_s, status.expected_time_s));
+                t.append("% ");
             }
-            t.add("short");
+            t.append("short");
             if (status.short_flight_cause & core::JointEstimator::kCauseCapacity) {
-                t.add(", capacity ");
-                t.add_uint(percent_of(status.capacity_ah, rated_capacity_ah));
-                t.add("%");
+                t.append(", capacity ");
+                t.append_uint(percent_of(status.capacity_ah, rated_capacity_ah));
+                t.append("%");
             }
             if (status.short_flight_cause & core::JointEstimator::kCauseResistance) {
-                t.add(", R ");
-                t.add_uint(percent_of(status.resistance_ohm, rated_resistance_ohm));
-                t.add("%");
+                t.append(", R ");
+                t.append_uint(percent_of(status.resistance_ohm, rated_resistance_ohm));
+                t.append("%");
             }
             break;
         case core::kWarnLowCapacity:
-            t.add("low capacity ");
-            t.add_hundredths(static_cast<uint32_t>(rounded(status.capacity_ah * 100.0f, 0, 999999, 0)));
-            t.add(" Ah (");
-            t.add_uint(percent_of(status.capacity_ah, rated_capacity_ah));
-            t.add("% of rated)");
+            t.append("low capacity ");
+            t.append_fixed(rounded(status.capacity_ah * 100.0f, 0, 999999, 0), 2);
+            t.append(" Ah (");
+            t.append_uint(percent_of(status.capacity_ah, rated_capacity_ah));
+            t.append("% of rated)");
             break;
         case core::kWarnHighResistance:
-            t.add("high resistance ");
-            t.add_uint(static_cast<uint32_t>(rounded(status.resistance_ohm * 1000.0f, 0, 999999, 0)));
-            t.add(" mOhm (");
-            t.add_uint(percent_of(status.resistance_ohm, rated_resistance_ohm));
-            t.add("%)");
+            t.append("high resistance ");
+            t.append_uint(static_cast<uint32_t>(rounded(status.resistance_ohm * 1000.0f, 0, 999999, 0)));
+            t.append(" mOhm (");
+            t.append_uint(percent_of(status.resistance_ohm, rated_resistance_ohm));
+            t.append("%)");
             break;
         case core::kWarnCellOutlier:
-            t.add("cell ");
-            t.add_uint(static_cast<uint32_t>(status.outlier_cell >= 0 ? status.outlier_cell + 1 : 0));
+            t.append("cell ");
+            t.append_uint(static_cast<uint32_t>(status.outlier_cell >= 0 ? status.outlier_cell + 1 : 0));
             if (status.cell_finding == core::CellAnalyzer::kLowCapacity) {
-                t.add(" weak: low capacity");
+                t.append(" weak: low capacity");
             } else if (status.cell_finding == core::CellAnalyzer::kHighResistance) {
-                t.add(" weak: high resistance");
+                t.append(" weak: high resistance");
             } else {
-                t.add(" differs from the others");
+                t.append(" differs from the others");
             }
             break;
         case core::kWarnSensorFault:
-            t.add("sensor fault, readings kept out");
+            t.append("sensor fault, readings kept out");
             break;
         default:
             break;
     }
-    return t.length;
+    return t.size();
 }
 
 void MavlinkTelemetry::configure(const TelemetryConfig& config, const core::MonitorConfig& monitor) {

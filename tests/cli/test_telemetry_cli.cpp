@@ -121,6 +121,11 @@ TEST_CASE("replay --mavlink: a bad telemetry section or an unwritable path is a 
     CHECK(r.exit_code != 0);
     CHECK(r.err.find("$.telemetry.sysid") != std::string::npos);
 
+    r = run("replay " + q(log) + " --mavlink " + q(dir + "/x.bin") + " --tlog " + q(dir + "/x.bin"));
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.find("expected two files") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir + "/x.bin"));
+
     r = run("replay " + q(log) + " --mavlink " + q(dir + "/no-such-dir/x.mavlink"));
     CHECK(r.exit_code == 5);
     CHECK(r.err.find("no-such-dir") != std::string::npos);

@@ -50,7 +50,7 @@ core::MonitorStatus flying_status() {
 
 TEST_CASE("Beeper: silent on a healthy flight; chirps when LOW, fast when CRITICAL", "[firmware][beeper]") {
     fw::Beeper b;
-    b.configure(fw::BeeperConfig{});
+    b.configure(telemetry::TelemetryConfig{});
     core::MonitorStatus s = flying_status();
     CHECK(listen(b, s, 0, 10000).empty());
     s.remaining_time_s = 59.0f;  // LOW: 100 ms every 2 s
@@ -64,7 +64,7 @@ TEST_CASE("Beeper: silent on a healthy flight; chirps when LOW, fast when CRITIC
 
 TEST_CASE("Beeper: long beeps announce a warning, most beeps first, and again while active in flight", "[firmware][beeper]") {
     fw::Beeper b;
-    b.configure(fw::BeeperConfig{});
+    b.configure(telemetry::TelemetryConfig{});
     core::MonitorStatus s = flying_status();
     // A weak cell and a short flight with its cause, raised at once: three long beeps, then two.
     s.warnings_raised = s.warnings = (1u << core::kWarnCellOutlier) | (1u << core::kWarnShortFlight) |
@@ -76,7 +76,9 @@ TEST_CASE("Beeper: long beeps announce a warning, most beeps first, and again wh
     CHECK(listen(b, s, 31000, 36000) == Beeps{{31000, 400}, {31900, 400}, {32800, 400}, {33700, 400}, {34600, 400}});
     // With the reference estimator a low capacity alone is three long beeps too, a sensor fault one.
     fw::Beeper r;
-    r.configure(fw::BeeperConfig{0, 0, 0});  // no thresholds, no repeats
+    telemetry::TelemetryConfig quiet;  // no thresholds, no repeats
+    quiet.low_time_s = quiet.critical_time_s = quiet.text_repeat_s = 0.0f;
+    r.configure(quiet);
     core::MonitorStatus q = flying_status();
     q.warnings_raised = q.warnings = 1u << core::kWarnLowCapacity;
     CHECK(listen(r, q, 0, 5000).size() == 3);

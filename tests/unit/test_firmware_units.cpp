@@ -10,7 +10,7 @@
 #include "app/line_link.h"
 #include "app/readings.h"
 #include "app/series_line.h"
-#include "app/text_buffer.h"
+#include "telemetry/text_buffer.h"
 #include "host/report/series_writer.h"
 #include "host/serial/line_protocol.h"
 #include "mock_hardware.h"
@@ -33,7 +33,7 @@ TEST_CASE("sensor readings become the floats nearest their decimal values", "[fi
     for (int32_t raw = 0; raw <= 28800; raw += 7) {
         fw::PackReading r;
         r.bus_10uv = raw * 125;
-        fw::FixedText<32> t;
+        telemetry::FixedText<32> t;
         t.append_fixed(r.bus_10uv, fw::kBusDecimals);
         INFO(t.c_str());
         REQUIRE(fwtest::same_bits(fw::bus_voltage_v(r), std::strtof(t.c_str(), nullptr)));
@@ -41,7 +41,7 @@ TEST_CASE("sensor readings become the floats nearest their decimal values", "[fi
     for (int32_t raw = -32768; raw <= 32767; raw += 5) {
         fw::PackReading r;
         r.shunt_100nv = raw * 25;
-        fw::FixedText<32> t;
+        telemetry::FixedText<32> t;
         t.append_fixed(r.shunt_100nv, fw::kShuntDecimals);
         INFO(t.c_str());
         REQUIRE(fwtest::same_bits(fw::shunt_voltage_mv(r), std::strtof(t.c_str(), nullptr)));
@@ -92,13 +92,13 @@ TEST_CASE("reading timer extends the 32-bit clock and counts skipped conversions
 }
 
 TEST_CASE("text buffer writes fixed-point numbers exactly and refuses to overflow", "[firmware]") {
-    fw::FixedText<16> t;
+    telemetry::FixedText<16> t;
     t.append_fixed(-5, 5);
     CHECK(std::string(t.c_str()) == "-0.00005");
     t.clear();
     t.append_fixed(1666000, 5);
     CHECK(std::string(t.c_str()) == "16.66000");
-    fw::FixedText<32> wide;
+    telemetry::FixedText<32> wide;
     wide.append_fixed(std::numeric_limits<int64_t>::min(), 0);
     CHECK(std::string(wide.c_str()) == "-9223372036854775808");
     CHECK_FALSE(wide.overflow());
@@ -163,7 +163,7 @@ TEST_CASE("averages file round-trips floats exactly and rejects anything damaged
         a.current_a = dist(rng);
         a.power_w = dist(rng);
         a.flights = static_cast<uint32_t>(i * 37);
-        fw::FixedText<160> t;
+        telemetry::FixedText<160> t;
         fw::format_averages(a, t);
         REQUIRE_FALSE(t.overflow());
         fw::StoredAverages b;
@@ -205,7 +205,7 @@ TEST_CASE("firmware series formatter writes the host SeriesWriter's bytes", "[fi
         std::string fw_text;
         {
             host::SeriesWriter w(path, cells);
-            fw::FixedText<fw::kSeriesLineCapacity> t;
+            telemetry::FixedText<fw::kSeriesLineCapacity> t;
             fw::format_series_header(cells, t);
             fw_text += t.c_str();
             for (int i = 0; i < 300; ++i) {

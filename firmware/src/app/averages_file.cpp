@@ -52,7 +52,7 @@ bool parse_uint_field(const char* line, size_t line_len, const char* key, uint32
 
 }  // namespace
 
-void format_averages(const StoredAverages& a, TextBuffer& out) {
+void format_averages(const StoredAverages& a, telemetry::TextBuffer& out) {
     out.clear();
     out.append(kMagic);
     out.appendf("\ncurrent_a=%.9g\npower_w=%.9g\nflights=", static_cast<double>(a.current_a),

@@ -12,7 +12,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "app/text_buffer.h"
+#include "telemetry/text_buffer.h"
 
 namespace battsim {
 namespace fw {
@@ -25,7 +25,7 @@ struct StoredAverages {
 
 constexpr const char* kAveragesPath = "battsim/averages.txt";
 
-void format_averages(const StoredAverages& a, TextBuffer& out);
+void format_averages(const StoredAverages& a, telemetry::TextBuffer& out);
 // False (and `out` untouched) for anything but a complete, well-formed file with finite,
 // non-negative averages: a bad file means "no memory", never a wrong start value.
 bool parse_averages(const char* text, size_t len, StoredAverages& out);

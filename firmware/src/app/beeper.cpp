@@ -8,9 +8,10 @@ uint64_t us(uint32_t ms) { return static_cast<uint64_t>(ms) * 1000u; }
 
 }  // namespace
 
-void Beeper::configure(const BeeperConfig& config) {
-    config_ = config;
-    schedule_.configure(config.repeat_s);
+void Beeper::configure(const telemetry::TelemetryConfig& config) {
+    low_time_s_ = config.low_time_s;
+    critical_time_s_ = config.critical_time_s;
+    schedule_.configure(config.text_repeat_s);
     pending_ = 0;
     pattern_start_us_ = 0;
     pattern_beeps_ = 0;
@@ -52,8 +53,8 @@ bool Beeper::update(const core::MonitorStatus& status) {
     if (pattern_beeps_ > 0) return (t - pattern_start_us_) % long_us < us(kLongOnMs);
 
     if (!status.flying || !status.time_valid) return false;
-    if (status.remaining_time_s < config_.critical_time_s) return t % us(kFastPeriodMs) < us(kFastOnMs);
-    if (status.remaining_time_s < config_.low_time_s) return t % us(kChirpPeriodMs) < us(kChirpOnMs);
+    if (status.remaining_time_s < critical_time_s_) return t % us(kFastPeriodMs) < us(kFastOnMs);
+    if (status.remaining_time_s < low_time_s_) return t % us(kChirpPeriodMs) < us(kChirpOnMs);
     return false;
 }
 

@@ -5,21 +5,18 @@
 // beeping (CRITICAL). When a warning is raised, long beeps: three for a short flight (or,
 // with the reference estimator, low capacity or high resistance), two for a weak cell, one
 // for a sensor fault; again every repeat_s while it stays active in flight. Time is the
-// samples' own, so the pattern is the same on the device and on the host.
+// samples' own, so the pattern is the same on the device and on the host. The thresholds
+// and the repeat are the config's `telemetry` section's, which the ground station's
+// charge state and texts use too.
 #pragma once
 #include <stdint.h>
 
 #include "core/monitor.h"
+#include "telemetry/mavlink.h"
 #include "telemetry/warning_schedule.h"
 
 namespace battsim {
 namespace fw {
-
-struct BeeperConfig {
-    float low_time_s = 60.0f;       // a chirp every 2 s in flight below this remaining flight time
-    float critical_time_s = 20.0f;  // fast beeping in flight below this
-    float repeat_s = 30.0f;         // a warning still active in flight is beeped again after this (0: once)
-};
 
 class Beeper {
 public:
@@ -28,14 +25,15 @@ public:
     static constexpr uint32_t kChirpOnMs = 100, kChirpPeriodMs = 2000;  // LOW
     static constexpr uint32_t kFastOnMs = 200, kFastPeriodMs = 400;     // CRITICAL
 
-    void configure(const BeeperConfig& config);
+    void configure(const telemetry::TelemetryConfig& config);
     // After each monitor update: whether the buzzer sounds until the next sample.
     bool update(const core::MonitorStatus& status);
     // Long beeps announcing warning `w`.
     static int long_beeps(core::Warning w);
 
 private:
-    BeeperConfig config_;
+    float low_time_s_ = 0.0f;
+    float critical_time_s_ = 0.0f;
     telemetry::WarningSchedule schedule_;  // the same rule as the ground station's texts
     uint8_t pending_ = 0;                  // warnings waiting for their pattern
     uint64_t pattern_start_us_ = 0;

@@ -1,13 +1,13 @@
 #include "app/display_pages.h"
 
-#include "app/text_buffer.h"
+#include "telemetry/text_buffer.h"
 
 namespace battsim {
 namespace fw {
 
 namespace {
 
-using Row = FixedText<kDisplayColumns + 1>;
+using Row = telemetry::FixedText<kDisplayColumns + 1>;
 
 // "m:ss", or "--:--" when unknown.
 void append_minutes(Row& r, bool valid, float seconds) {

@@ -11,7 +11,7 @@
 #include "app/hardware.h"
 #include "app/line_link.h"
 #include "app/reading_loop.h"
-#include "app/text_buffer.h"
+#include "telemetry/text_buffer.h"
 #include "core/estimate/coulomb_counter.h"
 #include "core/sensor.h"
 
@@ -63,7 +63,7 @@ private:
     uint32_t last_sensor_retry_ms_ = 0;
     int cells_ = 0;
     Reading reading_;
-    FixedText<256> line_;
+    telemetry::FixedText<256> line_;
 };
 
 }  // namespace fw

@@ -73,8 +73,7 @@ void MonitorApp::begin(const MonitorAppConfig& config) {
     monitor_.configure(mc);
     current_average_.configure(mc.current_average);
     telemetry_.configure(config.telemetry, mc);
-    beeper_.configure(BeeperConfig{config.telemetry.low_time_s, config.telemetry.critical_time_s,
-                                   config.telemetry.text_repeat_s});
+    beeper_.configure(config.telemetry);
     buzzing_ = false;
     if (buzzer_ != nullptr) buzzer_->set(false);
     sample_ = core::Sample{};
@@ -193,7 +192,7 @@ bool MonitorApp::save_averages() {
     a.current_a = current_average_.status().long_avg;
     a.power_w = monitor_.status().long_avg_power_w;
     a.flights = state_.flights;
-    FixedText<160> text;
+    telemetry::FixedText<160> text;
     format_averages(a, text);
     if (text.overflow() || (!storage_.exists(kLogDir) && !storage_.make_dir(kLogDir)) ||
         !storage_.write_file(kAveragesPath, text.c_str(), text.size())) {
@@ -267,7 +266,7 @@ void MonitorApp::silence_buzzer() {
 
 void MonitorApp::send_status_note() {
     const ReadingCounters c = readings_.counters();
-    FixedText<160> t;
+    telemetry::FixedText<160> t;
     t.append("samples=");
     t.append_uint(state_.samples);
     t.append(" missed=");

@@ -10,7 +10,7 @@
 #include "app/line_link.h"
 #include "app/reading_loop.h"
 #include "app/series_line.h"
-#include "app/text_buffer.h"
+#include "telemetry/text_buffer.h"
 #include "core/config.h"
 #include "core/estimate/rolling_average.h"
 #include "core/monitor.h"
@@ -29,7 +29,7 @@ struct Outputs {
 
 struct MonitorAppConfig {
     core::MonitorConfig monitor;  // from the generated battsim_config.h
-    telemetry::TelemetryConfig telemetry;  // the MAVLink output's, from the same header
+    telemetry::TelemetryConfig telemetry;  // the MAVLink output's and the buzzer's, from the same header
     Outputs outputs;
     bool remember_averages = true;       // read/write kAveragesPath
     uint32_t sd_sync_interval_ms = 5000; // card writes stall the loop; batch them
@@ -61,7 +61,7 @@ public:
     // The UART the MAVLink telemetry goes to (to an autopilot's or a telemetry radio's
     // serial port); before begin(). Without it there is no MAVLink output.
     void attach_telemetry(SerialPort& port) { telemetry_port_ = &port; }
-    // The buzzer (app/beeper.h; thresholds from the config's telemetry section); before begin().
+    // The buzzer (app/beeper.h; thresholds from `telemetry` above); before begin().
     void attach_buzzer(Buzzer& buzzer) { buzzer_ = &buzzer; }
     void begin(const MonitorAppConfig& config);
     // One pass of the loop: serial input, wait for a conversion, estimate, outputs.
@@ -116,8 +116,8 @@ private:
     uint32_t last_display_ms_ = 0;
     bool displayed_ = false;
     uint32_t last_sensor_retry_ms_ = 0;
-    FixedText<kSeriesLineCapacity> line_;
-    FixedText<kSeriesLineCapacity> header_;
+    telemetry::FixedText<kSeriesLineCapacity> line_;
+    telemetry::FixedText<kSeriesLineCapacity> header_;
 };
 
 }  // namespace fw

@@ -3,7 +3,7 @@
 namespace battsim {
 namespace fw {
 
-void format_series_header(int cells, TextBuffer& out) {
+void format_series_header(int cells, telemetry::TextBuffer& out) {
     out.clear();
     out.append(
         "time_s,voltage_v,current_a,filtered_current_a,model_voltage_v,adapted_model_voltage_v,consumed_mah,"
@@ -22,14 +22,14 @@ namespace {
 
 float cell_value(const float* values, int c) { return c < core::kMaxCells ? values[c] : 0.0f; }
 
-void put(TextBuffer& out, const char* fmt, float v) {
+void put(telemetry::TextBuffer& out, const char* fmt, float v) {
     out.appendf(fmt, static_cast<double>(v));
     out.append_char(',');
 }
 
 }  // namespace
 
-void format_series_line(const core::Sample& sample, const core::MonitorStatus& s, int cells, TextBuffer& out) {
+void format_series_line(const core::Sample& sample, const core::MonitorStatus& s, int cells, telemetry::TextBuffer& out) {
     out.clear();
     // Seconds with 6 decimals straight from the integer microseconds: the same digits as
     // printing time_us·1e-6 with %.6f, without double arithmetic on the device.

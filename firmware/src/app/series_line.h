@@ -4,7 +4,7 @@
 // against a replay of the same readings; tests/unit/test_firmware_replay.cpp holds the
 // two writers to that.
 #pragma once
-#include "app/text_buffer.h"
+#include "telemetry/text_buffer.h"
 #include "core/monitor.h"
 #include "core/sample.h"
 
@@ -16,9 +16,9 @@ namespace fw {
 constexpr size_t kSeriesLineCapacity = 1024;
 
 // The header line with its '\n'; `cells` = cell columns (the first sample's cell count).
-void format_series_header(int cells, TextBuffer& out);
+void format_series_header(int cells, telemetry::TextBuffer& out);
 // One row with its '\n'.
-void format_series_line(const core::Sample& sample, const core::MonitorStatus& s, int cells, TextBuffer& out);
+void format_series_line(const core::Sample& sample, const core::MonitorStatus& s, int cells, telemetry::TextBuffer& out);
 
 }  // namespace fw
 }  // namespace battsim

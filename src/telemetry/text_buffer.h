@@ -1,5 +1,6 @@
-// Fixed-capacity text building for lines and display rows: no heap, truncation is
-// remembered (a truncated line is never sent), always NUL-terminated.
+// Fixed-capacity text building for the firmware's lines and display rows and the
+// telemetry's sentences: no heap, truncation is remembered (a truncated line is never
+// sent), always NUL-terminated.
 #pragma once
 #include <stdarg.h>
 #include <stddef.h>
@@ -7,7 +8,7 @@
 #include <stdio.h>
 
 namespace battsim {
-namespace fw {
+namespace telemetry {
 
 class TextBuffer {
 public:
@@ -97,5 +98,5 @@ private:
     char storage_[N];
 };
 
-}  // namespace fw
+}  // namespace telemetry
 }  // namespace battsim
