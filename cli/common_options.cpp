@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <iostream>
+#include <sstream>
+#include <string>
 #include <stdexcept>
 
 #include "command.h"
@@ -169,9 +171,50 @@ int check_plot_option(const std::string& command, const std::string& path) {
     return kExitOk;
 }
 
+namespace {
+// A summary number for people: fixed decimals, a scale (ohm → mΩ), and "n/a" for a null.
+std::string fixed(const nlohmann::json& v, int decimals, double scale = 1.0) {
+    if (!v.is_number()) return "n/a";
+    std::ostringstream os;
+    os.setf(std::ios::fixed);
+    os.precision(decimals);
+    os << v.get<double>() * scale;
+    return os.str();
+}
+
+// What a warning's summary entry says beyond its name and time: when in the flight, the
+// cause, the cell, what was measured, and whether it still held at the end of the log.
+std::string warning_detail(const nlohmann::json& w) {
+    std::string d;
+    const auto add = [&d](const std::string& part) { d += (d.empty() ? "" : "; ") + part; };
+    if (w.contains("flight_time_s"))
+        add(w["flight_time_s"].is_number() ? fixed(w["flight_time_s"], 1) + " s into the flight" : "before the take-off");
+    if (w.contains("cell")) add("cell " + std::to_string(w["cell"].get<int>()));
+    if (w.contains("finding")) add(w["finding"].get<std::string>());
+    for (const auto& c : w.value("cause", nlohmann::json::array())) {
+        const std::string cause = c.get<std::string>();
+        if (cause == "sample_gap" && w.contains("sample_gaps")) {
+            const auto& g = w["sample_gaps"];
+            add(std::to_string(g["count"].get<uint64_t>()) + (g["count"] == 1 ? " gap" : " gaps") +
+                " between samples, longest " + fixed(g["longest_s"], 2) + " s");
+        } else if (cause == "current_offset" && w.contains("current_offset_a")) {
+            add("current sensor offset " + fixed(w["current_offset_a"], 2) + " A");
+        } else if (cause == "reading") {
+            add("readings outside the sensor limits");
+        } else if (cause == "cells") {
+            add("cell readings outside the limits");
+        } else {
+            add(cause);
+        }
+    }
+    if (!w.value("active_at_end", false)) add("cleared before the end");
+    return d.empty() ? d : " (" + d + ")";
+}
+}  // namespace
+
 void print_brief(const nlohmann::json& s, std::ostream& out) {
     out << s["input"]["path"].get<std::string>() << ": " << s["samples"]["total"] << " samples, "
-        << s["duration_s"] << " s\n";
+        << fixed(s["duration_s"], 1) << " s\n";
     // Samples the config's sensor limits kept out: a config for another pack (a 3S config on
     // a 4S log) rejects much of a flight, and the figures below would not say so.
     const auto rejected = s["samples"].value("rejected", nlohmann::json::object());
@@ -182,7 +225,11 @@ void print_brief(const nlohmann::json& s, std::ostream& out) {
             if (rejected.contains(key))
                 out << " " << rejected[key] << " " << key << " (" << host::sample_fault_limit(static_cast<uint8_t>(f)) << ")";
         }
-        out << "; does the config match this pack?\n";
+        // Only cell readings kept out: a balance lead more likely than the wrong pack.
+        bool pack_kept_out = false;
+        for (int f = 1; f < core::kSampleCellVoltage; ++f)
+            pack_kept_out = pack_kept_out || rejected.contains(host::sample_fault_key(static_cast<uint8_t>(f)));
+        out << (pack_kept_out ? "; does the config match this pack?\n" : "; a loose balance lead, or a config for another cell count?\n");
     }
     const auto& f = s["flight"];
     if (f.is_null()) {
@@ -190,16 +237,24 @@ void print_brief(const nlohmann::json& s, std::ostream& out) {
         return;
     }
     const auto& cap = f["capacity_ah"];
-    out << "  flight " << f["duration_s"] << " s; capacity mean " << cap["mean"] << " Ah (first 20 %: "
-        << cap["first20_mean"];
+    out << "  flight " << fixed(f["duration_s"], 1) << " s; capacity ";
     // The joint estimator's standard error: a flight that draws little of the pack says little.
-    if (cap.contains("final_sigma") && !cap["final_sigma"].is_null())
-        out << "; at landing " << cap["final"] << " +/- " << cap["final_sigma"];
-    out << "); resistance mean " << f["resistance_ohm"]["mean"] << " ohm; model MAE "
-        << f["voltage_error_v"]["model"]["mean_abs"] << " V\n";
-    out << "  remaining time at 20 %: " << f["remaining_time_s"]["at20"] << " s; warnings:";
+    if (cap.contains("final_sigma") && !cap["final_sigma"].is_null()) {
+        out << fixed(cap["final"], 3) << " +/- " << fixed(cap["final_sigma"], 3) << " Ah at the landing (mean "
+            << fixed(cap["mean"], 3) << ", first 20 %: " << fixed(cap["first20_mean"], 3) << ")";
+    } else {
+        out << "mean " << fixed(cap["mean"], 3) << " Ah (first 20 %: " << fixed(cap["first20_mean"], 3) << ", at the landing "
+            << fixed(cap["final"], 3) << ")";
+    }
+    out << "; resistance mean " << fixed(f["resistance_ohm"]["mean"], 2, 1000.0) << " mOhm; model MAE "
+        << fixed(f["voltage_error_v"]["model"]["mean_abs"], 3) << " V\n";
+    const auto& at20 = f["remaining_time_s"]["at20"];
+    out << "  remaining time at 20 %: " << (at20.is_number() ? fixed(at20, 1) + " s" : "not known yet") << "\n";
+    out << "  warnings:";
     if (s["warnings"].empty()) out << " none";
-    for (const auto& w : s["warnings"]) out << " " << w["name"].get<std::string>() << "@" << w["first_time_s"] << "s";
+    for (const auto& w : s["warnings"]) {
+        out << "\n    " << w["name"].get<std::string>() << " at " << fixed(w["first_time_s"], 1) << " s" << warning_detail(w);
+    }
     out << "\n";
 }
 

@@ -90,8 +90,10 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
     const bool cells_present = sample.cell_count >= 2;
     status_.sample_valid = valid;
     status_.cells_valid = valid && cells_ok;
-    raise(kWarnSensorFault, !valid || (cells_present && !cells_ok));
-    if (!valid || (cells_present && !cells_ok)) ++status_.sensor_fault_samples;
+    status_.sensor_fault_cause =
+        static_cast<uint8_t>(!valid ? kFaultReading : cells_present && !cells_ok ? kFaultCells : 0);
+    raise(kWarnSensorFault, status_.sensor_fault_cause != 0);
+    if (status_.sensor_fault_cause != 0) ++status_.sensor_fault_samples;
     if (!valid) {
         // Keep last_time_us_: the next good sample's dt spans the gap, so its charge counts.
         return status_;
@@ -205,10 +207,18 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         status_.rest_capacity_ah = js.rest_capacity_ah;
         status_.short_flight_cause = js.cause;
         short_flight = js.short_flight;
+        // The flight reported is the estimator's own, on the offset-corrected current: a
+        // sensor reading 1.5 A high had "flown" on the ground, for the summary, the texts
+        // and the buzzer alike.
+        status_.flying = js.flying;
         // Sensor faults only the joint estimator can see: a current offset learnt on the
         // ground, and samples missing for longer than any logger stall (or than three of the
         // log's own intervals).
-        if (js.current_offset_fault || js.sample_gap) raise(kWarnSensorFault, true);
+        status_.current_offset_a = js.current_offset_a;
+        const uint8_t cause =
+            static_cast<uint8_t>((js.current_offset_fault ? kFaultCurrentOffset : 0) | (js.sample_gap ? kFaultSampleGap : 0));
+        status_.sensor_fault_cause |= cause;
+        if (cause != 0) raise(kWarnSensorFault, true);
         if (status_.cells_valid) cell_analyzer_.observe(sample.cell_voltage_v, sample.cell_count, current_a);
         if (js.loaded && status_.cells_valid) {
             cell_analyzer_.update(sample.time_us, sample.cell_voltage_v, sample.cell_count, current_a,

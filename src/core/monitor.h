@@ -36,6 +36,15 @@ enum SampleFault : uint8_t {
     kSampleFaultCount,
 };
 
+// Why the sensor-fault warning holds on a sample (bits, several at once): a pilot, a log's
+// reader and a fleet table should tell a dropped log line from a broken sensor.
+enum SensorFaultCause : uint8_t {
+    kFaultReading = 1,        // the pack reading kept out (sample_fault says which limit)
+    kFaultCells = 2,          // a cell reading kept out, the pack reading kept
+    kFaultCurrentOffset = 4,  // joint: a current offset learnt on the ground beyond offset_fault_a
+    kFaultSampleGap = 8,      // joint: this sample ends a gap longer than max_sample_gap_s (dt_s is its length)
+};
+
 struct MonitorStatus {
     uint64_t time_us = 0;
     float dt_s = 0.0f;
@@ -47,7 +56,7 @@ struct MonitorStatus {
     bool cells_valid = false;
     bool initialised = false;   // initial state of charge known
     bool initial_forced = false;
-    bool flying = false;
+    bool flying = false;        // joint estimator: its own flight (offset-corrected take-off, landing hold)
 
     float consumed_mah = 0.0f;  // since full, including the initial estimate
     float consumed_mwh = 0.0f;
@@ -82,6 +91,8 @@ struct MonitorStatus {
     uint8_t warnings_raised = 0;                // bit per Warning, ever raised
     uint64_t warning_time_us[kWarnCount] = {};  // first time each was raised
     uint32_t sensor_fault_samples = 0;
+    uint8_t sensor_fault_cause = 0;  // SensorFaultCause bits of this sample (0: no sensor fault now)
+    float current_offset_a = 0.0f;   // joint: the current-sensor offset learnt on the ground
 };
 
 class Monitor {

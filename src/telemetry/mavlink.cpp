@@ -193,7 +193,22 @@ size_t warning_text(core::Warning w, float rated_capacity_ah, float rated_resist
             }
             break;
         case core::kWarnSensorFault:
-            t.append("sensor fault, readings kept out");
+            // The first cause that holds: a pilot can reseat a connector, recalibrate a
+            // sensor or ignore a log hiccup, and needs to know which.
+            t.append("sensor fault");
+            if (status.sensor_fault_cause & core::kFaultReading) {
+                t.append(": reading out of range");
+            } else if (status.sensor_fault_cause & core::kFaultCells) {
+                t.append(": cell reading out of range");
+            } else if (status.sensor_fault_cause & core::kFaultCurrentOffset) {
+                t.append(": current offset ");
+                t.append_fixed(rounded(status.current_offset_a * 100.0f, -99999, 99999, 0), 2);
+                t.append(" A");
+            } else if (status.sensor_fault_cause & core::kFaultSampleGap) {
+                t.append(": no reading for ");
+                t.append_fixed(rounded(status.dt_s * 10.0f, 0, 99999, 0), 1);
+                t.append(" s");
+            }
             break;
         default:
             break;

@@ -304,7 +304,13 @@ TEST_CASE("replay --series carries the joint estimator's cell findings as the su
     CHECK(std::stod(last.at("rest_capacity_ah")) > 0.0);
     // The short human summary says how sure the capacity is.
     const auto brief = run("replay " + q(dir + "/w.csv") + " -c " + q(kSource + "/configs/generic-3s.json") + " --estimator joint");
-    CHECK_THAT(brief.out, Catch::Contains("; at landing ") && Catch::Contains(" +/- "));
+    const auto three = [](double v) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%.3f", v);
+        return std::string(b);
+    };
+    CHECK_THAT(brief.out, Catch::Contains("capacity " + three(flight["capacity_ah"]["final"].get<double>()) + " +/- " +
+                                          three(flight["capacity_ah"]["final_sigma"].get<double>()) + " Ah at the landing"));
 }
 
 TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes the config that corrects it", "[cli][truth]") {

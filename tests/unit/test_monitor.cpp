@@ -65,6 +65,7 @@ TEST_CASE("Sensor faults are flagged and kept out of the estimators", "[monitor]
     m.update(make(t, nan, 20.0f));
     CHECK_FALSE(m.status().sample_valid);
     CHECK(m.status().sample_fault == kSampleNotFinite);
+    CHECK(m.status().sensor_fault_cause == kFaultReading);
     CHECK((m.status().warnings & (1u << kWarnSensorFault)) != 0);
     const uint64_t fault_time = m.status().warning_time_us[kWarnSensorFault];
     CHECK(fault_time == t);
@@ -79,11 +80,14 @@ TEST_CASE("Sensor faults are flagged and kept out of the estimators", "[monitor]
     CHECK(m.status().sample_valid);
     CHECK_FALSE(m.status().cells_valid);
     CHECK(m.status().sample_fault == kSampleCellVoltage);
+    CHECK(m.status().sensor_fault_cause == kFaultCells);
     CHECK(m.status().sensor_fault_samples == 3);
     // The charge over the two rejected samples is counted with the next good one's dt.
     t += 67000;
     m.update(make(t, 15.5f, 20.0f));
     CHECK(m.status().sample_fault == kSampleOk);
+    CHECK(m.status().sensor_fault_cause == 0);
+    CHECK((m.status().warnings & (1u << kWarnSensorFault)) == 0);
     CHECK(m.status().consumed_mah - mah == Approx(20.0 * 4 * 0.067 / 3.6).epsilon(1e-3));
     CHECK(all_finite(m.status()));
     CHECK(m.status().warning_time_us[kWarnSensorFault] == fault_time);  // first time kept
@@ -215,10 +219,17 @@ TEST_CASE("Joint mode flags a gap in the samples as a sensor fault; the referenc
         t += 350000;
         m.update(make(t, 16.5f, 0.3f));
         CHECK_FALSE((m.status().warnings_raised >> kWarnSensorFault) & 1u);
-        // Two seconds without a sample is not.
+        // Two seconds without a sample is not; the status says it was a gap, and how long.
         t += 2000000;
         m.update(make(t, 16.5f, 0.3f));
         const bool flagged = (m.status().warnings_raised >> kWarnSensorFault) & 1u;
         CHECK(flagged == (kind == EstimatorKind::Joint));
+        CHECK(m.status().sensor_fault_cause == (kind == EstimatorKind::Joint ? kFaultSampleGap : 0));
+        CHECK(m.status().dt_s == Approx(2.0f));
+        // The next sample on time clears it.
+        t += 67000;
+        m.update(make(t, 16.5f, 0.3f));
+        CHECK(m.status().sensor_fault_cause == 0);
+        CHECK_FALSE((m.status().warnings >> kWarnSensorFault) & 1u);
     }
 }

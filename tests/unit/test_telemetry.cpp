@@ -304,8 +304,25 @@ TEST_CASE("Telemetry: the warnings' sentences, by hand", "[telemetry]") {
     CHECK(std::string(text) == "battsim: low capacity 1.00 Ah (64% of rated)");
     telemetry::warning_text(core::kWarnHighResistance, 1.55f, 0.02f, st, text);
     CHECK(std::string(text) == "battsim: high resistance 34 mOhm (168%)");
+    // A sensor fault says its first cause: the pack reading, a cell reading, the current
+    // sensor's offset (with its sign), or a gap in the samples (its length).
+    st.sensor_fault_cause = core::kFaultReading | core::kFaultSampleGap;
     telemetry::warning_text(core::kWarnSensorFault, 1.55f, 0.02f, st, text);
-    CHECK(std::string(text) == "battsim: sensor fault, readings kept out");
+    CHECK(std::string(text) == "battsim: sensor fault: reading out of range");
+    st.sensor_fault_cause = core::kFaultCells;
+    telemetry::warning_text(core::kWarnSensorFault, 1.55f, 0.02f, st, text);
+    CHECK(std::string(text) == "battsim: sensor fault: cell reading out of range");
+    st.sensor_fault_cause = core::kFaultCurrentOffset | core::kFaultSampleGap;
+    st.current_offset_a = -0.826f;
+    telemetry::warning_text(core::kWarnSensorFault, 1.55f, 0.02f, st, text);
+    CHECK(std::string(text) == "battsim: sensor fault: current offset -0.83 A");
+    st.sensor_fault_cause = core::kFaultSampleGap;
+    st.dt_s = 2.101f;
+    telemetry::warning_text(core::kWarnSensorFault, 1.55f, 0.02f, st, text);
+    CHECK(std::string(text) == "battsim: sensor fault: no reading for 2.1 s");
+    st.sensor_fault_cause = 0;  // not raised by a known cause: the bare warning
+    telemetry::warning_text(core::kWarnSensorFault, 1.55f, 0.02f, st, text);
+    CHECK(std::string(text) == "battsim: sensor fault");
     st.outlier_cell = 0;
     st.cell_finding = core::CellAnalyzer::kNone;  // the reference estimator's Piao score
     telemetry::warning_text(core::kWarnCellOutlier, 1.55f, 0.02f, st, text);

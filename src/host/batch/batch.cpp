@@ -196,11 +196,16 @@ json make_row(const BatchItem& item, const json& summary) {
     row["cell_scores"] = scores.is_array() ? scores : json::array();
     row["remaining_at20_s"] = pick("/flight/remaining_time_s/at20");
     json warnings = json::array();
+    json fault_cause = json::array();
     const json raised = pick("/warnings");
     if (raised.is_array()) {
-        for (const json& w : raised) warnings.push_back(w.is_object() ? w.value("name", std::string("?")) : std::string("?"));
+        for (const json& w : raised) {
+            warnings.push_back(w.is_object() ? w.value("name", std::string("?")) : std::string("?"));
+            if (w.is_object() && w.value("name", std::string()) == "sensor_fault") fault_cause = w.value("cause", json::array());
+        }
     }
     row["warnings"] = warnings;
+    row["sensor_fault_cause"] = fault_cause;
     const json total = pick("/samples/total");
     row["samples"] = total.is_number_unsigned() ? total.get<uint64_t>() : 0;
     const json faults = pick("/sensor_fault_samples");
@@ -233,6 +238,7 @@ json make_error_row(const BatchItem& item, const std::string& reason) {
     row["warnings"] = json::array();
     row["samples"] = 0;
     row["sensor_fault_samples"] = 0;
+    row["sensor_fault_cause"] = json::array();
     row["notes"] = 0;
     return row;
 }

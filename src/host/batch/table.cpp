@@ -27,7 +27,7 @@ const std::vector<std::string> kRowKeys = {
     "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah", "capacity_final_sigma_ah", "capacity_after_rest_ah", "charger_ratio",
     "charger_fault", "charger_current_gain", "charger_suggested_gain", "error_mean_v", "abs_error_mean_v", "resistance_mean_ohm",
     "resistance_first20_ohm", "resistance_final_ohm", "cell_scores", "remaining_at20_s", "warnings", "samples", "sensor_fault_samples",
-    "notes"};
+    "sensor_fault_cause", "notes"};
 
 const std::vector<std::string> kPackKeys = {"pack", "flights", "failed", "capacity_mean_ah",
                                             "capacity_trend_ah_per_flight", "capacity_final_median_ah",
@@ -109,7 +109,15 @@ std::string render_rows_md(const json& table) {
         std::string cells;
         for (const json& c : r["cell_scores"]) cells += (cells.empty() ? "" : " / ") + fixed(c, 2);
         std::string warnings;
-        for (const json& w : r["warnings"]) warnings += (warnings.empty() ? "" : ", ") + text(w);
+        for (const json& w : r["warnings"]) {
+            warnings += (warnings.empty() ? "" : ", ") + text(w);
+            // A fleet's table should tell a dropped log line from a broken sensor at a glance.
+            if (text(w) == "sensor_fault" && !r["sensor_fault_cause"].empty()) {
+                std::string cause;
+                for (const json& c : r["sensor_fault_cause"]) cause += (cause.empty() ? "" : ", ") + text(c);
+                warnings += " (" + cause + ")";
+            }
+        }
         std::string status = text(r["status"]);
         if (status == "ok" && !r["flight"].get<bool>()) status = "ok (no flight)";
         if (status != "ok" && r["error"].is_string()) status += ": " + r["error"].get<std::string>();
@@ -555,8 +563,8 @@ json read_table_file(const std::string& path) {
                 fail(where + ".index: expected a whole number below the input count " + std::to_string(count));
             if (!r["status"].is_string() || !r["flight"].is_boolean())
                 fail(where + ": expected \"status\" text and \"flight\" true/false");
-            if (!r["cell_scores"].is_array() || !r["warnings"].is_array())
-                fail(where + ": expected \"cell_scores\" and \"warnings\" arrays");
+            if (!r["cell_scores"].is_array() || !r["warnings"].is_array() || !r["sensor_fault_cause"].is_array())
+                fail(where + ": expected \"cell_scores\", \"warnings\" and \"sensor_fault_cause\" arrays");
         }
     } catch (const nlohmann::json::exception& e) {
         // A value of the wrong type somewhere the checks above did not look.

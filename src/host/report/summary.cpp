@@ -75,6 +75,12 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
         outlier_finding_ = s.cell_finding;
     }
     seen_raised_ = s.warnings_raised;
+    fault_causes_ |= s.sensor_fault_cause;
+    if (s.sensor_fault_cause & core::kFaultSampleGap) {
+        ++gap_count_;
+        longest_gap_s_ = std::max(longest_gap_s_, s.dt_s);
+    }
+    if (s.sensor_fault_cause & core::kFaultCurrentOffset) fault_offset_a_ = s.current_offset_a;
     if (s.sample_fault != core::kSampleOk && s.sample_fault < core::kSampleFaultCount) ++rejected_[s.sample_fault];
     if (!s.sample_valid) return;
     ++valid_samples_;
@@ -139,6 +145,21 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
 namespace {
 json mean_or_null(double sum, double n) { return n > 0 ? json(round_sig(sum / n)) : json(nullptr); }
 }  // namespace
+
+void SummaryAccumulator::add_fault_causes(json& e) const {
+    json cause = json::array();
+    if (fault_causes_ & core::kFaultReading) cause.push_back("reading");  // `samples.rejected` counts them by limit
+    if (fault_causes_ & core::kFaultCells) cause.push_back("cells");
+    if (fault_causes_ & core::kFaultCurrentOffset) {
+        cause.push_back("current_offset");
+        e["current_offset_a"] = round_sig(fault_offset_a_, 4);
+    }
+    if (fault_causes_ & core::kFaultSampleGap) {
+        cause.push_back("sample_gap");
+        e["sample_gaps"] = {{"count", gap_count_}, {"longest_s", round_sig(longest_gap_s_, 4)}};
+    }
+    e["cause"] = cause;
+}
 
 json SummaryAccumulator::to_json(int cells) const {
     json j;
@@ -265,6 +286,7 @@ json SummaryAccumulator::to_json(int cells) const {
                 if (short_cause_ & core::JointEstimator::kCauseResistance) cause.push_back("resistance");
                 e["cause"] = cause;
             }
+            if (w == core::kWarnSensorFault) add_fault_causes(e);
             warnings.push_back(e);
         }
         j["sensor_fault_samples"] = last_.sensor_fault_samples;

@@ -51,6 +51,8 @@ public:
 
 private:
     void push(const Bucket& b);
+    // The sensor-fault warning's causes and what each measured, into its summary entry.
+    void add_fault_causes(nlohmann::json& entry) const;
 
     size_t max_buckets_;
     size_t per_bucket_ = 1;
@@ -78,6 +80,10 @@ private:
     uint8_t short_cause_ = 0;        // cause bits when the short-flight warning was first raised
     int8_t outlier_cell_ = -1;       // cell named when the cell warning was first raised
     uint8_t outlier_finding_ = 0;
+    uint8_t fault_causes_ = 0;        // core::SensorFaultCause bits seen on any sample
+    uint64_t gap_count_ = 0;          // samples ending a gap the joint estimator called a fault
+    float longest_gap_s_ = 0.0f;
+    float fault_offset_a_ = 0.0f;     // the learnt current offset on the latest sample it was a fault
 };
 
 }  // namespace host
