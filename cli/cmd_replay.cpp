@@ -12,6 +12,7 @@
 #include "host/plot/plot.h"
 #include "host/replay.h"
 #include "host/report/charger_check.h"
+#include "host/report/current_offset_fix.h"
 #include "host/report/telemetry_writer.h"
 
 namespace battsim {
@@ -56,9 +57,9 @@ std::function<int()> setup(CLI::App& sub) {
                    "With --charged-mah: a count off by more than this fraction is a sensor fault (default 0.03)")
         ->needs(charged);
     sub.add_option("--config-out", a->config_out,
-                   "With --charged-mah: write the config with the suggested current-sensor gain "
-                   "(extensions.current_sensor.gain) here")
-        ->needs(charged);
+                   "Write the config with the current-sensor corrections this replay found here: the gain "
+                   "--charged-mah suggests (extensions.current_sensor.gain), the offset learnt on the ground "
+                   "when it was a sensor fault (extensions.current_sensor.offset_a); none found: exit 1, nothing written");
     add_input_options(sub, a->input);
     return [a, charged]() -> int {
         host::ReplayOptions opt;
@@ -115,9 +116,12 @@ std::function<int()> setup(CLI::App& sub) {
             const auto& gain = summary["charger_check"]["suggested_current_gain"];
             if (gain.is_number()) corrected.monitor.extensions.current_sensor.gain = static_cast<float>(gain.get<double>());
         }
-        // Written only with a suggestion: a config carrying a gain fitted to an offset, or
+        // The offset the joint estimator learnt on the ground, when it called it a fault.
+        const double offset_taken_a = host::correct_current_offset(summary, corrected.monitor);
+        // Written only with a correction: a config carrying a gain fitted to an offset, or
         // to a pack that was not full, would be wrong on every later flight.
-        const bool refuse_config = check && !a->config_out.empty() && !summary["charger_check"]["suggested_current_gain"].is_number();
+        const bool gain_found = check && summary["charger_check"]["suggested_current_gain"].is_number();
+        const bool refuse_config = !a->config_out.empty() && !gain_found && offset_taken_a == 0.0;
         const std::string text = summary.dump(2) + "\n";
         try {
             if (!a->summary.empty()) host::write_file_atomic(a->summary, text);
@@ -149,10 +153,15 @@ std::function<int()> setup(CLI::App& sub) {
             std::cout << "\n";
         }
         if (refuse_config) {
-            std::cerr << "battsim replay: --config-out: no gain suggested (see the charger check's notes); "
-                      << a->config_out << " not written\n";
+            std::cerr << "battsim replay: --config-out: no correction found ("
+                      << (check ? "the charger check suggests no gain, see its notes; " : "no --charged-mah; ")
+                      << "no current-sensor offset learnt as a sensor fault); " << a->config_out << " not written\n";
             return kExitFailure;
         }
+        if (!a->config_out.empty() && offset_taken_a != 0.0)
+            std::cerr << "battsim replay: --config-out: extensions.current_sensor.offset_a "
+                      << corrected.monitor.extensions.current_sensor.offset_a << " A (the " << offset_taken_a
+                      << " A offset learnt on the ground taken out) in " << a->config_out << "\n";
         return kExitOk;
     };
 }

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <string>
 
@@ -103,6 +104,25 @@ TEST_CASE("replay says a sensor fault was the current sensor's offset, and its s
     CHECK_FALSE(r.warning.contains("sample_gaps"));
     CHECK_THAT(r.brief, Catch::Contains("current sensor offset 1."));
     CHECK(said(r.texts, "battsim: sensor fault: current offset 1."));
+
+    // --config-out takes the learnt offset out of the config; the next replay through it
+    // has no fault and counts the charge the pack really gave.
+    const std::string fixed = dir + "/fixed.json";
+    const std::string config = kSource + "/configs/sim-4s.json";
+    const clitest::Result out = run("replay " + q(r.log) + " -c " + q(config) + " --estimator joint --config-out " + q(fixed));
+    INFO(out.err);
+    REQUIRE(out.exit_code == 0);
+    CHECK_THAT(out.err, Catch::Contains("extensions.current_sensor.offset_a"));
+    const json written = json::parse(clitest::read_file(fixed));
+    CHECK(written["battery"]["extensions"]["current_sensor"]["offset_a"].get<double>() ==
+          Approx(-r.warning["current_offset_a"].get<double>()).margin(1e-4));
+    const json again = clitest::run_json("replay " + q(r.log) + " -c " + q(fixed) + " --estimator joint --json");
+    for (const json& w : again["warnings"]) CHECK(w["name"] != "sensor_fault");
+    const double log_charge_ah = truth["flight"]["log_charge_ah"].get<double>();
+    const double before_err = std::abs(r.summary["consumed"]["ah"].get<double>() - r.summary["initial_state"]["consumed_mah"].get<double>() * 1e-3 - log_charge_ah);
+    const double after_err = std::abs(again["consumed"]["ah"].get<double>() - again["initial_state"]["consumed_mah"].get<double>() * 1e-3 - log_charge_ah);
+    CHECK(before_err > 0.05);         // 1.5 A over 263 s is 0.11 Ah
+    CHECK(after_err < 0.3 * before_err);
 }
 
 TEST_CASE("replay says a sensor fault was a cell reading, and does not blame the config for it", "[cli][faults]") {
