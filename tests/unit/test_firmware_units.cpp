@@ -7,6 +7,7 @@
 #include <random>
 
 #include "app/averages_file.h"
+#include "app/display_pages.h"
 #include "app/line_link.h"
 #include "app/readings.h"
 #include "app/series_line.h"
@@ -256,4 +257,38 @@ TEST_CASE("firmware series formatter writes the host SeriesWriter's bytes", "[fi
         INFO("cells " << cells);
         REQUIRE(fw_text == fwtest::read_file(path));
     }
+}
+
+TEST_CASE("The OLED's warning row names a sensor fault by its cause, in a pilot's glance", "[firmware]") {
+    fw::host::MockClock clock;
+    fw::host::TextDisplay display(clock);
+    core::Sample sample;
+    sample.voltage_v = 16.4f;
+    core::MonitorStatus status;
+    fw::MonitorPage page;
+    page.sample = &sample;
+    page.status = &status;
+    const auto warning_row = [&]() {
+        fw::draw_monitor_page(display, page);
+        const std::string f = display.frame();
+        const size_t start = f.rfind('\n', f.size() - 2) + 1;  // row 6, the last
+        return f.substr(start, f.size() - 1 - start);
+    };
+    CHECK(warning_row().rfind("ok ", 0) == 0);
+    status.warnings = 1u << core::kWarnSensorFault;
+    const struct {
+        uint8_t cause;
+        const char* shown;
+    } cases[] = {{core::kFaultReading, "SENS "}, {core::kFaultCells, "TAP "}, {core::kFaultCurrentOffset, "OFS "},
+                 {core::kFaultSampleGap, "GAP "}, {core::kFaultReading | core::kFaultSampleGap, "SENS "}, {0, "SENS "}};
+    for (const auto& c : cases) {
+        status.sensor_fault_cause = c.cause;
+        INFO("cause " << int(c.cause));
+        CHECK(warning_row().rfind(c.shown, 0) == 0);
+    }
+    // Everything at once is cut at 21 columns: the short-flight verdict comes first.
+    status.warnings = 0x1F;
+    status.outlier_cell = 5;
+    status.sensor_fault_cause = core::kFaultCurrentOffset;
+    CHECK(warning_row() == "SHORT CAP RES CELL6 O");
 }

@@ -64,11 +64,19 @@ void draw_monitor_page(Display& d, const MonitorPage& page) {
 
     r.clear();
     if (s.warnings == 0) r.append("ok");
+    // The verdict first: the row is cut at 21 columns when everything is raised at once.
+    if (s.warnings & (1u << core::kWarnShortFlight)) r.append("SHORT ");
     if (s.warnings & (1u << core::kWarnLowCapacity)) r.append("CAP ");
     if (s.warnings & (1u << core::kWarnHighResistance)) r.append("RES ");
     if (s.warnings & (1u << core::kWarnCellOutlier)) r.appendf("CELL%d ", s.outlier_cell + 1);
-    if (s.warnings & (1u << core::kWarnSensorFault)) r.append("SENS ");
-    if (s.warnings & (1u << core::kWarnShortFlight)) r.append("SHORT ");
+    // A sensor fault by its cause, in the same width: what to check differs.
+    if (s.warnings & (1u << core::kWarnSensorFault)) {
+        r.append(s.sensor_fault_cause & core::kFaultReading         ? "SENS "
+                 : s.sensor_fault_cause & core::kFaultCells         ? "TAP "
+                 : s.sensor_fault_cause & core::kFaultCurrentOffset ? "OFS "
+                 : s.sensor_fault_cause & core::kFaultSampleGap     ? "GAP "
+                                                                    : "SENS ");
+    }
     if (!page.sd_ok) r.append(" SD!");
     append_counters_row(r, page.counters);
     d.text(0, 5, r.c_str());
