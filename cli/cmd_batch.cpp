@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <thread>
 
@@ -79,6 +80,17 @@ int run(const BatchArgs& a) {
     std::vector<host::BatchItem> items;
     for (const host::BatchItem& it : all)
         if (shard.contains(it.index)) items.push_back(it);
+
+    // What each config makes unreliable, once per config: the table only counts notes, and a
+    // fleet replayed with the joint estimator and no OCV table reads plausible nonsense.
+    std::map<std::string, size_t> noted;
+    for (const host::BatchItem& it : items) {
+        if (!it.error.empty()) continue;
+        for (const std::string& note : host::config_notes(it.replay.config.monitor))
+            ++noted["config " + it.replay.config.name + ": " + note];
+    }
+    for (const auto& [note, logs] : noted)
+        std::cerr << me << "note (" << logs << (logs == 1 ? " log" : " logs") << "), " << note << "\n";
 
     host::BatchRunOptions opt;
     opt.jobs = a.jobs > 0 ? a.jobs : std::max(1u, std::thread::hardware_concurrency());

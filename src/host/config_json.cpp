@@ -510,12 +510,15 @@ std::vector<std::string> config_notes(const core::MonitorConfig& config, const L
     // Without a table the joint estimator reads the state of charge off the Tremblay curve,
     // a fit of a discharge under load, not a rest curve: on the dissertation's flights with
     // configs/reference-modified.json its final capacities read 2.55–3.08 Ah for packs of
-    // 1.5–1.6 Ah (1.04–1.65 Ah with a table). The numbers look as plausible as any others.
+    // 1.5–1.6 Ah (1.04–1.65 Ah with a table), and the cell check, whose weak-cell drift is
+    // the curve's slope, names cell 2 of the new pack 30 for capacity (nothing with a table).
+    // The numbers look as plausible as any others.
     if (config.estimator == core::EstimatorKind::Joint && config.joint.ocv.points < 2) {
         notes.push_back(
             "the joint estimator has no OCV table (joint.ocv_cell_voltage_v) and reads the state of charge off the "
-            "Tremblay curve, which is no rest curve: its capacity, state of charge and remaining time can be far off "
-            "(the dissertation's 1.5-1.6 Ah packs read 2.55-3.08 Ah). Give the config a table: battsim discharge "
+            "Tremblay curve, which is no rest curve: its capacity, state of charge, remaining time and weak-cell verdicts "
+            "can be far off (the dissertation's 1.5-1.6 Ah packs read 2.55-3.08 Ah, and a new pack's cell is named "
+            "weak). Give the config a table: battsim discharge "
             "--ocv-points N, or battsim fit-ocv");
     }
     return notes;

@@ -396,3 +396,20 @@ TEST_CASE("batch: the monitor table pools a drone's charger checks into one gain
     // --monitors wrote the same table, in --format.
     CHECK(nlohmann::json::parse(read_file(dir + "/mon.json")) == t["monitors"]);
 }
+
+TEST_CASE("batch: what a config makes unreliable is said once, with how many logs it touches", "[cli][batch]") {
+    // The table only counts each log's notes; a fleet replayed with the joint estimator and
+    // no OCV table would otherwise read plausible nonsense without a word.
+    const std::string dir = clitest::temp_dir();
+    for (const char* name : {"a.csv", "b.csv"}) clitest::write_file(dir + "/" + name, read_file(kSource + "/logs/example-4s.csv"));
+    const std::string logs = q(dir + "/a.csv") + " " + q(dir + "/b.csv");
+    clitest::Result r = run("batch " + logs + " -c " + q(kConfig) + " --estimator joint --no-progress -o " + q(dir + "/t.md"));
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("battsim batch: note (2 logs), config reference-4s-modified: the joint estimator has no OCV table"));
+    CHECK(r.err.find("no OCV table") == r.err.rfind("no OCV table"));  // once, not per log
+    r = run("batch " + logs + " -c " + q(kSource + "/configs/sim-4s.json") + " --estimator joint --no-progress -o " + q(dir + "/t.md"));
+    CHECK(r.exit_code == 0);
+    CHECK(r.err.find("note (") == std::string::npos);
+    r = run("batch " + logs + " -c " + q(kConfig) + " --no-progress -o " + q(dir + "/t.md"));  // the reference needs none
+    CHECK(r.err.find("note (") == std::string::npos);
+}
