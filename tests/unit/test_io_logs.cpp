@@ -208,7 +208,7 @@ std::string ulog_sub(int multi_id, int msg_id, const std::string& name = "batter
 }
 // battery_status data without the trailing 3 padding bytes (as PX4 logs it).
 std::string ulog_battery(int msg_id, uint64_t ts, float v, float i, float temp = std::numeric_limits<float>::quiet_NaN(),
-                         int cells = 4, float cell_v = 3.9f) {
+                         int cells = 4, float cell_v = 3.9f, float cell_step_v = 0.01f) {
     std::string p;
     put(p, static_cast<uint16_t>(msg_id), 2);
     put(p, ts, 8);
@@ -217,7 +217,7 @@ std::string ulog_battery(int msg_id, uint64_t ts, float v, float i, float temp =
     put_f(p, 10.0f);
     put_f(p, temp);
     put(p, static_cast<uint32_t>(cells), 4);
-    for (int k = 0; k < 4; ++k) put_f(p, cell_v + 0.01f * static_cast<float>(k));
+    for (int k = 0; k < 4; ++k) put_f(p, cell_v + cell_step_v * static_cast<float>(k));
     put(p, 0, 1);  // warning
     return ulog_msg('D', p);
 }
@@ -341,22 +341,22 @@ TEST_CASE("PX4 ULog test.ulg: battery_status multi_id 0", "[io-logs][data]") {
     CHECK(seconds(r.samples.back()) - seconds(r.samples.front()) == Approx(8.8).margin(0.01));
     CHECK(median_dt(r.samples) == Approx(0.2).margin(0.005));  // 5 Hz
     CHECK(non_decreasing(r.samples));
-    CHECK(r.cell_count == 4);
+    // Its voltage_cell_v is pack / 4 in every sample (PX4 measured no cell): left out.
+    CHECK(r.cell_count == 0);
     CHECK_FALSE(r.has_temperature);  // temperature is NaN in this log
     float vmin = 1e9f, vmax = 0, imax = 0;
     for (const auto& s : r.samples) {
         vmin = std::min(vmin, s.voltage_v);
         vmax = std::max(vmax, s.voltage_v);
         imax = std::max(imax, s.current_a);
-        CHECK(s.cell_count == 4);
-        CHECK(s.cell_voltage_v[0] > 3.3f);
-        CHECK(s.cell_voltage_v[0] < 3.7f);
+        CHECK(s.cell_count == 0);
+        CHECK(s.cell_voltage_v[0] == 0.0f);
         CHECK_FALSE(s.has_temperature);
     }
     CHECK(vmin == Approx(12.95).margin(0.005));
     CHECK(vmax == Approx(14.31).margin(0.005));
     CHECK(imax == Approx(12.19).margin(0.01));
-    CHECK(any_note(r, "carry no per-cell information"));
+    CHECK(any_note(r, "carry no per-cell information and are left out"));
 }
 
 TEST_CASE("DataFlash text logs: PARM parameters", "[io-logs][data]") {
@@ -765,6 +765,26 @@ TEST_CASE("ULog: current_a = -1 means unknown: 0 A with a note", "[io-logs]") {
     CHECK(r.samples[0].current_a == 0.0f);
     CHECK(r.samples[1].current_a == Approx(4.0));
     CHECK(any_note(r, "current_a = -1"));
+}
+
+TEST_CASE("ULog: cells PX4 filled with pack / count are left out; measured ones are kept", "[io-logs]") {
+    LogTempDir d;
+    // Every cell equal in every sample: what PX4 writes when it measures no cell.
+    std::string filled = ulog_good_prefix();
+    for (int k = 0; k < 3; ++k) filled += ulog_battery(3, 1000000 + 100000 * k, 15.6f, 5.0f, 20.0f, 4, 3.9f, 0.0f);
+    const auto r = read_all(Kind::Ulog, d.write("filled.ulg", filled));
+    REQUIRE(r.samples.size() == 3);
+    CHECK(r.cell_count == 0);
+    for (const auto& s : r.samples) CHECK(s.cell_count == 0);
+    CHECK(any_note(r, "are left out"));
+    // One sample whose cells differ is a measurement: every sample keeps its cells.
+    std::string measured = filled + ulog_battery(3, 1300000, 15.6f, 5.0f, 20.0f, 4, 3.9f);
+    const auto m = read_all(Kind::Ulog, d.write("measured.ulg", measured));
+    REQUIRE(m.samples.size() == 4);
+    CHECK(m.cell_count == 4);
+    CHECK(m.samples[0].cell_count == 4);
+    CHECK(m.samples[3].cell_voltage_v[3] == Approx(3.93));
+    CHECK_FALSE(any_note(m, "per-cell information"));
 }
 
 TEST_CASE("ULog: cells only up to cell_count and only while > 0", "[io-logs]") {

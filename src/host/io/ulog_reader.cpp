@@ -32,6 +32,7 @@
 #include "host/io/ulog_reader.h"
 
 #include <algorithm>
+#include <iterator>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -645,16 +646,20 @@ private:
                                  ? "no battery_status data (multi_id 0) in this ULog: the topic is subscribed but "
                                    "never logged"
                                  : "no battery_status data (multi_id 0) in this ULog: the topic is not logged");
-        info_.cell_count = max_cells;
+        // PX4 fills every cell with pack / count when it cannot measure cells: such cells
+        // say nothing of any cell, and their sum, rounded apart from the pack's, read as a
+        // sensor fault. They are left out, so the monitor sees the pack alone.
+        synthetic_cells_ = with_cells > 0 && equal_cells == with_cells;
+        info_.cell_count = synthetic_cells_ ? 0 : max_cells;
         info_.has_temperature = temps > 0;
         if (unknown_current > 0)
             info_.notes.push_back(
                 "current_a = -1 (PX4: no current measurement) in " + std::to_string(unknown_current) + " of " +
                 std::to_string(rows) + " battery_status samples: those samples carry 0 A, which here means unknown");
-        if (with_cells > 0 && equal_cells == with_cells)
+        if (synthetic_cells_)
             info_.notes.push_back("battery_status.voltage_cell_v holds the same value for every cell in every sample: "
                                   "PX4 fills it with pack voltage / cell count when it cannot measure cells, so the "
-                                  "cell voltages carry no per-cell information");
+                                  "cell voltages carry no per-cell information and are left out");
     }
 
     void drop(const char* kind, const std::string& text) {
@@ -690,7 +695,8 @@ private:
         out.voltage_v = static_cast<float>(r.voltage);
         out.current_a = static_cast<float>(current);
         int beyond = 0;
-        out.cell_count = static_cast<uint8_t>(record_cells(r, out.cell_voltage_v, beyond));
+        out.cell_count = synthetic_cells_ ? 0 : static_cast<uint8_t>(record_cells(r, out.cell_voltage_v, beyond));
+        if (synthetic_cells_) std::fill(std::begin(out.cell_voltage_v), std::end(out.cell_voltage_v), 0.0f);
         if (beyond > 0)
             notes_.add("cells", where + ": battery_status reports " + std::to_string(core::kMaxCells + beyond) +
                                     " cells; cells beyond " + std::to_string(core::kMaxCells) + " are dropped");
@@ -705,6 +711,7 @@ private:
     SourceInfo info_;
     NoteLog notes_;
     std::unique_ptr<UlogStream> stream_;
+    bool synthetic_cells_ = false;  // every cell equal in every sample: PX4's pack / count
     long rows_ = 0;
     long emitted_ = 0;
     double last_t_ = 0;
