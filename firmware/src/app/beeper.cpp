@@ -45,10 +45,14 @@ bool Beeper::update(const core::MonitorStatus& status) {
                                                            long_beeps(static_cast<core::Warning>(best))))
                 best = w;
         }
-        pending_ = static_cast<uint8_t>(pending_ & ~(1u << best));
-        schedule_.told(best, t);
-        pattern_start_us_ = t;
-        pattern_beeps_ = long_beeps(static_cast<core::Warning>(best));
+        if (best < 0) {
+            pending_ = 0;  // no warning of ours: nothing to beep (the schedule gives none)
+        } else {
+            pending_ = static_cast<uint8_t>(pending_ & ~(1u << best));
+            schedule_.told(best, t);
+            pattern_start_us_ = t;
+            pattern_beeps_ = long_beeps(static_cast<core::Warning>(best));
+        }
     }
     if (pattern_beeps_ > 0) return (t - pattern_start_us_) % long_us < us(kLongOnMs);
 
