@@ -45,3 +45,27 @@ print("| %s | %s | %.2f | %s | %+.1f %% → %+.1f %% | %s | %.3f → %.3f (%.3f)
 EOF
   done
 done
+
+# How much of the offset a rest learns: the 4S flight (1.5 A) with longer and shorter rests
+# before its take-off (the suite's is 60 s).
+echo
+echo "| rest before take-off s | learnt A (of 1.50) |"
+echo "|--:|--:|"
+for idle in 30 60 120 240; do
+  python3 - "$root/configs/scenarios/4s-racing-fault-current-offset.json" "$idle" "$tmp/rest.json" <<'EOF'
+import json, os, sys
+path, idle, out = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+s = json.load(open(path))
+s["profile"]["idle_before_s"] = idle
+s["monitor_config"] = os.path.normpath(os.path.join(os.path.dirname(path), s["monitor_config"]))
+json.dump(s, open(out, "w"))
+EOF
+  "$bin" simulate "$tmp/rest.json" -o "$tmp/rest.csv" > /dev/null
+  "$bin" replay "$tmp/rest.csv" -c "$root/configs/sim-4s.json" --estimator joint --json > "$tmp/rest-summary.json"
+  python3 - "$idle" "$tmp/rest-summary.json" <<'EOF'
+import json, sys
+s = json.load(open(sys.argv[2]))
+w = next((w for w in s["warnings"] if w["name"] == "sensor_fault"), None)
+print("| %s | %s |" % (sys.argv[1], "%.3f" % w["current_offset_a"] if w and "current_offset_a" in w else "not a fault"))
+EOF
+done
