@@ -12,7 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "core/monitor.h"
 #include "host/config_json.h"
+#include "host/sim/sensor.h"
 #include "host/sim/det_math.h"
 #include "host/sim/ocv.h"
 #include "host/sim/plant.h"
@@ -537,4 +539,18 @@ TEST_CASE("Truth names outlier cells by the 10 % bar against the other cells, no
     CHECK(tj["pack"]["per_cell"].size() == 4);
     CHECK(tj["pack"]["per_cell"][3]["r0_ohm_25c"].get<double>() ==
           Approx(1.5 * tj["pack"]["per_cell"][0]["r0_ohm_25c"].get<double>()).epsilon(1e-5));
+}
+
+TEST_CASE("The sensor-fault causes a monitor should name for each injected fault", "[sim]") {
+    using namespace battsim;
+    host::sim::SensorFaults f;
+    CHECK(host::sim::nameable_fault_causes(f) == 0);
+    f.current_gain_error = 0.08;  // seen by a charger, never in flight
+    f.missed_probability = 0.05;  // single rows: no gap
+    CHECK(host::sim::nameable_fault_causes(f) == 0);
+    f.current_offset_a = -1.0;
+    CHECK(host::sim::nameable_fault_causes(f) == core::kFaultCurrentOffset);
+    f.loose_tap = 2;
+    f.missed_burst_rate_per_min = 2.0;
+    CHECK(host::sim::nameable_fault_causes(f) == (core::kFaultCurrentOffset | core::kFaultCells | core::kFaultSampleGap));
 }

@@ -146,19 +146,20 @@ namespace {
 json mean_or_null(double sum, double n) { return n > 0 ? json(round_sig(sum / n)) : json(nullptr); }
 }  // namespace
 
+json sensor_fault_cause_names(uint8_t causes) {
+    json names = json::array();
+    if (causes & core::kFaultReading) names.push_back("reading");  // `samples.rejected` counts them by limit
+    if (causes & core::kFaultCells) names.push_back("cells");
+    if (causes & core::kFaultCurrentOffset) names.push_back("current_offset");
+    if (causes & core::kFaultSampleGap) names.push_back("sample_gap");
+    return names;
+}
+
 void SummaryAccumulator::add_fault_causes(json& e) const {
-    json cause = json::array();
-    if (fault_causes_ & core::kFaultReading) cause.push_back("reading");  // `samples.rejected` counts them by limit
-    if (fault_causes_ & core::kFaultCells) cause.push_back("cells");
-    if (fault_causes_ & core::kFaultCurrentOffset) {
-        cause.push_back("current_offset");
-        e["current_offset_a"] = round_sig(fault_offset_a_, 4);
-    }
-    if (fault_causes_ & core::kFaultSampleGap) {
-        cause.push_back("sample_gap");
+    if (fault_causes_ & core::kFaultCurrentOffset) e["current_offset_a"] = round_sig(fault_offset_a_, 4);
+    if (fault_causes_ & core::kFaultSampleGap)
         e["sample_gaps"] = {{"count", gap_count_}, {"longest_s", round_sig(longest_gap_s_, 4)}};
-    }
-    e["cause"] = cause;
+    e["cause"] = sensor_fault_cause_names(fault_causes_);
 }
 
 json SummaryAccumulator::to_json(int cells) const {

@@ -18,6 +18,10 @@ constexpr int kSummaryVersion = 1;
 // Rounds to `digits` significant digits so summaries print short, stable numbers.
 double round_sig(double x, int digits = 6);
 
+// The names of core::SensorFaultCause bits, in bit order ("reading", "cells",
+// "current_offset", "sample_gap"): the summary's and the scoreboard's sensor-fault causes.
+nlohmann::json sensor_fault_cause_names(uint8_t causes);
+
 // The summary's key for a core::SampleFault, and the config key whose limit it broke.
 const char* sample_fault_key(uint8_t fault);
 const char* sample_fault_limit(uint8_t fault);

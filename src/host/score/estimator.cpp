@@ -101,6 +101,7 @@ EstimatorColumn monitor_column(std::string name, std::string description,
                 e.rest_capacity_ah = st.rest_capacity_ah;
             }
             e.warnings = st.warnings;
+            e.fault_cause = st.sensor_fault_cause;
             e.outlier_cell = st.outlier_cell;
             out.push_back(e);
         }
@@ -158,6 +159,7 @@ EstimatorColumn oracle_column() {
             if (w == "cell_outlier") bits |= 1u << core::kWarnCellOutlier;
         }
         if (t.sensor_faulty) bits |= 1u << core::kWarnSensorFault;
+        const uint8_t causes = sim::nameable_fault_causes(s.sensor.faults);
         sim::Plant plant;
         plant.configure(t.plant, 1.0, s.ambient_c);
         AgedForwardRuns runs;
@@ -187,6 +189,7 @@ EstimatorColumn oracle_column() {
                 }
                 if (e.time_s >= t.takeoff_s) {
                     e.warnings = bits;
+                    e.fault_cause = causes;
                     e.outlier_cell = static_cast<int8_t>(t.weak_cell);
                 }
             }

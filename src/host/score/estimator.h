@@ -29,6 +29,7 @@ struct Estimate {
     bool has_rest_capacity = false;  // read from the rests before and after a flight
     double rest_capacity_ah = 0.0;
     uint8_t warnings = 0;      // bit per core::Warning, active after this sample
+    uint8_t fault_cause = 0;   // core::SensorFaultCause bits of this sample
     int8_t outlier_cell = -1;  // 0-based cell named while the cell warning is active
 };
 

@@ -1,5 +1,7 @@
 #include "host/score/scoreboard.h"
 
+#include "host/report/summary.h"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -126,6 +128,7 @@ ColumnFlight judge(const std::vector<Estimate>& est, const sim::SimulationResult
                 }
             }
         }
+        cf.fault_causes |= e.fault_cause;
         if ((e.warnings >> core::kWarnCellOutlier) & 1u) {
             cf.cell_warning = true;
             cf.named_cell = e.outlier_cell;
@@ -307,6 +310,12 @@ std::vector<Row> build_rows(const ScoreResult& r) {
                   ++n.n;
                   if (c.sensor_warning) ++n.k;
               });
+    add_count("sensor_faults_cause_named", "sensor faults named by their cause",
+              [](const FlightScore& f, const ColumnFlight& c, Count& n) {
+                  if (f.nameable_fault_causes == 0) return;  // a gain error: no flight shows it
+                  ++n.n;
+                  if (c.sensor_warning && (c.fault_causes & f.nameable_fault_causes) == f.nameable_fault_causes) ++n.k;
+              });
     add_count("sensor_faults_blamed_on_cells", "sensor faults blamed on cells",
               [](const FlightScore& f, const ColumnFlight& c, Count& n) {
                   if (!f.sensor_faulty) return;
@@ -347,6 +356,7 @@ FlightScore score_flight(const sim::SimulationResult& sim, const std::vector<cor
     f.short_flight = t.short_flight();
     f.degraded = t.degraded;
     f.sensor_faulty = t.sensor_faulty;
+    f.nameable_fault_causes = sim::nameable_fault_causes(sim.scenario.sensor.faults);
     f.weak_cell = t.weak_cell;
     f.outlier_cells = t.outlier_cells;
     f.justified = t.justified_warnings;
@@ -615,6 +625,7 @@ json to_json(const ScoreResult& r) {
         {"short_flight", "T < 0.8 x the healthy twin's T"},
         {"false_warning", "low capacity or high resistance warning the pack does not justify, or short flight on a flight that is not short"},
         {"sensor_fault_blamed_on_cell", "on a sensor-fault flight, a named cell that is not one of the pack's outlier cells"},
+        {"sensor_fault_cause_named", "on a flight with an offset, a loose balance tap or dropouts of a second or more, the sensor-fault warning names each (current_offset, cells, sample_gap); a gain error shows in no flight and is left out"},
         {"copies", "copy k > 0 of the suite adds 7919 k to every scenario's seed and names its flights NAME@k; summary pools every copy, summary_by_copy has each"}};
     j["copies"] = r.copies;
     j["summary"] = summary_json(build_rows(r), r.columns);
@@ -642,6 +653,7 @@ json to_json(const ScoreResult& r) {
                         return a;
                     }()},
                    {"sensor_faulty", f.sensor_faulty},
+                   {"nameable_sensor_fault_causes", sensor_fault_cause_names(f.nameable_fault_causes)},
                    {"notes", f.notes}};
         json per = json::object();
         for (size_t c = 0; c < r.columns.size(); ++c) {
@@ -662,6 +674,7 @@ json to_json(const ScoreResult& r) {
                                  {"first_warning_after_takeoff_s", warn},
                                  {"warned_in_time", cf.warned_in_time},
                                  {"false_warnings", cf.false_warnings},
+                                 {"sensor_fault_causes", sensor_fault_cause_names(cf.fault_causes)},
                                  {"named_cell", cf.cell_warning && cf.named_cell >= 0 ? json(cf.named_cell + 1) : json(nullptr)}};
         }
         fj["estimators"] = per;

@@ -60,6 +60,7 @@ struct ColumnFlight {
     bool cell_warning = false;
     int named_cell = -1;
     bool sensor_warning = false;
+    uint8_t fault_causes = 0;  // core::SensorFaultCause bits named over the log
     double first_warning_s[core::kWarnCount];  // since take-off (0 = on the ground), −1 never
     ColumnFlight() {
         for (double& t : first_warning_s) t = -1.0;
@@ -73,6 +74,7 @@ struct FlightScore {
     int cells = 0;
     double total_flight_time_s = 0, healthy_total_flight_time_s = 0, flown_s = 0;
     bool short_flight = false, degraded = false, sensor_faulty = false;
+    uint8_t nameable_fault_causes = 0;  // what a monitor should name of the injected sensor faults
     int weak_cell = -1;
     std::vector<int> outlier_cells;  // any of them named counts as right (see sim::Truth)
     std::vector<std::string> justified;

@@ -1,5 +1,7 @@
 #include "host/sim/sensor.h"
 
+#include "core/monitor.h"
+
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -280,6 +282,14 @@ void format_record(SimLogFormat f, int cells, const core::ShuntCalibration& shun
         append_fixed(out, r.temperature_dc, 1);
         out += '\n';
     }
+}
+
+uint8_t nameable_fault_causes(const SensorFaults& faults) {
+    uint8_t causes = 0;
+    if (faults.current_offset_a != 0.0) causes |= core::kFaultCurrentOffset;
+    if (faults.loose_tap != 0) causes |= core::kFaultCells;
+    if (faults.missed_burst_rate_per_min > 0.0 && faults.missed_burst_max_s > 0.0) causes |= core::kFaultSampleGap;
+    return causes;
 }
 
 }  // namespace sim

@@ -49,6 +49,12 @@ struct SensorFaults {
     }
 };
 
+// The core::SensorFaultCause bits a monitor should name for these faults: an offset, a
+// loose balance tap (its cell readings), dropouts of a second or more (gaps). A gain error
+// is none of them: no flight shows it (a charger's count does), and single missed rows
+// are no gap.
+uint8_t nameable_fault_causes(const SensorFaults& faults);
+
 struct SensorParams {
     double period_ms = 66.87;
     double tap_period_ms = 52.8;
