@@ -457,6 +457,10 @@ TEST_CASE("the monitor table pools each monitor's charger checks as the median s
                               row("N", "ok", 0.99, false, 0.95, 0.96),      row("M", "ok", 1.12, true, 1.0, nullptr),
                               row("M", "ok", nullptr, nullptr, nullptr, nullptr), row("M", "error", nullptr, nullptr, nullptr, nullptr),
                               row("M", "ok", 1.053, true, 1.0, 0.95),       row("M", "ok", 1.25, true, 1.0, 0.80)};
+    // Its sensor faults by cause: the offset flight, and one with a loose tap and a gap.
+    rows[5]["sensor_fault_cause"] = {"current_offset"};
+    rows[6]["sensor_fault_cause"] = {"cells", "sample_gap"};
+    rows[4]["sensor_fault_cause"] = json::array();
     const auto monitors = monitor_rows(rows, 0.03);
     REQUIRE(monitors.size() == 2);
     const json& m = monitors[0];
@@ -471,6 +475,11 @@ TEST_CASE("the monitor table pools each monitor's charger checks as the median s
     CHECK(m["current_gain"].get<double>() == 1.0);
     CHECK(m["charger_ratio_pooled"].get<double>() == Approx(1.0 / 0.93).epsilon(1e-5));
     CHECK(m["charger_fault"] == true);
+    CHECK(m["fault_flights_current_offset"] == 1);
+    CHECK(m["fault_flights_cells"] == 1);
+    CHECK(m["fault_flights_sample_gap"] == 1);
+    CHECK(m["fault_flights_reading"] == 0);
+    CHECK(monitors[1]["fault_flights_current_offset"] == 0);
     // Monitor N: one flight at gain 0.95 asking 0.96: 0.95 / 0.96 = 0.9896, within 3 %.
     CHECK(monitors[1]["charger_ratio_pooled"].get<double>() == Approx(0.95 / 0.96).epsilon(1e-5));
     CHECK(monitors[1]["charger_fault"] == false);
@@ -483,8 +492,11 @@ TEST_CASE("the monitor table pools each monitor's charger checks as the median s
     const json table = make_table(rows, rows.size(), "0123456789abcdef", ShardSpec());
     CHECK(table["monitors"].size() == 2);
     CHECK(render_monitors(table, TableFormat::Csv).rfind("monitor,flights,failed,charger_checks,charger_flagged,", 0) == 0);
-    CHECK(render_monitors(table, TableFormat::Markdown).find("| M | 8 | 1 | 6 | 6 | 5 | 1.0753 | 0.0630 | 1.0000 | 0.9300 | yes |") !=
-          std::string::npos);
+    const std::string md = render_monitors(table, TableFormat::Markdown);
+    CHECK(md.find("| M | 8 | 1 | 6 | 6 | 5 | 1.0753 | 0.0630 | 1.0000 | 0.9300 | yes |") != std::string::npos);
+    CHECK(md.find(" | tap 1, offset 1, gap 1 |\n") != std::string::npos);
+    CHECK(md.find("| N | 1 |") != std::string::npos);
+    CHECK(md.substr(md.find("| N | 1 |")).find(" | – |\n") != std::string::npos);
     CHECK(make_table(rows, rows.size(), "0123456789abcdef", ShardSpec{1, 2})["monitors"].is_null());  // a shard's: left to merge
 }
 

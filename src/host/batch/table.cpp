@@ -41,7 +41,12 @@ const std::vector<std::string> kMonitorKeys = {"monitor", "flights", "failed", "
                                                "charger_fault", "fleet_flights", "fleet_capacity_source", "fleet_capacity_effect",
                                                "fleet_capacity_effect_sigma", "fleet_resistance_effect",
                                                "fleet_resistance_effect_sigma", "fleet_gain_error",
-                                               "fleet_gain_error_sigma", "fleet_gain_fault"};
+                                               "fleet_gain_error_sigma", "fleet_gain_fault", "fault_flights_reading",
+                                               "fault_flights_cells", "fault_flights_current_offset", "fault_flights_sample_gap"};
+
+// The sensor-fault causes a monitor's flights are counted by, with their short names.
+const char* const kFaultCauses[][2] = {
+    {"reading", "reading"}, {"cells", "tap"}, {"current_offset", "offset"}, {"sample_gap", "gap"}};
 
 json number_or_null(double v) { return std::isfinite(v) ? json(round_sig(v)) : json(nullptr); }
 
@@ -150,8 +155,8 @@ std::string render_packs_md(const json& packs) {
 std::string render_monitors_md(const json& monitors) {
     std::ostringstream o;
     o << "| monitor | flights | failed | charger checks | flagged | pooled | count / charger | spread of the gains "
-         "| gain | suggested gain | fault | gain error against the fleet | fleet fault |\n";
-    o << "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|---|--:|---|\n";
+         "| gain | suggested gain | fault | gain error against the fleet | fleet fault | sensor faults (flights) |\n";
+    o << "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|---|--:|---|---|\n";
     for (const json& m : monitors) {
         const json& fault = m["charger_fault"];
         auto yes_no = [](const json& b) { return b.is_boolean() ? (b.get<bool>() ? "yes" : "no") : "–"; };
@@ -169,7 +174,14 @@ std::string render_monitors_md(const json& monitors) {
         } else {
             o << "–";
         }
-        o << " | " << yes_no(m["fleet_gain_fault"]) << " |\n";
+        // A monitor whose flights keep raising one cause: its balance lead, its current
+        // sensor's zero, its bus.
+        std::string faults;
+        for (const auto& c : kFaultCauses) {
+            const json n = m.value(std::string("fault_flights_") + c[0], json(0));
+            if (n.is_number() && n.get<long>() > 0) faults += (faults.empty() ? "" : ", ") + std::string(c[1]) + " " + n.dump();
+        }
+        o << " | " << yes_no(m["fleet_gain_fault"]) << " | " << (faults.empty() ? "–" : faults) << " |\n";
     }
     return o.str();
 }
@@ -397,6 +409,7 @@ std::vector<json> monitor_rows(const std::vector<json>& rows, double tolerance) 
     std::vector<json> out;
     for (const auto& group : group_rows(rows, "monitor")) {
         size_t failed = 0, checks = 0, flagged = 0;
+        std::map<std::string, size_t> fault_flights;
         std::vector<double> suggestions;
         double current_gain = NAN;  // of the latest flight that suggests one
         for (const json* row : group.second) {
@@ -404,6 +417,8 @@ std::vector<json> monitor_rows(const std::vector<json>& rows, double tolerance) 
             if (r.value("status", json()) != "ok") ++failed;
             if (r.value("charger_ratio", json()).is_number()) ++checks;
             if (r.value("charger_fault", json()) == true) ++flagged;
+            for (const json& c : r.value("sensor_fault_cause", json::array()))
+                if (c.is_string()) ++fault_flights[c.get<std::string>()];
             // Only flights that suggest a gain are pooled: a pack full at the start and no
             // in-flight sensor fault (an offset's charge is not a gain).
             const json suggested = r.value("charger_suggested_gain", json());
@@ -420,6 +435,7 @@ std::vector<json> monitor_rows(const std::vector<json>& rows, double tolerance) 
         m["charger_checks"] = checks;
         m["charger_flagged"] = flagged;
         m["charger_pooled"] = suggestions.size();
+        for (const auto& c : kFaultCauses) m[std::string("fault_flights_") + c[0]] = fault_flights[c[0]];
         // The gain every pooled flight asks for, as one median: a charger's own count is good
         // to a percent or two per charge, and one bad entry (a pack not quite full) is outvoted.
         // The ratio is what the sensor counts with the gain in use against the charger.
