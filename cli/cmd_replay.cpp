@@ -143,15 +143,7 @@ std::function<int()> setup(CLI::App& sub) {
         if (a->json) std::cout << text;
         if (!a->json && a->summary.empty() && a->series.empty() && a->plot.empty() && !stream)
             print_brief(summary, std::cout);
-        if (!a->json && summary.contains("charger_check")) {
-            const auto& c = summary["charger_check"];
-            std::cout << "  charger check: counted " << c["counted_ah"] << " Ah against " << c["charged_ah"]
-                      << " Ah charged (x" << c["ratio"] << "): "
-                      << (c["fault"].is_null() ? "no verdict" : c["fault"].get<bool>() ? "current sensor fault" : "within tolerance");
-            if (c["suggested_current_gain"].is_number())
-                std::cout << "; suggested extensions.current_sensor.gain " << c["suggested_current_gain"];
-            std::cout << "\n";
-        }
+        if (!a->json && summary.contains("charger_check")) print_charger_check(summary["charger_check"], std::cout);
         if (refuse_config) {
             std::cerr << "battsim replay: --config-out: no correction found ("
                       << (check ? "the charger check suggests no gain, see its notes; " : "no --charged-mah; ")

@@ -258,5 +258,15 @@ void print_brief(const nlohmann::json& s, std::ostream& out) {
     out << "\n";
 }
 
+void print_charger_check(const nlohmann::json& c, std::ostream& out) {
+    const nlohmann::json& fault = c["fault"];
+    out << "  charger check: counted " << fixed(c["counted_ah"], 3) << " Ah against " << fixed(c["charged_ah"], 3)
+        << " Ah charged (x" << fixed(c["ratio"], 4) << "): "
+        << (fault.is_null() ? "no verdict" : fault.get<bool>() ? "current sensor fault" : "within tolerance");
+    if (c["suggested_current_gain"].is_number())
+        out << "; suggested extensions.current_sensor.gain " << fixed(c["suggested_current_gain"], 4);
+    out << "\n";
+}
+
 }  // namespace cli
 }  // namespace battsim

@@ -58,6 +58,8 @@ int finish_report(const std::string& command, const nlohmann::json& report, cons
 int check_plot_option(const std::string& command, const std::string& path);
 // Human-readable few lines about a summary.
 void print_brief(const nlohmann::json& summary, std::ostream& out);
+// The summary's `charger_check` as one line for people.
+void print_charger_check(const nlohmann::json& check, std::ostream& out);
 
 }  // namespace cli
 }  // namespace battsim

@@ -346,6 +346,9 @@ TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes
     // The short summary says it; bad values are refused with a message.
     const auto brief = run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --estimator joint" + charged);
     CHECK_THAT(brief.out, Catch::Contains("charger check: counted ") && Catch::Contains("current sensor fault"));
+    char ratio[32];
+    std::snprintf(ratio, sizeof ratio, "(x%.4f)", c["ratio"].get<double>());
+    CHECK_THAT(brief.out, Catch::Contains(std::string(" Ah charged ") + ratio));
     const auto bad = run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --charged-mah -5");
     CHECK(bad.exit_code == 2);
     CHECK_THAT(bad.err, Catch::Contains("--charged-mah: the charged charge must be a positive number of mAh"));
