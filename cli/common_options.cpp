@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <iostream>
-#include <sstream>
 #include <string>
 #include <stdexcept>
 
@@ -172,14 +171,8 @@ int check_plot_option(const std::string& command, const std::string& path) {
 }
 
 namespace {
-// A summary number for people: fixed decimals, a scale (ohm → mΩ), and "n/a" for a null.
 std::string fixed(const nlohmann::json& v, int decimals, double scale = 1.0) {
-    if (!v.is_number()) return "n/a";
-    std::ostringstream os;
-    os.setf(std::ios::fixed);
-    os.precision(decimals);
-    os << v.get<double>() * scale;
-    return os.str();
+    return host::fixed_text(v, decimals, "n/a", scale);
 }
 
 // What a warning's summary entry says beyond its name and time: when in the flight, the

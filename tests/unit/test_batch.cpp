@@ -494,7 +494,7 @@ TEST_CASE("the monitor table pools each monitor's charger checks as the median s
     CHECK(render_monitors(table, TableFormat::Csv).rfind("monitor,flights,failed,charger_checks,charger_flagged,", 0) == 0);
     const std::string md = render_monitors(table, TableFormat::Markdown);
     CHECK(md.find("| M | 8 | 1 | 6 | 6 | 5 | 1.0753 | 0.0630 | 1.0000 | 0.9300 | yes |") != std::string::npos);
-    CHECK(md.find(" | tap 1, offset 1, gap 1 |\n") != std::string::npos);
+    CHECK(md.find(" | cells 1, current_offset 1, sample_gap 1 |\n") != std::string::npos);
     CHECK(md.find("| N | 1 |") != std::string::npos);
     CHECK(md.substr(md.find("| N | 1 |")).find(" | – |\n") != std::string::npos);
     CHECK(make_table(rows, rows.size(), "0123456789abcdef", ShardSpec{1, 2})["monitors"].is_null());  // a shard's: left to merge

@@ -44,21 +44,13 @@ const std::vector<std::string> kMonitorKeys = {"monitor", "flights", "failed", "
                                                "fleet_gain_error_sigma", "fleet_gain_fault", "fault_flights_reading",
                                                "fault_flights_cells", "fault_flights_current_offset", "fault_flights_sample_gap"};
 
-// The sensor-fault causes a monitor's flights are counted by, with their short names.
-const char* const kFaultCauses[][2] = {
-    {"reading", "reading"}, {"cells", "tap"}, {"current_offset", "offset"}, {"sample_gap", "gap"}};
+// Every sensor-fault cause's name (the summary's), which a monitor's flights are counted by.
+const json kFaultCauses = sensor_fault_cause_names(0xFF);
 
 json number_or_null(double v) { return std::isfinite(v) ? json(round_sig(v)) : json(nullptr); }
 
-// Fixed decimals for the Markdown table; "–" for no value. -0.000 prints as 0.000.
-std::string fixed(const json& v, int decimals) {
-    if (!v.is_number()) return "–";
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, v.get<double>());
-    std::string s = buf;
-    if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
-    return s;
-}
+// Fixed decimals for the Markdown table; "–" for no value.
+std::string fixed(const json& v, int decimals) { return fixed_text(v, decimals); }
 
 std::string significant(const json& v, int digits) {
     if (!v.is_number()) return "–";
@@ -177,9 +169,9 @@ std::string render_monitors_md(const json& monitors) {
         // A monitor whose flights keep raising one cause: its balance lead, its current
         // sensor's zero, its bus.
         std::string faults;
-        for (const auto& c : kFaultCauses) {
-            const json n = m.value(std::string("fault_flights_") + c[0], json(0));
-            if (n.is_number() && n.get<long>() > 0) faults += (faults.empty() ? "" : ", ") + std::string(c[1]) + " " + n.dump();
+        for (const json& c : kFaultCauses) {
+            const json n = m.value("fault_flights_" + text(c), json(0));
+            if (n.is_number() && n.get<long>() > 0) faults += (faults.empty() ? "" : ", ") + text(c) + " " + n.dump();
         }
         o << " | " << yes_no(m["fleet_gain_fault"]) << " | " << (faults.empty() ? "–" : faults) << " |\n";
     }
@@ -435,7 +427,7 @@ std::vector<json> monitor_rows(const std::vector<json>& rows, double tolerance) 
         m["charger_checks"] = checks;
         m["charger_flagged"] = flagged;
         m["charger_pooled"] = suggestions.size();
-        for (const auto& c : kFaultCauses) m[std::string("fault_flights_") + c[0]] = fault_flights[c[0]];
+        for (const json& c : kFaultCauses) m["fault_flights_" + text(c)] = fault_flights[text(c)];
         // The gain every pooled flight asks for, as one median: a charger's own count is good
         // to a percent or two per charge, and one bad entry (a pack not quite full) is outvoted.
         // The ratio is what the sensor counts with the gain in use against the charger.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace battsim {
 namespace host {
@@ -13,6 +14,15 @@ double round_sig(double x, int digits) {
     const double mag = std::floor(std::log10(std::fabs(x)));
     const double scale = std::pow(10.0, digits - 1 - mag);
     return std::round(x * scale) / scale;
+}
+
+std::string fixed_text(const json& v, int decimals, const char* none, double scale) {
+    if (!v.is_number()) return none;
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, v.get<double>() * scale);
+    std::string s = buf;
+    if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
+    return s;
 }
 
 namespace {

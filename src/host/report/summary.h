@@ -18,6 +18,10 @@ constexpr int kSummaryVersion = 1;
 // Rounds to `digits` significant digits so summaries print short, stable numbers.
 double round_sig(double x, int digits = 6);
 
+// A summary number for people: `decimals` fixed decimals of the value × `scale`, `none` for
+// a null (or any non-number); -0.000 prints as 0.000. The tables and the brief share it.
+std::string fixed_text(const nlohmann::json& v, int decimals, const char* none = "–", double scale = 1.0);
+
 // The names of core::SensorFaultCause bits, in bit order ("reading", "cells",
 // "current_offset", "sample_gap"): the summary's and the scoreboard's sensor-fault causes.
 nlohmann::json sensor_fault_cause_names(uint8_t causes);

@@ -1,7 +1,5 @@
 #include "host/score/scoreboard.h"
 
-#include "host/report/summary.h"
-
 #include <unistd.h>
 
 #include <algorithm>
@@ -18,6 +16,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "host/report/summary.h"
 #include "host/io/sample_reader.h"
 #include "host/stats.h"
 #include "host/sim/det_math.h"
