@@ -240,7 +240,11 @@ void print_brief(const nlohmann::json& s, std::ostream& out) {
             << fixed(cap["final"], 3) << ")";
     }
     out << "; resistance mean " << fixed(f["resistance_ohm"]["mean"], 2, 1000.0) << " mOhm; model MAE "
-        << fixed(f["voltage_error_v"]["model"]["mean_abs"], 3) << " V\n";
+        << fixed(f["voltage_error_v"]["model"]["mean_abs"], 3) << " V";
+    // The joint estimator's own model (its tracking filter, one step ahead) is what it
+    // compares with the measurement; the configured curve's error says how far the config is.
+    if (s["estimator"] == "joint") out << " (the estimator's own: " << fixed(f["voltage_error_v"]["adapted"]["mean_abs"], 3) << " V)";
+    out << "\n";
     const auto& at20 = f["remaining_time_s"]["at20"];
     out << "  remaining time at 20 %: " << (at20.is_number() ? fixed(at20, 1) + " s" : "not known yet") << "\n";
     out << "  warnings:";

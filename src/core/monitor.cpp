@@ -211,6 +211,10 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         // sensor reading 1.5 A high had "flown" on the ground, for the summary, the texts
         // and the buzzer alike.
         status_.flying = js.flying;
+        // The model this estimator adapts is its tracking filter's (OCV table, R0,
+        // polarisation), not the reference's Tremblay curve, which it never adapts: what that
+        // filter predicted for this sample before the sample corrected it.
+        status_.adapted_model_voltage_v = sample.voltage_v - js.innovation_v;
         // Sensor faults only the joint estimator can see: a current offset learnt on the
         // ground, and samples missing for longer than any logger stall (or than three of the
         // log's own intervals).

@@ -61,7 +61,7 @@ struct MonitorStatus {
     float consumed_mah = 0.0f;  // since full, including the initial estimate
     float consumed_mwh = 0.0f;
     float model_voltage_v = 0.0f;          // fixed (configured) model
-    float adapted_model_voltage_v = 0.0f;  // adapted model
+    float adapted_model_voltage_v = 0.0f;  // adapted model: the reference's; the joint estimator's tracking filter one step ahead
     float soc = 0.0f;                      // 1 − consumed / estimated capacity
     float capacity_ah = 0.0f;              // estimated pack capacity
     float capacity_sigma_ah = 0.0f;        // joint estimator: its standard error (0 = none)

@@ -313,6 +313,41 @@ TEST_CASE("replay --series carries the joint estimator's cell findings as the su
                                           three(flight["capacity_ah"]["final_sigma"].get<double>()) + " Ah at the landing"));
 }
 
+TEST_CASE("replay --estimator joint reports its own model's voltage error beside the configured curve's", "[cli]") {
+    // The bundled example flight: the configured Tremblay curve is about 0.3 V off the
+    // simulated pack; the joint estimator's tracking filter, one step ahead, follows it
+    // within a few mV. The summary, the series and the brief say the same.
+    const std::string log = kSource + "/logs/example-4s.csv";
+    const std::string cfg = kSource + "/configs/sim-4s.json";
+    const std::string dir = clitest::temp_dir();
+    const std::string args = "replay " + q(log) + " -c " + q(cfg) + " --estimator joint";
+    const auto j = clitest::run_json(args + " --json --series " + q(dir + "/s.csv"));
+    const auto& e = j["flight"]["voltage_error_v"];
+    const double own = e["adapted"]["mean_abs"].get<double>();
+    CHECK(own < 0.02);
+    CHECK(e["model"]["mean_abs"].get<double>() > 10.0 * own);
+    // The series' adapted column over the flight gives the summary's figure.
+    double sum = 0.0;
+    int n = 0;
+    for (const auto& r : read_series(dir + "/s.csv")) {
+        if (r.at("flying") != "1" || r.at("sample_valid") != "1") continue;
+        sum += std::fabs(std::stod(r.at("voltage_v")) - std::stod(r.at("adapted_model_voltage_v")));
+        ++n;
+    }
+    REQUIRE(n > 1000);
+    CHECK(sum / n == Approx(own).margin(2e-4));
+    const auto three = [](double v) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%.3f", v);
+        return std::string(b);
+    };
+    const auto brief = run(args);
+    CHECK_THAT(brief.out, Catch::Contains("model MAE " + three(e["model"]["mean_abs"].get<double>()) +
+                                          " V (the estimator's own: " + three(own) + " V)"));
+    // The reference estimator's brief has no such figure.
+    CHECK_THAT(run("replay " + q(log) + " -c " + q(cfg)).out, !Catch::Contains("the estimator's own"));
+}
+
 TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes the config that corrects it", "[cli][truth]") {
     // The simulated racing flight whose current sensor reads 8 % high; the truth holds the
     // charge the pack gave over the log, which is what a charger puts back.

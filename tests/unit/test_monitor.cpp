@@ -233,3 +233,21 @@ TEST_CASE("Joint mode flags a gap in the samples as a sensor fault; the referenc
         CHECK_FALSE((m.status().warnings >> kWarnSensorFault) & 1u);
     }
 }
+
+TEST_CASE("Joint mode's adapted model is its own filter's prediction, which follows the pack", "[monitor]") {
+    // At rest the filter reads its state of charge off the resting voltage, so it predicts
+    // that voltage back; under a steady load its R0 and polarisation close the gap. The
+    // configured Tremblay curve (the fixed model) stays where the config puts it.
+    Monitor m;
+    uint64_t t = 0;
+    configure_at_rest(m, EstimatorKind::Joint, t);
+    CHECK(m.status().adapted_model_voltage_v == Approx(16.5f).margin(0.005f));
+    for (int k = 0; k < 1000; ++k, t += 67000) m.update(make(t, 15.5f - 0.0005f * k, 20.0f));
+    const MonitorStatus& s = m.status();
+    REQUIRE(s.flying);
+    // One step behind a voltage falling 7.5 mV/s: 25 mV; the configured curve is 0.18 V off.
+    const float own_v = std::fabs(s.adapted_model_voltage_v - 15.0005f);
+    CHECK(own_v < 0.04f);
+    CHECK(std::fabs(s.model_voltage_v - 15.0005f) > 4.0f * own_v);
+    CHECK(s.adapted_model_voltage_v != s.model_voltage_v);
+}

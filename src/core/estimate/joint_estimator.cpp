@@ -202,6 +202,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     }
     const CapacityEkf::Status& es = tracking_.ekf.status();
     status_.current_offset_a = es.offset_a;
+    status_.innovation_v = es.innovation_v;
     status_.sigma_current_offset_a = es.sigma_offset_a;
     status_.current_offset_fault =
         fabsf(es.offset_a) > config_.offset_fault_a && fabsf(es.offset_a) > 3.0f * es.sigma_offset_a;

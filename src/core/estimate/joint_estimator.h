@@ -219,6 +219,7 @@ public:
         bool current_offset_fault = false;
         bool sample_gap = false;  // this sample ends a logging gap (a sensor fault)
         float rest_capacity_ah = 0.0f;     // after a flight and a rest (0 = none yet)
+        float innovation_v = 0.0f;         // the tracking filter's: this sample's voltage less what it predicted
     };
 
     void configure(const Config& config, const TremblayParams& rated, int cells_in_series);
