@@ -57,10 +57,10 @@ int plan(const BenchArgs& a, std::vector<host::BatchItem>& items) {
 
 void print(const nlohmann::json& j, bool as_json) {
     if (as_json) {
-        std::cout << j.dump(2) << "\n";
+        std::cout << host::json_text(j, 2) << "\n";
         return;
     }
-    for (auto it = j.begin(); it != j.end(); ++it) std::cout << it.key() << ": " << it.value().dump() << "\n";
+    for (auto it = j.begin(); it != j.end(); ++it) std::cout << it.key() << ": " << host::json_text(it.value()) << "\n";
 }
 
 // Times the first planned log with `bench`, which returns the figures to print.
@@ -143,13 +143,13 @@ std::function<int()> setup(CLI::App& sub) {
     }
     mon->add_option("LOG", a->paths, "Log to replay")->required()->expected(1);
     mon->add_option("--passes", a->passes, "Passes over the log (default: until --min-time)");
-    mon->add_option("--min-time", a->min_time, "Seconds of updates to time at least")->capture_default_str();
+    mon->add_option("--min-time", a->min_time, "Seconds of updates to time at least")->check(number_in(0.0, 3600.0))->capture_default_str();
     rep->add_option("LOG", a->paths, "Log to replay")->required()->expected(1);
-    rep->add_option("--min-time", a->min_time, "Seconds to keep replaying")->capture_default_str();
+    rep->add_option("--min-time", a->min_time, "Seconds to keep replaying")->check(number_in(0.0, 3600.0))->capture_default_str();
     rep->add_option("--min-runs", a->min_runs, "Replays at least")->capture_default_str();
     bat->add_option("PATHS", a->paths, "Logs: files, directories, patterns (or --manifest alone)");
     bat->add_option("-j,--jobs", a->jobs, "Threads (default: all cores)");
-    bat->add_option("--min-time", a->min_time, "Seconds to keep repeating the batch")->capture_default_str();
+    bat->add_option("--min-time", a->min_time, "Seconds to keep repeating the batch")->check(number_in(0.0, 3600.0))->capture_default_str();
     bat->add_option("--min-runs", a->min_runs, "Batches at least")->capture_default_str();
     return [a, mon, rep]() -> int {
         if (mon->parsed()) return run_monitor(*a);

@@ -42,11 +42,11 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_flag("--json", a->json, "Print the calibration JSON on standard output");
     sub.add_option("--shares", a->options.slow_shares, "Candidate slow shares (0..1), comma-separated")
         ->delimiter(',')
-        ->check(CLI::Range(0.0, 1.0))
+        ->check(number_in(0.0, 1.0))
         ->capture_default_str();
     sub.add_option("--tolerance", a->options.tolerance,
                    "Keep the configured share while its mean |final/rest - 1| is within this")
-        ->check(CLI::Range(0.0, 1.0))
+        ->check(number_in(0.0, 1.0))
         ->capture_default_str();
     add_input_options(sub, a->input);
     return [a]() -> int {
@@ -70,10 +70,10 @@ std::function<int()> setup(CLI::App& sub) {
             out.description += (out.description.empty() ? "" : "; ") + std::string("health filter's slow share ") +
                                (c.changed ? "calibrated" : "checked") + " on " + std::to_string(c.logs.size()) +
                                " flight(s) by battsim calibrate";
-            if (int rc = run_job(command, [&] { host::write_file_atomic(a->output, host::config_to_json(out).dump(2) + "\n"); }))
+            if (int rc = run_job(command, [&] { host::write_file_atomic(a->output, host::json_text(host::config_to_json(out), 2) + "\n"); }))
                 return rc;
         }
-        if (a->json) std::cout << host::to_json(c).dump(2) << "\n";
+        if (a->json) std::cout << host::json_text(host::to_json(c), 2) << "\n";
         else print_table(c, std::cout);
         return kExitOk;
     };

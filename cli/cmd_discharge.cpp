@@ -26,8 +26,8 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("LOG", a->log, "Discharge log (any supported format)")->required();
     sub.add_option("--min-voltage", a->min_v, "Battery connected above this; bottom of the tables (default: the config's min_voltage_v)");
     sub.add_option("--max-voltage", a->max_v, "Top of the tables (default: the config's max_voltage_v)");
-    sub.add_option("--reaction", a->reaction_s, "Smoothing: moving-average (exponential) time constant in s; 0 = none")->capture_default_str();
-    sub.add_option("--alpha", a->alpha, "Smoothing: fixed per-sample constant in (0, 1] instead of --reaction");
+    sub.add_option("--reaction", a->reaction_s, "Smoothing: moving-average (exponential) time constant in s; 0 = none")->check(number_in(0.0, 1.0e6))->capture_default_str();
+    sub.add_option("--alpha", a->alpha, "Smoothing: fixed per-sample constant in (0, 1] instead of --reaction")->check(number_in(0.0, 1.0));
     sub.add_option("--decimate", a->decimate, "Average every x samples")->capture_default_str();
     sub.add_option("--table", a->table, "Write the voltage -> mAh/mWh lookup table CSV here (10 mV rows, max to min)");
     sub.add_option("--curve", a->curve, "Write the smoothed, decimated curve with its gradient (CSV)");
@@ -46,6 +46,11 @@ std::function<int()> setup(CLI::App& sub) {
         host::LoadedConfig config;
         if (int rc = resolve_input(a->input, opt.reader, config, "battsim discharge")) return rc;
         opt.reader.shunt = config.monitor.shunt;
+        // 0 means "the config's"; NaN or a negative voltage is a typo, not a default.
+        if (!(a->min_v >= 0) || !(a->max_v >= 0)) {
+            std::cerr << "battsim discharge: --min-voltage and --max-voltage take a voltage > 0\n";
+            return kExitUsage;
+        }
         opt.min_voltage_v = a->min_v > 0 ? a->min_v : config.monitor.min_voltage_v;
         opt.max_voltage_v = a->max_v > 0 ? a->max_v : config.monitor.max_voltage_v;
         opt.reaction_s = a->reaction_s;
@@ -80,12 +85,12 @@ std::function<int()> setup(CLI::App& sub) {
         try {
             if (!a->table.empty()) host::write_file_atomic(a->table, host::discharge::table_csv(result));
             if (!a->curve.empty()) host::write_file_atomic(a->curve, host::discharge::curve_csv(result));
-            if (!a->summary.empty()) host::write_file_atomic(a->summary, summary.dump(2) + "\n");
+            if (!a->summary.empty()) host::write_file_atomic(a->summary, host::json_text(summary, 2) + "\n");
             if (!a->plot.empty()) host::discharge::plot_discharge(result, a->plot);
             if (!a->config_out.empty()) {
                 const host::LoadedConfig out =
                     host::discharge::start_config_from_discharge(result, config, with_ocv ? &ocv : nullptr);
-                host::write_file_atomic(a->config_out, host::config_to_json(out).dump(2) + "\n");
+                host::write_file_atomic(a->config_out, host::json_text(host::config_to_json(out), 2) + "\n");
             }
         } catch (const std::invalid_argument& e) {
             std::cerr << "battsim discharge: " << e.what() << "\n";
@@ -95,7 +100,7 @@ std::function<int()> setup(CLI::App& sub) {
             return kExitOutputError;
         }
         if (a->json) {
-            std::cout << summary.dump(2) << "\n";
+            std::cout << host::json_text(summary, 2) << "\n";
             return kExitOk;
         }
         std::cout << a->log << ": " << result.samples_kept << " of " << result.samples_read << " samples above "

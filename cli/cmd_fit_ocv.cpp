@@ -66,23 +66,23 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--points", a->options.points, "Table points from empty to full")->check(CLI::Range(2, 21))->capture_default_str();
     sub.add_option("--prior-sigma", a->options.prior_sigma_v,
                    "Per cell, V: how far the table may leave the config's curve where no flight reaches")
-        ->check(CLI::PositiveNumber)
+        ->check(number_in(0.0, 1.0e6, true))
         ->capture_default_str();
     sub.add_option("--smooth-sigma", a->options.smooth_sigma_v, "Per cell, V: second difference of that distance")
-        ->check(CLI::PositiveNumber)
+        ->check(number_in(0.0, 1.0e6, true))
         ->capture_default_str();
     sub.add_option("--fast-time", a->options.fast_time_s, "Seconds: the fast polarisation's low-pass of the current")
-        ->check(CLI::PositiveNumber)
+        ->check(number_in(0.0, 1.0e6, true))
         ->capture_default_str();
     sub.add_option("--slow-time", a->options.slow_time_s, "Seconds: the slow polarisation's low-pass of the current (0: the best fit of 20, 30, 45, 60, 90)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(number_in(0.0, 1.0e6))
         ->capture_default_str();
     sub.add_option("--empty-sigma", a->options.empty_sigma_v,
                    "Per cell, V: how far the empty point (SOC 0) may leave the config's (its minimum voltage)")
-        ->check(CLI::PositiveNumber)
+        ->check(number_in(0.0, 1.0e6, true))
         ->capture_default_str();
     sub.add_option("--rest-weight", a->options.rest_weight, "Weight of a sample at rest (|I| < 1 A) against one in flight")
-        ->check(CLI::PositiveNumber)
+        ->check(number_in(0.0, 1.0e6, true))
         ->capture_default_str();
     sub.add_option("--iterations", a->options.iterations, "Most rounds of the joint Levenberg-Marquardt step (20 alternating rounds come first)")
         ->check(CLI::Range(1, 100000))
@@ -137,7 +137,7 @@ std::function<int()> setup(CLI::App& sub) {
             for (const host::fit::OcvStitchFlight& f : s.flights) fitted += !f.test;
             out.description += (out.description.empty() ? "" : "; ") + std::string("joint OCV table fitted by battsim fit-ocv on ") +
                                std::to_string(fitted) + " flight(s)";
-            if (int rc = run_job(command, [&] { host::write_file_atomic(a->output, host::config_to_json(out).dump(2) + "\n"); }))
+            if (int rc = run_job(command, [&] { host::write_file_atomic(a->output, host::json_text(host::config_to_json(out), 2) + "\n"); }))
                 return rc;
         }
         if (!a->plot.empty())

@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "command.h"
+#include "common_options.h"
 #include "host/serial/serial_logger.h"
 
 namespace battsim {
@@ -28,10 +29,10 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_flag("--append", a->options.append, "Continue an existing file (its header must match the device's)");
     sub.add_option("--max-wait", a->options.max_wait_s,
                    "Stop when the device has been gone this many seconds (default: wait until Ctrl-C)")
-        ->check(CLI::NonNegativeNumber);
+        ->check(number_in(0.0, 1.0e7));
     sub.add_option("--fsync-interval", a->options.fsync_interval_s, "Seconds between fsyncs of the output")
         ->capture_default_str()
-        ->check(CLI::NonNegativeNumber);
+        ->check(number_in(0.0, 1.0e7));
     sub.add_flag("-q,--quiet", a->quiet, "Print only errors and the final count");
     return [a]() -> int {
         g_stop.store(false);

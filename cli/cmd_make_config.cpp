@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "command.h"
+#include "common_options.h"
 #include "host/config_json.h"
 #include "host/io/atomic_file.h"
 #include "host/pack_config.h"
@@ -76,7 +77,7 @@ int run(const MakeConfigArgs& a) {
         std::cerr << me << ": " << e.what() << "\n";
         return kExitUsage;
     }
-    host::write_file_atomic(a.output, j.dump(2) + "\n");
+    host::write_file_atomic(a.output, host::json_text(j, 2) + "\n");
     return kExitOk;
 }
 
@@ -88,15 +89,15 @@ std::function<int()> setup(CLI::App& sub) {
                    "count from its cell columns or how high it rests");
     sub.add_option("--format", a->format, "Log format of --from-log (as replay)")->capture_default_str();
     sub.add_option("--cells", a->cells, "Cells in series")->check(CLI::Range(1, 12));
-    sub.add_option("--capacity-mah", a->capacity_mah, "Rated capacity (mAh)")->check(CLI::PositiveNumber);
+    sub.add_option("--capacity-mah", a->capacity_mah, "Rated capacity (mAh)")->check(number_in(0.0, 1.0e6, true));
     sub.add_option("--resistance-mohm", a->resistance_mohm,
                    "Pack internal resistance (mOhm; default: the reference pack's per cell, scaled by capacity)")
-        ->check(CLI::PositiveNumber);
+        ->check(number_in(0.0, 1.0e4, true));
     sub.add_option("--cutoff-v", a->cutoff_v, "Loaded pack voltage the remaining time runs to (V; default 3.325 V per cell)")
-        ->check(CLI::PositiveNumber);
+        ->check(number_in(0.0, 1.0e4, true));
     sub.add_option("--cutoff-delay-s", a->cutoff_delay_s,
                    "How long the flight goes on below the cutoff before the failsafe acts (s; default 5)")
-        ->check(CLI::Range(0.0, 600.0));
+        ->check(number_in(0.0, 600.0));
     sub.add_option("--name", a->name, "Config name (default pack-<cells>s-<mAh>)");
     sub.add_option("-o,--output", a->output, "Config JSON to write (\"-\" = standard output)")->capture_default_str();
     return [a]() -> int {

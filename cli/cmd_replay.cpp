@@ -48,8 +48,8 @@ std::function<int()> setup(CLI::App& sub) {
                    "docs/telemetry.md)");
     sub.add_option("--tlog", a->tlog, "Write that stream as a .tlog, which ground stations open to replay");
     sub.add_flag("--json", a->json, "Print the summary JSON on standard output");
-    sub.add_flag("--realtime", a->realtime_flag, "Pace the replay to wall-clock time (the monitor still uses the log's time stamps)");
-    sub.add_option("--speed", a->realtime, "With --realtime: speed-up factor (default 1)");
+    auto* realtime = sub.add_flag("--realtime", a->realtime_flag, "Pace the replay to wall-clock time (the monitor still uses the log's time stamps)");
+    sub.add_option("--speed", a->realtime, "With --realtime: speed-up factor (default 1)")->check(number_in(1.0e-3, 1.0e6))->needs(realtime);
     auto* charged = sub.add_option("--charged-mah", a->charged_mah,
                                    "What the charger put back after this log (the pack charged full before it): "
                                    "checks the current sensor against it (summary `charger_check`)");
@@ -122,12 +122,12 @@ std::function<int()> setup(CLI::App& sub) {
         // to a pack that was not full, would be wrong on every later flight.
         const bool gain_found = check && summary["charger_check"]["suggested_current_gain"].is_number();
         const bool refuse_config = !a->config_out.empty() && !gain_found && offset_taken_a == 0.0;
-        const std::string text = summary.dump(2) + "\n";
+        const std::string text = host::json_text(summary, 2) + "\n";
         try {
             if (!a->summary.empty()) host::write_file_atomic(a->summary, text);
             if (stream) stream->commit();
             if (!a->config_out.empty() && !refuse_config)
-                host::write_file_atomic(a->config_out, host::config_to_json(corrected).dump(2) + "\n");
+                host::write_file_atomic(a->config_out, host::json_text(host::config_to_json(corrected), 2) + "\n");
             if (!a->plot.empty()) {
                 const std::string title = "battsim replay: " + a->log + " (config " + summary["config"].get<std::string>() +
                                           ", " + summary["estimator"].get<std::string>() + " estimator)";

@@ -109,7 +109,7 @@ std::function<int()> setup(CLI::App& sub) {
         }
         for (const auto& f : result.flights)
             for (const std::string& n : f.notes) std::cerr << "battsim score: note: " << f.name << ": " << n << "\n";
-        const std::string text = a->json ? host::score::to_json(result).dump(2) + "\n" : host::score::format_table(result);
+        const std::string text = a->json ? host::json_text(host::score::to_json(result), 2) + "\n" : host::score::format_table(result);
         if (a->output.empty()) {
             std::cout << text;
             return kExitOk;

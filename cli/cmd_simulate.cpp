@@ -16,7 +16,7 @@ struct SimulateArgs {
     std::string truth;
     std::string out_dir;
     std::string format;
-    long long seed = -1;
+    std::string seed;  // empty: the scenario's own
     double cutoff = 0;
 };
 
@@ -60,13 +60,29 @@ std::function<int()> setup(CLI::App& sub) {
             std::cerr << "battsim simulate: " << e.what() << "\n";
             return kExitConfigError;
         }
+        // A seed is any whole number a scenario's "seed" takes; a negative one or one past
+        // 64 bits had silently meant the scenario's own, or the largest.
+        uint64_t seed = 0;
+        if (!a->seed.empty()) {
+            std::size_t used = 0;
+            try {
+                if (a->seed.find_first_not_of("0123456789") == std::string::npos) seed = std::stoull(a->seed, &used);
+            } catch (const std::exception&) {
+                used = 0;
+            }
+            if (used != a->seed.size()) {
+                std::cerr << "battsim simulate: --seed: expected a whole number from 0 to 18446744073709551615, found " << a->seed
+                          << "\n";
+                return kExitUsage;
+            }
+        }
         if (!a->output.empty() && scenarios.size() != 1) {
             std::cerr << "battsim simulate: -o/--output takes one scenario, " << scenarios.size()
                       << " given; use --out-dir\n";
             return kExitUsage;
         }
         for (host::sim::Scenario& s : scenarios) {
-            if (a->seed >= 0) s.seed = static_cast<uint64_t>(a->seed);
+            if (!a->seed.empty()) s.seed = seed;
             if (!a->format.empty()) {
                 const std::string problem = host::sim::log_format_problem(a->format, s.pack.cells);
                 if (!problem.empty()) {

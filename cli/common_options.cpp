@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <sstream>
 #include <string>
 #include <stdexcept>
 
@@ -13,6 +14,28 @@
 
 namespace battsim {
 namespace cli {
+
+CLI::Validator number_in(double lo, double hi, bool above_lo) {
+    const auto figure = [](double v) {
+        std::ostringstream o;
+        o << v;
+        return o.str();
+    };
+    const std::string range = (above_lo ? "(" : "[") + figure(lo) + ", " + figure(hi) + "]";
+    return CLI::Validator(
+        [=](std::string& text) -> std::string {
+            std::size_t used = 0;
+            double v = 0.0;
+            try {
+                v = std::stod(text, &used);
+            } catch (const std::exception&) {
+                used = 0;
+            }
+            const bool ok = used == text.size() && used > 0 && std::isfinite(v) && (above_lo ? v > lo : v >= lo) && v <= hi;
+            return ok ? std::string() : "expected a number in " + range + ", found " + text;
+        },
+        "NUMBER in " + range);
+}
 
 void add_input_options(CLI::App& sub, InputArgs& a) {
     sub.add_option("-c,--config", a.config, "Battery and monitor config JSON (default: built-in reference 4S, modified set)");
@@ -145,7 +168,7 @@ int run_job(const std::string& command, const std::function<void()>& job) {
 
 int finish_report(const std::string& command, const nlohmann::json& report, const std::string& path, bool json,
                   const std::function<void(std::ostream&)>& brief) {
-    const std::string text = report.dump(2) + "\n";
+    const std::string text = host::json_text(report, 2) + "\n";
     try {
         if (!path.empty()) host::write_file_atomic(path, text);
     } catch (const std::runtime_error& e) {

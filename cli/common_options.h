@@ -29,6 +29,11 @@ struct InputArgs {
 
 void add_input_options(CLI::App& sub, InputArgs& a);
 
+// A number option in [lo, hi] ((lo, hi] with `above_lo`): NaN and infinities refused, and
+// the range said in plain figures (CLI11's PositiveNumber and Range let NaN through and
+// print a 300-digit double's limit).
+CLI::Validator number_in(double lo, double hi, bool above_lo = false);
+
 // What fit and residual share: the capacity bound, the report, the plot and the input.
 struct ModelJobArgs {
     double max_capacity_factor = 1.5;

@@ -153,6 +153,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
             r.fail(r.child("exponential_voltage_v"), "must be below full_voltage_v");
         if (!(p.exponential_capacity_ah < p.capacity_ah))
             r.fail(r.child("exponential_capacity_ah"), "must be below capacity_ah");
+        if (!(m.min_voltage_v < m.max_voltage_v)) r.fail(r.child("min_voltage_v"), "must be below max_voltage_v");
         if (const json* e = r.member("extensions")) m.extensions = extensions_from_json(*e, origin, r.child("extensions"));
     }
     if (const json* s = root.member("monitor")) {
@@ -292,7 +293,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("critical_time_s", t.critical_time_s, 0, 36000);
         r.number("text_repeat_s", t.text_repeat_s, 0, 36000);
         if (t.critical_time_s > t.low_time_s)
-            r.fail(r.child("critical_time_s"), "expected at most low_time_s (" + json(t.low_time_s).dump() + ")");
+            r.fail(r.child("critical_time_s"), "expected at most low_time_s (" + json_text(json(t.low_time_s)) + ")");
     }
     return out;
 }

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include <nlohmann/json.hpp>
 
@@ -41,7 +42,12 @@ public:
     // A missing member keeps `out` (the default).
     template <typename T>
     void number(const char* key, T& out, double lo, double hi) {
-        if (const nlohmann::json* v = member(key)) out = static_cast<T>(check(*v, child(key), lo, hi));
+        if (const nlohmann::json* v = member(key)) {
+            const double x = check(*v, child(key), lo, hi);
+            // An integer setting given 2.5 had been read as 2 without a word.
+            if (std::is_integral<T>::value && x != std::floor(x)) fail(child(key), "expected a whole number, found " + json_brief(*v));
+            out = static_cast<T>(x);
+        }
     }
     void string(const char* key, std::string& out) {
         if (const nlohmann::json* v = member(key)) {

@@ -65,8 +65,12 @@ struct FieldWriter {
 };
 
 std::string comment_safe(std::string s) {
+    // Line comments only: a control character (a newline, a NUL escaped in the JSON) becomes a
+    // space, and a backslash a slash, since one at the line's end splices the next line
+    // (the #pragma once) into the comment.
     for (char& ch : s) {
-        if (ch == '\n' || ch == '\r') ch = ' ';
+        if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7F) ch = ' ';
+        if (ch == '\\') ch = '/';
     }
     std::string::size_type p;
     while ((p = s.find("*/")) != std::string::npos) s.replace(p, 2, "* /");

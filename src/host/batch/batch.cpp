@@ -255,6 +255,7 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
             throw std::runtime_error(options.out_dir + ": cannot create the summary directory (" + ec.message() + ")");
     }
 
+    std::vector<std::string> unwritten(n);
     std::atomic<size_t> next{0};
     std::mutex lock;
     size_t done = 0;
@@ -289,9 +290,10 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
                     // Written now, not at the end: a crash later loses nothing done so far.
                     try {
                         write_file_atomic((fs::path(options.out_dir) / (item.stem + ".json")).string(),
-                                          summary.dump(2) + "\n");
+                                          json_text(summary, 2) + "\n");
                     } catch (const std::exception& e) {
-                        row = make_error_row(item, std::string("summary not written: ") + e.what());
+                        // The replay's numbers stand; only the file is missing (exit 5).
+                        unwritten[k] = item.path + ": summary not written: " + e.what();
                     }
                 }
             }
@@ -314,6 +316,8 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
         for (size_t t = 0; t < jobs; ++t) pool.emplace_back(work);
         for (std::thread& t : pool) t.join();
     }
+    for (std::string& u : unwritten)
+        if (!u.empty()) result.unwritten.push_back(std::move(u));
     return result;
 }
 

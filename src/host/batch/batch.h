@@ -63,6 +63,9 @@ struct BatchResult {
     std::vector<nlohmann::json> summaries;  // in item order (null for failed); empty unless kept
     std::size_t failed = 0;
     std::uint64_t samples = 0;              // replayed, over all logs
+    // --out summaries that could not be written, in item order ("log: why"); their rows keep
+    // the numbers computed.
+    std::vector<std::string> unwritten;
 };
 
 // Replays `items` on a pool of `jobs` threads. A log that fails becomes an error row

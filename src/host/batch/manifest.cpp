@@ -175,13 +175,13 @@ public:
         }
     }
     std::string string_value(const json& v, const std::string& where) const {
-        if (!v.is_string()) fail(where, "expected a string, found " + v.dump());
+        if (!v.is_string()) fail(where, "expected a string, found " + json_brief(v));
         return v.get<std::string>();
     }
     // Test labels and pack ids are text; whole numbers are accepted and written as text.
     std::string label(const json& v, const std::string& where) const {
-        if (v.is_number_integer() || v.is_number_unsigned()) return v.dump();
-        if (!v.is_string()) fail(where, "expected a string or a whole number, found " + v.dump());
+        if (v.is_number_integer() || v.is_number_unsigned()) return json_text(v);
+        if (!v.is_string()) fail(where, "expected a string or a whole number, found " + json_brief(v));
         return v.get<std::string>();
     }
     std::string path_value(const json& v, const std::string& where, const std::string& base) const {
@@ -212,14 +212,14 @@ public:
         if (obj.contains("charged_mah")) {
             const json& v = obj["charged_mah"];
             if (!v.is_number() || !(v.get<double>() > 0.0))
-                fail(where + ".charged_mah", "expected a positive number of mAh, found " + v.dump());
+                fail(where + ".charged_mah", "expected a positive number of mAh, found " + json_brief(v));
             s.charged_mah = v.get<double>();
         }
         if (obj.contains("config")) s.config = path_value(obj["config"], where + ".config", dir);
         if (obj.contains("average_ms")) {
             const json& v = obj["average_ms"];
             try {
-                if (!v.is_number()) throw std::invalid_argument("expected a number of ms, found " + v.dump());
+                if (!v.is_number()) throw std::invalid_argument("expected a number of ms, found " + json_brief(v));
                 s.average_ms = average_window_ms(v.get<double>());
             } catch (const std::invalid_argument& e) {
                 fail(where + ".average_ms", e.what());
@@ -276,7 +276,7 @@ public:
             }
             if (c.contains("negative_is_discharge")) {
                 if (!c["negative_is_discharge"].is_boolean())
-                    fail(w + ".negative_is_discharge", "expected true or false, found " + c["negative_is_discharge"].dump());
+                    fail(w + ".negative_is_discharge", "expected true or false, found " + json_brief(c["negative_is_discharge"]));
                 s.negative_discharge = c["negative_is_discharge"].get<bool>();
             }
         }
@@ -290,9 +290,9 @@ public:
         check_keys(j, "$", {"schema", "version", "description", "base_dir", "defaults", "logs"});
         if (!j.contains("schema")) fail("$", "expected \"schema\": \"" + std::string(kManifestSchema) + "\"");
         if (j["schema"] != kManifestSchema)
-            fail("$.schema", "expected \"" + std::string(kManifestSchema) + "\", found " + j["schema"].dump());
+            fail("$.schema", "expected \"" + std::string(kManifestSchema) + "\", found " + json_brief(j["schema"]));
         if (j.contains("version") && j["version"] != kManifestVersion)
-            fail("$.version", "unsupported version " + j["version"].dump() + "; expected " + std::to_string(kManifestVersion));
+            fail("$.version", "unsupported version " + json_brief(j["version"]) + "; expected " + std::to_string(kManifestVersion));
         Manifest m;
         m.path = path_;
         if (j.contains("description")) m.description = string_value(j["description"], "$.description");

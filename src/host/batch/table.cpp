@@ -87,9 +87,9 @@ std::string csv_field(const json& v) {
     if (v.is_string()) {
         s = v.get<std::string>();
     } else if (v.is_array()) {
-        for (size_t i = 0; i < v.size(); ++i) s += (i ? ";" : "") + (v[i].is_string() ? v[i].get<std::string>() : v[i].dump());
+        for (size_t i = 0; i < v.size(); ++i) s += (i ? ";" : "") + (v[i].is_string() ? v[i].get<std::string>() : json_text(v[i]));
     } else {
-        s = v.dump();
+        s = json_text(v);
     }
     if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
     std::string q = "\"";
@@ -135,7 +135,7 @@ std::string render_packs_md(const json& packs) {
          "| R Ω | R trend Ω/flight |\n";
     o << "|---|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     for (const json& p : packs) {
-        o << "| " << md_cell(text(p["pack"])) << " | " << p["flights"].dump() << " | " << p["failed"].dump() << " | "
+        o << "| " << md_cell(text(p["pack"])) << " | " << json_text(p["flights"]) << " | " << json_text(p["failed"]) << " | "
           << fixed(p["capacity_mean_ah"], 3) << " | " << significant(p["capacity_trend_ah_per_flight"], 3) << " | "
           << fixed(p["capacity_final_median_ah"], 3) << " | " << fixed(p["capacity_scatter_ratio"], 1) << " | "
           << fixed(p["resistance_mean_ohm"], 4) << " | " << significant(p["resistance_trend_ohm_per_flight"], 3)
@@ -152,8 +152,8 @@ std::string render_monitors_md(const json& monitors) {
     for (const json& m : monitors) {
         const json& fault = m["charger_fault"];
         auto yes_no = [](const json& b) { return b.is_boolean() ? (b.get<bool>() ? "yes" : "no") : "–"; };
-        o << "| " << md_cell(text(m["monitor"])) << " | " << m["flights"].dump() << " | " << m["failed"].dump() << " | "
-          << m["charger_checks"].dump() << " | " << m["charger_flagged"].dump() << " | " << m["charger_pooled"].dump()
+        o << "| " << md_cell(text(m["monitor"])) << " | " << json_text(m["flights"]) << " | " << json_text(m["failed"]) << " | "
+          << json_text(m["charger_checks"]) << " | " << json_text(m["charger_flagged"]) << " | " << json_text(m["charger_pooled"])
           << " | " << fixed(m["charger_ratio_pooled"], 4) << " | " << fixed(m["suggested_gain_spread"], 4) << " | "
           << fixed(m["current_gain"], 4) << " | " << fixed(m["suggested_current_gain"], 4) << " | "
           << yes_no(fault) << " | ";
@@ -171,7 +171,7 @@ std::string render_monitors_md(const json& monitors) {
         std::string faults;
         for (const json& c : kFaultCauses) {
             const json n = m.value("fault_flights_" + text(c), json(0));
-            if (n.is_number() && n.get<long>() > 0) faults += (faults.empty() ? "" : ", ") + text(c) + " " + n.dump();
+            if (n.is_number() && n.get<long>() > 0) faults += (faults.empty() ? "" : ", ") + text(c) + " " + json_text(n);
         }
         o << " | " << yes_no(m["fleet_gain_fault"]) << " | " << (faults.empty() ? "–" : faults) << " |\n";
     }
@@ -496,13 +496,13 @@ size_t failed_rows(const json& table) {
 
 std::string render_table(const json& table, TableFormat format) {
     switch (format) {
-        case TableFormat::Json: return table.dump(2) + "\n";
+        case TableFormat::Json: return json_text(table, 2) + "\n";
         case TableFormat::Csv: return render_csv(table["rows"], kRowKeys);
         case TableFormat::Markdown: break;
     }
     std::string out = render_rows_md(table);
     if (table["shard"].is_object()) {
-        out += "\nShard " + table["shard"]["index"].dump() + "/" + table["shard"]["count"].dump() +
+        out += "\nShard " + json_text(table["shard"]["index"]) + "/" + json_text(table["shard"]["count"]) +
                " of the inputs; `battsim merge` the shards' JSON tables for the whole table and the per-pack table.\n";
     } else if (table["packs"].is_array() && !table["packs"].empty()) {
         out += "\nPer pack (trend: least-squares slope over the pack's flights in input order):\n\n";
@@ -520,7 +520,7 @@ std::string render_table(const json& table, TableFormat format) {
 std::string render_packs(const json& table, TableFormat format) {
     const json packs = table["packs"].is_array() ? table["packs"] : json::array();
     switch (format) {
-        case TableFormat::Json: return packs.dump(2) + "\n";
+        case TableFormat::Json: return json_text(packs, 2) + "\n";
         case TableFormat::Csv: return render_csv(packs, kPackKeys);
         case TableFormat::Markdown: break;
     }
@@ -531,7 +531,7 @@ std::string render_monitors(const json& table, TableFormat format) {
     const json monitors = table.value("monitors", json());
     const json list = monitors.is_array() ? monitors : json::array();
     switch (format) {
-        case TableFormat::Json: return list.dump(2) + "\n";
+        case TableFormat::Json: return json_text(list, 2) + "\n";
         case TableFormat::Csv: return render_csv(list, kMonitorKeys);
         case TableFormat::Markdown: break;
     }
@@ -554,7 +554,7 @@ json read_table_file(const std::string& path) {
         if (!t.is_object() || t.value("schema", std::string()) != kBatchSchema)
             fail(std::string("expected a JSON table with \"schema\": \"") + kBatchSchema + "\" (from `battsim batch --format json`)");
         if (t.value("version", 0) != kBatchVersion)
-            fail("unsupported table version " + t.value("version", json()).dump() + "; expected " + std::to_string(kBatchVersion));
+            fail("unsupported table version " + json_brief(t.value("version", json())) + "; expected " + std::to_string(kBatchVersion));
         if (!t.contains("inputs") || !t["inputs"].is_object() || !t["inputs"].value("count", json()).is_number_unsigned() ||
             !t["inputs"].value("digest", json()).is_string())
             fail("expected \"inputs\": {\"count\": N, \"digest\": \"…\"}");
@@ -594,7 +594,7 @@ json merge_tables(const std::vector<json>& tables, const std::vector<std::string
         if (tab["inputs"]["count"].get<size_t>() != count || tab["inputs"]["digest"] != digest) {
             throw InputError(origin, 0, 0,
                              "comes from a different input list than " + origins[0] + " (inputs " +
-                                 tab["inputs"]["count"].dump() + " / digest " + tab["inputs"]["digest"].dump() +
+                                 json_text(tab["inputs"]["count"]) + " / digest " + json_text(tab["inputs"]["digest"]) +
                                  " vs " + std::to_string(count) + " / \"" + digest +
                                  "\"); run every shard with the same paths, manifest and options");
         }

@@ -18,6 +18,9 @@ namespace battsim {
 namespace host {
 namespace discharge {
 
+// No pack the monitor reads is near this (a 14S LiPo is 58.8 V full).
+constexpr double kMaxTableVoltage_v = 200.0;
+
 struct DischargeOptions {
     ReaderOptions reader;
     double min_voltage_v = 0;   // crop: the battery counts as connected above this; also the table's bottom

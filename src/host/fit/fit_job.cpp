@@ -158,14 +158,14 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
     nlohmann::json written = nlohmann::json::array();
     if (!job.output_config.empty()) {
         const std::string name = job.name.empty() ? "fitted-" + join_labels(traces) : job.name;
-        write_file_atomic(job.output_config, config_to_json(make_config(result.specs[0], name)).dump(2) + "\n");
+        write_file_atomic(job.output_config, json_text(config_to_json(make_config(result.specs[0], name)), 2) + "\n");
         written.push_back(job.output_config);
     }
     if (!job.output_dir.empty()) {
         for (size_t t = 0; t < traces.size(); ++t) {
             const std::string name = (job.name.empty() ? std::string("fitted") : job.name) + "-" + traces[t].label;
             const std::string path = job.output_dir + "/" + name + ".json";
-            write_file_atomic(path, config_to_json(make_config(result.specs[t], name)).dump(2) + "\n");
+            write_file_atomic(path, json_text(config_to_json(make_config(result.specs[t], name)), 2) + "\n");
             written.push_back(path);
         }
     }

@@ -47,7 +47,8 @@ std::string JsonLocator::string_token() {
     if (p_ >= t_.size() || t_[p_] != '"') return s;
     ++p_;
     while (p_ < t_.size() && t_[p_] != '"') {
-        if (t_[p_] == '\\' && p_ + 1 < t_.size()) ++p_;  // keys with escapes: close enough to locate
+        // An escape is kept as written (an escaped n is not the letter n): keys compare as spelt.
+        if (t_[p_] == '\\' && p_ + 1 < t_.size()) s += t_[p_++];
         s += t_[p_++];
     }
     ++p_;
@@ -84,7 +85,12 @@ void JsonLocator::value(const std::string& path, int depth) {
             if (c == '{') {
                 const std::size_t key_at = p_;
                 const std::string key = string_token();
-                keys_[path + "." + key] = key_at;
+                // Every object is walked once under its own path, so a key seen again
+                // under the same path is the same object's.
+                if (!keys_.emplace(path + "." + key, key_at).second && duplicate_.empty()) {
+                    duplicate_ = path + "." + key;
+                    duplicate_at_ = key_at;
+                }
                 skip_ws();
                 if (p_ < t_.size() && t_[p_] == ':') ++p_;
                 value(path + "." + key, depth + 1);
@@ -144,10 +150,28 @@ JsonSyntaxError json_syntax_error(const std::string& text, const nlohmann::json:
     return out;
 }
 
+std::string json_text(const nlohmann::json& j, int indent) {
+    return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+std::string json_brief(const nlohmann::json& j) {
+    if (j.is_array()) return "an array of " + std::to_string(j.size()) + (j.size() == 1 ? " value" : " values");
+    if (j.is_object()) return "an object of " + std::to_string(j.size()) + (j.size() == 1 ? " member" : " members");
+    std::string s = json_text(j);
+    if (s.size() > 60) s = s.substr(0, 57) + "...";
+    return s;
+}
+
 bool parse_json_text(const std::string& text, nlohmann::json& out, JsonSyntaxError& error) {
     try {
         out = nlohmann::json::parse(text);
-        return true;
+        const JsonLocator where(text);
+        if (where.duplicate_key().empty()) return true;
+        const auto lc = line_column(text, where.duplicate_offset());
+        error.line = lc.first;
+        error.column = lc.second;
+        error.what = where.duplicate_key() + ": the key is given twice in its object (the last would win unseen)";
+        return false;
     } catch (const nlohmann::json::parse_error& e) {
         error = json_syntax_error(text, e);
     } catch (const nlohmann::json::out_of_range& e) {

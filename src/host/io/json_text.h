@@ -27,6 +27,12 @@ public:
     std::pair<long, long> location(const std::string& path) const;
     std::pair<long, long> key_location(const std::string& path) const;
 
+    // The first member whose key its object already had ("$.a.b" of the second one), and
+    // where that second key starts; empty when every key is unique. nlohmann::json keeps
+    // the last value silently, so a pasted-twice key would change the numbers unseen.
+    const std::string& duplicate_key() const { return duplicate_; }
+    std::size_t duplicate_offset() const { return duplicate_at_; }
+
 private:
     void skip_ws();
     std::string string_token();
@@ -39,6 +45,8 @@ private:
     std::size_t p_ = 0;
     std::map<std::string, std::size_t> offsets_;
     std::map<std::string, std::size_t> keys_;
+    std::string duplicate_;
+    std::size_t duplicate_at_ = 0;
 };
 
 // A bad value in a JSON document: "origin[:line:column]: $.a.b: detail". Readers that
@@ -93,6 +101,15 @@ JsonSyntaxError json_syntax_error(const std::string& text, const nlohmann::json:
 // (the first place the number's text occurs is given).
 bool parse_json_text(const std::string& text, nlohmann::json& out, JsonSyntaxError& error);
 
+// The text of a JSON value for output (indent < 0: one line). Bytes that are not UTF-8 (a
+// Latin-1 file name from an old camera or a Windows share) are replaced with U+FFFD instead
+// of throwing: a summary must not be lost for the name of its log.
+std::string json_text(const nlohmann::json& j, int indent = -1);
+// A bad value as an error message quotes it: scalars as their text (cut at 60 characters),
+// arrays and objects by their size only, so a value nested 100,000 deep is neither printed
+// whole nor walked recursively (which overflowed the stack).
+std::string json_brief(const nlohmann::json& j);
+
 // Reads a document (config, scenario, manifest, table) whole. Capped, so that a path to a
 // device or a runaway file gives a message instead of eating the memory.
 enum class TextRead { Ok, CannotOpen, IsDirectory, TooLarge };
@@ -111,7 +128,8 @@ nlohmann::json load_json_document(const std::string& path, const std::string& ki
     nlohmann::json j;
     JsonSyntaxError se;
     if (!parse_json_text(text, j, se))
-        throw E(path + ":" + std::to_string(se.line) + ":" + std::to_string(se.column) + ": not valid JSON: " + se.what);
+        throw E(path + ":" + std::to_string(se.line) + ":" + std::to_string(se.column) + ": " +
+                (se.what.rfind("$", 0) == 0 ? "" : "not valid JSON: ") + se.what);
     return j;
 }
 

@@ -49,14 +49,23 @@ json charger_check(const json& summary, const ChargerCheckOptions& o) {
         notes.push_back("a sensor fault was raised in flight (a current offset learnt on the ground, or missing "
                         "samples): an offset's charge reads as gain here; correct it first, no gain suggested");
     }
+    // A current sensor off by a factor of two is broken, not miscalibrated; a count that far
+    // off is a typo (Ah given as mAh) or another flight's charge, and a gain fitted to it
+    // had written a config battsim then refused to load.
+    const bool plausible = ratio >= 0.5 && ratio <= 2.0;
+    if (!plausible) {
+        notes.push_back("the monitor counted " + std::to_string(static_cast<long>(std::lround(ratio * 100.0))) +
+                        " % of the charger's count: check --charged-mah (in mAh) and that the log is of this charge; "
+                        "no gain suggested");
+    }
     json j;
     j["charged_ah"] = round_sig(o.charged_ah);
     j["counted_ah"] = round_sig(counted_ah);
     j["ratio"] = round_sig(ratio);
     j["tolerance"] = o.tolerance;
     j["current_gain"] = round_sig(o.current_gain);
-    j["suggested_current_gain"] = started_full && !sensor_fault ? json(round_sig(o.current_gain / ratio)) : json(nullptr);
-    j["fault"] = started_full ? json(std::fabs(ratio - 1.0) > o.tolerance) : json(nullptr);
+    j["suggested_current_gain"] = started_full && !sensor_fault && plausible ? json(round_sig(o.current_gain / ratio)) : json(nullptr);
+    j["fault"] = started_full && plausible ? json(std::fabs(ratio - 1.0) > o.tolerance) : json(nullptr);
     j["notes"] = notes;
     return j;
 }

@@ -976,7 +976,7 @@ nlohmann::json run_residual_job(const ResidualJob& job, ResidualReport* out, std
         for (const std::string& e : rep.effects) effects += (effects.empty() ? "" : ", ") + e;
         c.description = "battsim residual " BATTSIM_VERSION " on " + std::to_string(traces.size()) + " log(s) from " +
                                job.config.name + "; effects added: " + (effects.empty() ? "none" : effects);
-        write_file_atomic(job.output_config, config_to_json(c).dump(2) + "\n");
+        write_file_atomic(job.output_config, json_text(config_to_json(c), 2) + "\n");
         j["config_written"] = job.output_config;
     }
     if (!job.plot_path.empty()) {

@@ -45,7 +45,7 @@ public:
         const double d = v->get<double>();
         if (!std::isfinite(d) || d < lo || d > hi) {
             std::ostringstream m;
-            m << "expected a number in [" << lo << ", " << hi << "], found " << v->dump();
+            m << "expected a number in [" << lo << ", " << hi << "], found " << json_brief(*v);
             fail(at(key), m.str());
         }
         out = d;
@@ -54,7 +54,7 @@ public:
     bool integer(const char* key, int& out, int lo, int hi) {
         const json* v = find(key);
         if (!v) return false;
-        if (!v->is_number_integer()) fail(at(key), "expected a whole number, found " + v->dump());
+        if (!v->is_number_integer()) fail(at(key), "expected a whole number, found " + json_brief(*v));
         const long long n = v->get<long long>();
         if (n < lo || n > hi) {
             fail(at(key), "expected a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], found " +
@@ -66,7 +66,7 @@ public:
     bool seed(const char* key, uint64_t& out) {
         const json* v = find(key);
         if (!v) return false;
-        if (!v->is_number_unsigned()) fail(at(key), "expected a whole number >= 0, found " + v->dump());
+        if (!v->is_number_unsigned()) fail(at(key), "expected a whole number >= 0, found " + json_brief(*v));
         out = v->get<uint64_t>();
         return true;
     }

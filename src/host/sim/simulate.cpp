@@ -454,7 +454,7 @@ void write_simulation(const SimulationResult& r, const std::string& log_path, co
     AtomicFile log(log_path);
     log.write(r.log_text);
     AtomicFile truth(truth_path);
-    truth.write(truth_to_json(r).dump(2) + "\n");
+    truth.write(json_text(truth_to_json(r), 2) + "\n");
     log.commit();
     truth.commit();
 }

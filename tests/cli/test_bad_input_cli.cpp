@@ -1,0 +1,154 @@
+// What a whole-product audit (thirty-second session) broke from the outside, each now a clear
+// refusal or a kept result: odd file names, hostile documents, typos in options and counts.
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+
+#include "cli_util.h"
+
+using clitest::q;
+using clitest::run;
+
+namespace {
+const std::string kSource = BATTSIM_SOURCE_DIR;
+const std::string kExample = kSource + "/logs/example-4s.csv";
+const std::string kConfig = kSource + "/configs/sim-4s.json";
+
+// sim-4s.json with `edit` applied.
+std::string edited_config(const std::string& dir, const std::string& name, void (*edit)(nlohmann::json&)) {
+    nlohmann::json c = nlohmann::json::parse(clitest::read_file(kConfig));
+    edit(c);
+    const std::string path = dir + "/" + name;
+    clitest::write_file(path, c.dump(2));
+    return path;
+}
+}  // namespace
+
+TEST_CASE("a log whose name is not UTF-8 is replayed and tabled, its name's bad byte replaced", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string latin1 = dir + "/lat\xe9n.csv";  // "latén" in Latin-1
+    clitest::write_file(latin1, clitest::read_file(kExample));
+    const auto brief = run("replay " + q(latin1) + " -c " + q(kConfig));
+    INFO(brief.err);
+    CHECK(brief.exit_code == 0);
+    CHECK_THAT(brief.out, Catch::Contains("3913 samples"));
+    const auto j = clitest::run_json("replay " + q(latin1) + " -c " + q(kConfig) + " --json");
+    CHECK(j["input"]["path"].get<std::string>().find("lat\xef\xbf\xbdn.csv") != std::string::npos);  // U+FFFD
+    // A batch loses no row for it, in JSON either.
+    const auto b = run("batch " + q(latin1) + " " + q(kExample) + " -c " + q(kConfig) +
+                       " --no-progress --format json -o " + q(dir + "/t.json"));
+    INFO(b.err);
+    CHECK(b.exit_code == 0);
+    const auto table = nlohmann::json::parse(clitest::read_file(dir + "/t.json"));
+    REQUIRE(table["rows"].size() == 2);
+    CHECK(table["rows"][0]["status"] == "ok");
+    CHECK(table["rows"][0]["capacity_mean_ah"] == table["rows"][1]["capacity_mean_ah"]);
+}
+
+TEST_CASE("a value nested 100,000 deep is refused in a few words, not a crash", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    const int n = 100000;
+    clitest::write_file(dir + "/deep.json", "{\"schema\":\"battsim.manifest\",\"version\":1,\"logs\":[{\"path\":\"a.csv\",\"test\":" +
+                                                std::string(n, '[') + std::string(n, ']') + "}]}");
+    const auto r = run("batch -m " + q(dir + "/deep.json") + " --no-progress");
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("$.logs[0].test: expected a string or a whole number, found an array of 1 value"));
+    CHECK(r.err.size() < 400);
+}
+
+TEST_CASE("a config's duplicate key, fractional count or crossed voltages are refused by name", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    // The last of two keys had won silently: 9 Ah read for a 1.55 Ah pack.
+    std::string text = clitest::read_file(kConfig);
+    const std::string key = "\"capacity_ah\": ";
+    const auto at = text.find(key);
+    REQUIRE(at != std::string::npos);
+    text.insert(at, "\"capacity_ah\": 9.0, ");
+    clitest::write_file(dir + "/dup.json", text);
+    auto r = run("replay " + q(kExample) + " -c " + q(dir + "/dup.json"));
+    CHECK(r.exit_code == 4);
+    CHECK_THAT(r.err, Catch::Contains("$.battery.capacity_ah: the key is given twice in its object"));
+    CHECK_THAT(r.err, Catch::Contains("dup.json:"));
+
+    const std::string frac = edited_config(dir, "frac.json", [](nlohmann::json& c) { c["battery"]["cells_in_series"] = 2.5; });
+    r = run("replay " + q(kExample) + " -c " + q(frac));
+    CHECK(r.exit_code == 4);
+    CHECK_THAT(r.err, Catch::Contains("$.battery.cells_in_series: expected a whole number, found 2.5"));
+
+    const std::string crossed = edited_config(dir, "crossed.json", [](nlohmann::json& c) { c["battery"]["min_voltage_v"] = 17.0; });
+    r = run("replay " + q(kExample) + " -c " + q(crossed));
+    CHECK(r.exit_code == 4);
+    CHECK_THAT(r.err, Catch::Contains("$.battery.min_voltage_v: must be below max_voltage_v"));
+}
+
+TEST_CASE("a charger count far from the monitor's suggests no gain and writes no config", "[cli]") {
+    // 2,000,000 mAh for a 1.55 Ah flight (Ah typed as mAh): the gain it implied was out of
+    // the range the config reader accepts, so --config-out had left an unloadable config.
+    const std::string dir = clitest::temp_dir();
+    const std::string pack = dir + "/pack.json";
+    clitest::write_file(pack, clitest::read_file(kConfig));
+    const auto r = run("replay " + q(kExample) + " -c " + q(pack) + " --charged-mah 2000000 --config-out " + q(pack));
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("check --charged-mah (in mAh)"));
+    CHECK(clitest::read_file(pack) == clitest::read_file(kConfig));
+    const auto j = clitest::run_json("replay " + q(kExample) + " -c " + q(pack) + " --charged-mah 2000000 --json");
+    CHECK(j["charger_check"]["suggested_current_gain"].is_null());
+    CHECK(j["charger_check"]["fault"].is_null());
+}
+
+TEST_CASE("batch keeps a log's numbers when its summary file cannot be written, and exits 5", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    std::filesystem::create_directories(dir + "/out/example-4s.json");  // a directory where the summary goes
+    const auto r = run("batch " + q(kExample) + " -c " + q(kConfig) + " --no-progress --format json --out " + q(dir + "/out") +
+                       " -o " + q(dir + "/t.json"));
+    CHECK(r.exit_code == 5);
+    CHECK_THAT(r.err, Catch::Contains(kExample + ": summary not written: "));
+    const auto table = nlohmann::json::parse(clitest::read_file(dir + "/t.json"));
+    REQUIRE(table["rows"].size() == 1);
+    CHECK(table["rows"][0]["status"] == "ok");
+    CHECK(table["rows"][0]["capacity_mean_ah"].is_number());
+}
+
+TEST_CASE("option typos are refused with the range in plain figures", "[cli]") {
+    struct Case {
+        std::string args, says;
+    };
+    const std::string scenario = q(kSource + "/configs/scenarios/4s-racing-healthy-a.json");
+    const std::string dir = clitest::temp_dir();
+    const Case cases[] = {
+        {"bench monitor " + q(kExample) + " --min-time nan", "--min-time: expected a number in [0, 3600], found nan"},
+        {"simulate " + scenario + " -o " + q(dir + "/s.csv") + " --seed -1", "--seed: expected a whole number from 0"},
+        {"simulate " + scenario + " -o " + q(dir + "/s.csv") + " --seed 99999999999999999999", "--seed: expected a whole number"},
+        {"replay " + q(kExample) + " --speed 2", "--speed requires --realtime"},
+        {"replay " + q(kExample) + " --realtime --speed 1e-30", "--speed: expected a number in [0.001, 1e+06]"},
+        {"make-config --cells 4 --capacity-mah 0", "--capacity-mah: expected a number in (0, 1e+06], found 0"},
+        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --max-voltage 100000", "the maximum voltage must be at most 200 V"},
+        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --alpha nan", "--alpha: expected a number in [0, 1]"},
+        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --min-voltage nan", "--min-voltage and --max-voltage take a voltage"},
+        {"fit-ocv " + q(kExample) + " --prior-sigma nan", "--prior-sigma: expected a number in (0, 1e+06]"},
+    };
+    for (const Case& c : cases) {
+        INFO(c.args);
+        const auto r = run(c.args);
+        CHECK(r.exit_code == 2);
+        CHECK_THAT(r.err, Catch::Contains(c.says));
+        CHECK(r.err.size() < 400);
+    }
+    CHECK_FALSE(std::filesystem::exists(dir + "/s.csv"));
+}
+
+TEST_CASE("export-config keeps a description that ends in a backslash inside its comment", "[cli]") {
+    // A trailing backslash had spliced the next line, the #pragma once, into the comment.
+    const std::string dir = clitest::temp_dir();
+    const std::string cfg =
+        edited_config(dir, "bs.json", [](nlohmann::json& c) { c["description"] = std::string("ends in a backslash \\\nand a NUL ") + '\0'; });
+    const auto r = run("export-config --firmware " + q(cfg) + " -o " + q(dir + "/h.h"));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const std::string h = clitest::read_file(dir + "/h.h");
+    CHECK(h.find('\0') == std::string::npos);
+    CHECK(h.find("\\\n") == std::string::npos);
+    CHECK_THAT(h, Catch::Contains("// ends in a backslash / and a NUL  \n#pragma once\n"));
+}
