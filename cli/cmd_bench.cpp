@@ -114,6 +114,10 @@ int run_batch(const BenchArgs& a) {
     if (int rc = plan(a, items)) return rc;
     const unsigned jobs = a.jobs > 0 ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
     const host::ThroughputBench r = host::bench_batch(items, jobs, a.min_time, a.min_runs);
+    if (!r.failure.empty()) {
+        std::cerr << "battsim bench: " << r.failure << "\n";
+        return kExitInputError;
+    }
     print({{"runs", r.runs},
            {"logs", r.logs},
            {"jobs", r.jobs},

@@ -37,8 +37,12 @@ std::function<int()> setup(CLI::App& sub) {
         ->capture_default_str();
     sub.add_option("--window", a->window, "Samples in the objective: all (initialised) or flight (the summary's flight window)")
         ->capture_default_str();
-    sub.add_option("--max-points", a->max_points, "At most this many samples per log in the objective (thinned evenly)")->capture_default_str();
-    sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iteration limit")->capture_default_str();
+    sub.add_option("--max-points", a->max_points, "At most this many samples per log in the objective (thinned evenly)")
+        ->check(CLI::Range(static_cast<size_t>(20), static_cast<size_t>(100000000)))
+        ->capture_default_str();
+    sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iteration limit")
+        ->check(CLI::Range(1, 100000))
+        ->capture_default_str();
     sub.add_flag("--sample-weights", a->sample_weights, "Weight logs by their sample count instead of equally");
     add_model_job_options(sub, a->common, "fit report", "Plot measured and model voltage per log (.png or .svg)");
     return [a]() -> int {

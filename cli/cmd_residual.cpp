@@ -33,11 +33,11 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--window", a->window, "Samples analysed: all (initialised) or flight")->capture_default_str();
     sub.add_option("--initial", a->initial, "Initial charge: free (fitted per log; flights) or zero (logs start full: constant-current discharges)")
         ->capture_default_str();
-    sub.add_option("--blocks", a->blocks, "Blocks per log; odd ones (but the last) are held out, the others fitted")->capture_default_str();
-    sub.add_option("--max-effects", a->max_effects, "Most effects added")->capture_default_str();
-    sub.add_option("--min-gain", a->min_gain, "Least share of the held-out error variance an effect must remove")->capture_default_str();
-    sub.add_option("--max-p", a->max_p, "Significance level of the Wilcoxon signed-rank test over the held-out blocks")->capture_default_str();
-    sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iterations per refit")->capture_default_str();
+    sub.add_option("--blocks", a->blocks, "Blocks per log; odd ones (but the last) are held out, the others fitted")->check(CLI::Range(4, 1000))->capture_default_str();
+    sub.add_option("--max-effects", a->max_effects, "Most effects added")->check(CLI::Range(0, 20))->capture_default_str();
+    sub.add_option("--min-gain", a->min_gain, "Least share of the held-out error variance an effect must remove")->check(number_in(0.0, 1.0))->capture_default_str();
+    sub.add_option("--max-p", a->max_p, "Significance level of the Wilcoxon signed-rank test over the held-out blocks")->check(number_in(0.0, 1.0, true))->capture_default_str();
+    sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iterations per refit")->check(CLI::Range(1, 100000))->capture_default_str();
     add_model_job_options(sub, a->common, "report", "Plot voltage, residual before/after, autocorrelation, histogram (.png or .svg)");
     return [a]() -> int {
         const char* me = "battsim residual";

@@ -44,10 +44,10 @@ void add_input_options(CLI::App& sub, InputArgs& a) {
     sub.add_option("--current-source", a.current_source, "Raw logs: current from 'current' (logged mA) or 'shunt' (shunt mV through the config's calibration)")
         ->capture_default_str();
     sub.add_option("--time-col", a.time_col, "CSV: name of the time column");
-    sub.add_option("--time-unit", a.time_unit, "CSV: unit of the time column (s, ms, us) when its name has no suffix");
+    sub.add_option("--time-unit", a.time_unit, "CSV: unit of the time column (s, ms, us); overrides the unit its name implies (time_ms)");
     sub.add_option("--voltage-col", a.voltage_col, "CSV: name of the pack voltage column (V)");
     sub.add_option("--current-col", a.current_col, "CSV: name of the current column");
-    sub.add_option("--current-unit", a.current_unit, "CSV: unit of the current column (A, mA) when its name has no suffix");
+    sub.add_option("--current-unit", a.current_unit, "CSV: unit of the current column (A, mA); overrides the unit its name implies (current_ma)");
     sub.add_option("--cell-cols", a.cell_cols, "CSV: names of the cell voltage columns, cell 1 first")->delimiter(',');
     sub.add_option("--temperature-col", a.temperature_col, "CSV: name of the temperature column (degC)");
     sub.add_option("--estimator", a.estimator, "Estimator: reference (the dissertation's) or joint (the newer one); default from the config");
@@ -60,6 +60,7 @@ void add_input_options(CLI::App& sub, InputArgs& a) {
 void add_model_job_options(CLI::App& sub, ModelJobArgs& a, const std::string& report, const std::string& plot_help) {
     sub.add_option("--max-capacity-factor", a.max_capacity_factor,
                    "The fitted capacity stays at or below this x the config's (and above the charge drawn)")
+        ->check(number_in(1.0, 100.0))
         ->capture_default_str();
     sub.add_option("--report", a.report, "Write the " + report + " JSON here");
     sub.add_option("--plot", a.plot, plot_help);

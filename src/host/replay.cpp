@@ -42,7 +42,7 @@ public:
     }
     // fastest_s: the shortest median interval at which the joint estimator's resistance lags
     // are reached (0: no such limit, the reference estimator).
-    std::vector<std::string> notes(bool flew, double takeoff_a, double fastest_s) const {
+    std::vector<std::string> notes(bool flew, double takeoff_a, double fastest_s, double window_s) const {
         std::vector<std::string> out;
         char buf[320];
         if (!flew && max_a_ < takeoff_a && min_a_ <= -takeoff_a) {
@@ -55,7 +55,8 @@ public:
         }
         // Battery logs are written a few times a second to once every few seconds.
         const double dt_s = median(intervals_s_);
-        if (dt_s > kSlowestIntervalS) {
+        // Unless the user's own --average-ms windows spaced them so.
+        if (dt_s > kSlowestIntervalS && !(dt_s <= 1.5 * window_s)) {
             std::snprintf(buf, sizeof buf,
                           "the samples are %.4g s apart (median): if the time column counts milliseconds, give "
                           "--time-unit ms (or --time-col with a column in seconds)",
@@ -152,7 +153,8 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
                                  ? std::max(jc.resistance.lag_s, jc.hover_resistance.lag_s) /
                                        (core::DifferenceResistanceEstimator::kHistory - 1)
                                  : 0.0;
-    for (const std::string& n : shape.notes(flew, options.config.monitor.flying.min_flying_current_a, fastest_s))
+    for (const std::string& n : shape.notes(flew, options.config.monitor.flying.min_flying_current_a, fastest_s,
+                                              static_cast<double>(options.reader.average_us) * 1e-6))
         input_notes.push_back(n);
     j["input"] = {{"path", path}, {"format", to_string(info.format)}, {"cells", info.cell_count},
                   {"has_temperature", info.has_temperature}, {"notes", input_notes}};

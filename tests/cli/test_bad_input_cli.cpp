@@ -152,3 +152,38 @@ TEST_CASE("export-config keeps a description that ends in a backslash inside its
     CHECK(h.find("\\\n") == std::string::npos);
     CHECK_THAT(h, Catch::Contains("// ends in a backslash / and a NUL  \n#pragma once\n"));
 }
+
+TEST_CASE("merge refuses a shard row whose value is not of the type batch writes", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string example2 = dir + "/example2.csv";
+    clitest::write_file(example2, clitest::read_file(kExample));
+    const std::string logs = q(kExample) + " " + q(example2) + " -c " + q(kConfig) + " --no-progress --format json";
+    REQUIRE(run("batch " + logs + " --shard 1/2 -o " + q(dir + "/s1.json")).exit_code == 0);
+    REQUIRE(run("batch " + logs + " --shard 2/2 -o " + q(dir + "/s2.json")).exit_code == 0);
+    CHECK(run("merge " + q(dir + "/s1.json") + " " + q(dir + "/s2.json") + " --format csv -o " + q(dir + "/m.csv")).exit_code == 0);
+    nlohmann::json bad = nlohmann::json::parse(clitest::read_file(dir + "/s1.json"));
+    bad["rows"][0]["capacity_mean_ah"] = "x";
+    clitest::write_file(dir + "/bad.json", bad.dump());
+    auto r = run("merge " + q(dir + "/bad.json") + " " + q(dir + "/s2.json") + " --format csv -o " + q(dir + "/m2.csv"));
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("bad.json: rows[0].capacity_mean_ah: expected a number or null, found \"x\""));
+    bad = nlohmann::json::parse(clitest::read_file(dir + "/s1.json"));
+    bad["rows"][0]["extra"] = 1;
+    clitest::write_file(dir + "/bad.json", bad.dump());
+    r = run("merge " + q(dir + "/bad.json") + " " + q(dir + "/s2.json") + " --format csv -o " + q(dir + "/m2.csv"));
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("rows[0].extra: not a key batch writes"));
+    CHECK_FALSE(std::filesystem::exists(dir + "/m2.csv"));
+}
+
+TEST_CASE("bench batch refuses logs that do not replay instead of timing them", "[cli]") {
+    const auto r = run("bench batch " + q(kExample) + " /nonexistent/x.csv --min-time 0 --min-runs 1");
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("/nonexistent/x.csv: cannot open file"));
+}
+
+TEST_CASE("averaging into minute-long windows is not taken for a time column in milliseconds", "[cli]") {
+    const auto r = run("replay " + q(kExample) + " -c " + q(kConfig) + " --average-ms 60000");
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, !Catch::Contains("--time-unit ms"));
+}

@@ -89,6 +89,14 @@ ThroughputBench bench_batch(const std::vector<BatchItem>& items, unsigned jobs, 
     const Clock::time_point t0 = Clock::now();
     while (r.runs < min_runs || seconds_since(t0) < min_seconds) {
         const BatchResult res = run_batch(items, opt);
+        if (r.runs == 0) {
+            for (const nlohmann::json& row : res.rows) {
+                if (row.value("status", std::string()) == "ok") continue;
+                const std::string log = row.value("log", std::string()), error = row.value("error", std::string());
+                r.failure = error.rfind(log, 0) == 0 ? error : log + ": " + error;
+                return r;
+            }
+        }
         r.samples += res.samples;
         r.bytes += bytes;
         r.logs += items.size();

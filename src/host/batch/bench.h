@@ -36,6 +36,9 @@ struct ThroughputBench {
     // CPU time of the whole process (all threads): on a shared machine the wall time
     // includes waiting for a core, the CPU time does not.
     double cpu_seconds = 0;
+    // The first log that failed in the first run ("path: why"); empty when all replayed. A
+    // throughput over logs that never opened measures nothing.
+    std::string failure;
     double samples_per_second() const { return seconds > 0 ? samples / seconds : 0; }
     double megabytes_per_second() const { return seconds > 0 ? bytes / seconds / 1e6 : 0; }
     double megabytes_per_cpu_second() const { return cpu_seconds > 0 ? bytes / cpu_seconds / 1e6 : 0; }

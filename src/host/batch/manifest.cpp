@@ -106,7 +106,7 @@ LogSettings settings_from_strings(const LogSettingStrings& a) {
         }
     };
     if (!a.format.empty() && a.format != "auto")
-        s.format = with("--format", [&] { return parse_log_format(a.format); });
+        s.format = parse_log_format(a.format);  // its message names the log format; batch spells the option --log-format
     if (!a.current_source.empty() && a.current_source != "auto")
         s.current_source = with("--current-source", [&] { return parse_current_source(a.current_source); });
     if (!a.time_unit.empty()) s.time_scale_to_s = with("--time-unit", [&] { return time_unit_scale(a.time_unit); });

@@ -29,6 +29,39 @@ const std::vector<std::string> kRowKeys = {
     "resistance_first20_ohm", "resistance_final_ohm", "cell_scores", "remaining_at20_s", "warnings", "samples", "sensor_fault_samples",
     "sensor_fault_cause", "notes"};
 
+// The first key of a batch row whose value is not of the type batch writes ("key: expected
+// ..."), or an unknown key; empty when the row is well formed.
+std::string row_type_problem(const json& r) {
+    static const std::vector<std::string> texts = {"test", "log", "config", "estimator", "status"};
+    static const std::vector<std::string> texts_or_null = {"pack", "monitor", "error"};
+    static const std::vector<std::string> text_lists = {"warnings", "sensor_fault_cause"};
+    const auto in = [](const std::vector<std::string>& keys, const std::string& k) {
+        return std::find(keys.begin(), keys.end(), k) != keys.end();
+    };
+    for (auto it = r.begin(); it != r.end(); ++it) {
+        const std::string& k = it.key();
+        const json& v = it.value();
+        if (!in(kRowKeys, k)) return k + ": not a key batch writes";
+        if (k == "index" || k == "flight") continue;  // checked by the caller
+        if (in(texts, k)) {
+            if (!v.is_string()) return k + ": expected text, found " + json_brief(v);
+        } else if (in(texts_or_null, k)) {
+            if (!v.is_string() && !v.is_null()) return k + ": expected text or null, found " + json_brief(v);
+        } else if (in(text_lists, k)) {
+            for (const json& e : v)
+                if (!e.is_string()) return k + ": expected a list of text, found " + json_brief(e);
+        } else if (k == "cell_scores") {
+            for (const json& e : v)
+                if (!e.is_number() && !e.is_null()) return k + ": expected a list of numbers, found " + json_brief(e);
+        } else if (k == "charger_fault") {
+            if (!v.is_boolean() && !v.is_null()) return k + ": expected true, false or null, found " + json_brief(v);
+        } else if (!v.is_number() && !v.is_null()) {
+            return k + ": expected a number or null, found " + json_brief(v);
+        }
+    }
+    return "";
+}
+
 const std::vector<std::string> kPackKeys = {"pack", "flights", "failed", "capacity_mean_ah",
                                             "capacity_trend_ah_per_flight", "capacity_final_median_ah",
                                             "capacity_final_spread_ah", "capacity_final_sigma_median_ah",
@@ -573,6 +606,10 @@ json read_table_file(const std::string& path) {
                 fail(where + ": expected \"status\" text and \"flight\" true/false");
             if (!r["cell_scores"].is_array() || !r["warnings"].is_array() || !r["sensor_fault_cause"].is_array())
                 fail(where + ": expected \"cell_scores\", \"warnings\" and \"sensor_fault_cause\" arrays");
+            // Every value of the type batch writes: an edited or corrupted shard must not pass its
+            // values into the merged table and the per-pack trends unseen.
+            const std::string problem = row_type_problem(r);
+            if (!problem.empty()) fail(where + "." + problem);
         }
     } catch (const nlohmann::json::exception& e) {
         // A value of the wrong type somewhere the checks above did not look.

@@ -573,6 +573,13 @@ LogFitStats evaluate(const Trace& trace, const ModelSpec& spec, InitialMode mode
 FitResult fit_model(const std::vector<Trace>& traces, const std::vector<ModelSpec>& start, const FitOptions& options) {
     Problem problem(traces, start, options);
     const LmProblem lm = problem.lm_problem();
+    // No fewer samples than parameters: a one-row log had "fitted" with RMSE 0 and the start
+    // values as the result.
+    std::size_t samples = 0;
+    for (const auto& p : problem.points()) samples += p.size();
+    if (lm.n_params > 0 && samples <= static_cast<std::size_t>(lm.n_params))
+        throw std::invalid_argument("fit: " + std::to_string(samples) + " samples to fit " + std::to_string(lm.n_params) +
+                                    " parameters: too few (a longer log, or fewer parameters with --params)");
     const Eigen::VectorXd x0 = problem.start_vector();
     LmResult res = levenberg_marquardt(lm, x0, options.lm);
     Eigen::VectorXd x_linear;
