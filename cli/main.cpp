@@ -2,6 +2,7 @@
 // firmware runs.
 #include <algorithm>
 #include <iostream>
+#include <string>
 
 #include "command.h"
 
@@ -28,6 +29,17 @@ int main(int argc, char** argv) {
     for (auto& c : commands) {
         CLI::App* sub = app.add_subcommand(c.name, c.description);
         actions.emplace_back(sub, c.setup(*sub));
+    }
+    // CLI11 answers a misspelt command with "A subcommand is required"; name it instead.
+    if (argc > 1 && argv[1][0] != '-') {
+        const std::string word = argv[1];
+        const bool known = std::any_of(commands.begin(), commands.end(), [&](const Command& c) { return c.name == word; });
+        if (!known) {
+            std::cerr << "battsim: unknown command \"" << word << "\"; the commands are:";
+            for (const Command& c : commands) std::cerr << " " << c.name;
+            std::cerr << " (battsim --help)\n";
+            return kExitUsage;
+        }
     }
     try {
         app.parse(argc, argv);
