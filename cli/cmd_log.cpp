@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "command.h"
+#include "common_options.h"
 #include "host/serial/serial_logger.h"
 
 namespace battsim {
@@ -34,6 +35,7 @@ std::function<int()> setup(CLI::App& sub) {
         ->check(CLI::NonNegativeNumber);
     sub.add_flag("-q,--quiet", a->quiet, "Print only errors and the final count");
     return [a]() -> int {
+        if (int rc = check_outputs("battsim log", {{"--port", a->options.port}}, {{"--out", a->options.out_path}})) return rc;
         g_stop.store(false);
         std::signal(SIGINT, on_signal);
         std::signal(SIGTERM, on_signal);

@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "command.h"
+#include "common_options.h"
 #include "host/config_json.h"
 #include "host/io/atomic_file.h"
 #include "host/pack_config.h"
@@ -27,6 +28,7 @@ struct MakeConfigArgs {
 
 int run(const MakeConfigArgs& a) {
     const char* me = "battsim make-config";
+    if (int rc = check_outputs(me, {{"--from-log", a.from_log}}, {{"-o/--output", a.output}})) return rc;
     host::PackRating r;
     r.name = a.name;
     host::LogPack log;
