@@ -2,6 +2,7 @@
 // per-log summaries, shards of the work and a regression check against goldens.
 #include <unistd.h>
 
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <mutex>
@@ -17,6 +18,8 @@
 namespace battsim {
 namespace cli {
 namespace {
+
+namespace fs = std::filesystem;
 
 struct BatchArgs {
     std::vector<std::string> paths;
@@ -80,6 +83,19 @@ int run(const BatchArgs& a) {
     std::vector<host::BatchItem> items;
     for (const host::BatchItem& it : all)
         if (shard.contains(it.index)) items.push_back(it);
+
+    // Every log listed is an input, the goldens too (a summary written over its golden
+    // would compare equal); every summary --out writes is an output.
+    std::vector<host::NamedPath> inputs{{"-m/--manifest", a.manifest}};
+    for (const host::BatchItem& it : all) inputs.push_back({"a log", it.path});
+    std::vector<host::NamedPath> outputs{{"-o/--output", a.output}, {"--packs", a.packs}, {"--monitors", a.monitors}};
+    for (const host::BatchItem& it : items) {
+        if (!a.compare.empty())
+            inputs.push_back({"--compare's " + it.stem + ".json", (fs::path(a.compare) / (it.stem + ".json")).string()});
+        if (!a.out_dir.empty())
+            outputs.push_back({"--out's " + it.stem + ".json", (fs::path(a.out_dir) / (it.stem + ".json")).string()});
+    }
+    if (int rc = check_outputs("battsim batch", inputs, outputs)) return rc;
 
     // What each config makes unreliable, once per config: the table only counts notes, and a
     // fleet replayed with the joint estimator and no OCV table reads plausible nonsense.

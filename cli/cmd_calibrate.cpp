@@ -58,6 +58,9 @@ std::function<int()> setup(CLI::App& sub) {
         if (int rc = resolve_input(a->input, opt.reader, opt.config)) return rc;
         host::ShapeCalibration c;
         const char* const command = "battsim calibrate";
+        std::vector<host::NamedPath> inputs{{"-c/--config", a->input.config, true}};
+        add_named(inputs, "a log", a->logs);
+        if (int rc = check_outputs(command, inputs, {{"-o/--output", a->output, true}})) return rc;
         if (int rc = run_job(command, [&] { c = host::calibrate_slow_share(a->logs, opt, a->options); })) return rc;
         if (c.logs.empty()) {
             std::cerr << command << ": no log has a rest after a flight to read the capacity from (" << a->logs.size()

@@ -57,6 +57,13 @@ std::function<int()> setup(CLI::App& sub) {
         opt.alpha = a->alpha;
         opt.decimate = a->decimate;
         if (int rc = check_plot_option("battsim discharge", a->plot)) return rc;
+        if (int rc = check_outputs("battsim discharge", {{"the log", a->log}, {"-c/--config", a->input.config, true}},
+                                   {{"--table", a->table},
+                                    {"--curve", a->curve},
+                                    {"--summary", a->summary},
+                                    {"--plot", a->plot},
+                                    {"--config-out", a->config_out, true}}))
+            return rc;
         host::discharge::DischargeResult result;
         try {
             result = host::discharge::process_discharge(a->log, opt);

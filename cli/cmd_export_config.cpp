@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "command.h"
+#include "common_options.h"
 #include "host/export_header.h"
 
 namespace battsim {
@@ -22,6 +23,8 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--estimator", a->estimator, "Estimator compiled in: reference or joint; default from the config")
         ->check(CLI::IsMember({"reference", "joint"}));
     return [a]() -> int {
+        if (int rc = check_outputs("battsim export-config", {{"--firmware", a->firmware}}, {{"-o/--output", a->output}}))
+            return rc;
         try {
             for (const std::string& note : host::export_firmware_config(a->firmware, a->output, a->estimator))
                 std::cerr << "battsim export-config: note: " << note << "\n";

@@ -126,6 +126,13 @@ std::function<int()> setup(CLI::App& sub) {
             }
             if (a->input.config.empty() && !items.empty()) config = items.front().replay.config;
         }
+        // After the plan, which names the manifest's logs.
+        std::vector<host::NamedPath> inputs{{"-c/--config", a->input.config, true}, {"-m/--manifest", a->manifest}};
+        for (const host::fit::OcvStitchLog& l : logs) inputs.push_back({"a log", l.path});
+        add_named(inputs, "a --test log", a->test_logs);
+        if (int rc = check_outputs(command, inputs,
+                                   {{"-o/--output", a->output, true}, {"--report", a->report}, {"--plot", a->plot}}))
+            return rc;
         if (a->test_every > 0)
             for (size_t k = 0; k < logs.size(); ++k) logs[k].test = k % a->test_every == 1 % a->test_every;
         for (const std::string& p : a->test_logs) logs.push_back({p, reader, true});

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "command.h"
+#include "common_options.h"
 #include "host/batch/table.h"
 #include "host/io/atomic_file.h"
 #include "host/io/sample_reader.h"
@@ -28,6 +29,11 @@ int run(const MergeArgs& a) {
         std::cerr << me << e.what() << "\n";
         return kExitUsage;
     }
+    std::vector<host::NamedPath> inputs;
+    add_named(inputs, "a table", a.tables);
+    if (int rc = check_outputs("battsim merge", inputs,
+                               {{"-o/--output", a.output}, {"--packs", a.packs}, {"--monitors", a.monitors}}))
+        return rc;
     nlohmann::json merged;
     try {
         std::vector<nlohmann::json> tables;

@@ -65,15 +65,19 @@ std::function<int()> setup(CLI::App& sub) {
         host::ReplayOptions opt;
         if (int rc = resolve_input(a->input, opt.reader, opt.config)) return rc;
         if (int rc = check_plot_option("battsim replay", a->plot)) return rc;
+        if (int rc = check_outputs("battsim replay", {{"the log", a->log}, {"-c/--config", a->input.config, true}},
+                                   {{"--series", a->series},
+                                    {"--summary", a->summary},
+                                    {"--plot", a->plot},
+                                    {"--mavlink", a->mavlink},
+                                    {"--tlog", a->tlog},
+                                    {"--config-out", a->config_out, true}}))
+            return rc;
         opt.series_path = a->series;
         if (a->realtime_flag) opt.realtime_speed = a->realtime > 0 ? a->realtime : 1.0;
         nlohmann::json summary;
         host::plot::ReplaySeries plotted;
         host::SampleObserver observer;
-        if (!a->mavlink.empty() && a->mavlink == a->tlog) {
-            std::cerr << "battsim replay: --mavlink and --tlog: expected two files, found " << a->mavlink << " twice\n";
-            return kExitUsage;
-        }
         std::unique_ptr<host::TelemetryWriter> stream;
         try {
             if (!a->mavlink.empty() || !a->tlog.empty())

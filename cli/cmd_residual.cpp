@@ -43,6 +43,11 @@ std::function<int()> setup(CLI::App& sub) {
         const char* me = "battsim residual";
         host::residual::ResidualJob job;
         if (int rc = resolve_input(a->common.input, job.reader, job.config, me)) return rc;
+        std::vector<host::NamedPath> inputs{{"-c/--config", a->common.input.config, true}};
+        add_named(inputs, "a log", a->logs);
+        if (int rc = check_outputs(me, inputs,
+                                   {{"-o/--output", a->output, true}, {"--report", a->common.report}, {"--plot", a->common.plot}}))
+            return rc;
         job.logs = a->logs;
         job.options.max_capacity_factor = a->common.max_capacity_factor;
         job.output_config = a->output;

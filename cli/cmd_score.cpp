@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "command.h"
+#include "common_options.h"
 #include "host/io/atomic_file.h"
 #include "host/io/sample_reader.h"
 #include "host/score/scoreboard.h"
@@ -52,6 +53,12 @@ std::function<int()> setup(CLI::App& sub) {
             std::cerr << "battsim score: " << e.what() << "\n";
             return kExitConfigError;
         }
+        std::vector<host::NamedPath> inputs;
+        for (const host::sim::Scenario& s : scenarios) {
+            inputs.push_back({"a scenario", s.source_path});
+            if (!a->logs_dir.empty()) inputs.push_back({"--logs' " + s.name + ".csv", a->logs_dir + "/" + s.name + ".csv"});
+        }
+        if (int rc = check_outputs("battsim score", inputs, {{"-o/--output", a->output}})) return rc;
         for (host::sim::Scenario& s : scenarios) {
             if (a->log_format.empty()) continue;
             const std::string problem = host::sim::log_format_problem(a->log_format, s.pack.cells);

@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "command.h"
+#include "common_options.h"
 #include "host/sim/simulate.h"
 
 namespace battsim {
@@ -81,7 +82,25 @@ std::function<int()> setup(CLI::App& sub) {
                       << " given; use --out-dir\n";
             return kExitUsage;
         }
-        for (host::sim::Scenario& s : scenarios) {
+        // Where each scenario's log and truth go, checked against the scenarios and each other
+        // before any is flown (two scenarios of one name in --out-dir, say).
+        std::vector<std::pair<std::string, std::string>> targets;
+        std::vector<host::NamedPath> inputs, outputs;
+        add_named(inputs, "a scenario", files);
+        for (const host::sim::Scenario& s : scenarios) {
+            if (!a->out_dir.empty()) {
+                targets.emplace_back(a->out_dir + "/" + s.name + ".csv", a->out_dir + "/" + s.name + ".truth.json");
+                outputs.push_back({"the log of " + s.name, targets.back().first});
+                outputs.push_back({"the truth of " + s.name, targets.back().second});
+            } else {
+                targets.emplace_back(a->output, a->truth.empty() ? default_truth_path(a->output) : a->truth);
+                outputs.push_back({"-o/--output", targets.back().first});
+                outputs.push_back({a->truth.empty() ? "the truth (-o's name with .truth.json)" : "--truth", targets.back().second});
+            }
+        }
+        if (int rc = check_outputs("battsim simulate", inputs, outputs)) return rc;
+        for (size_t k = 0; k < scenarios.size(); ++k) {
+            host::sim::Scenario& s = scenarios[k];
             if (!a->seed.empty()) s.seed = seed;
             if (!a->format.empty()) {
                 const std::string problem = host::sim::log_format_problem(a->format, s.pack.cells);
@@ -99,13 +118,8 @@ std::function<int()> setup(CLI::App& sub) {
                 std::cerr << "battsim simulate: " << e.what() << "\n";
                 return kExitConfigError;
             }
-            std::string log = a->output, truth = a->truth;
-            if (!a->out_dir.empty()) {
-                log = a->out_dir + "/" + s.name + ".csv";
-                truth = a->out_dir + "/" + s.name + ".truth.json";
-            } else if (truth.empty()) {
-                truth = default_truth_path(log);
-            }
+            const std::string& log = targets[k].first;
+            const std::string& truth = targets[k].second;
             try {
                 host::sim::write_simulation(r, log, truth);
             } catch (const std::runtime_error& e) {

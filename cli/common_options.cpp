@@ -194,6 +194,21 @@ int check_plot_option(const std::string& command, const std::string& path) {
     return kExitOk;
 }
 
+int check_outputs(const std::string& command, const std::vector<host::NamedPath>& inputs,
+                  const std::vector<host::NamedPath>& outputs) {
+    try {
+        host::check_output_paths(inputs, outputs);
+    } catch (const std::invalid_argument& e) {
+        std::cerr << command << ": " << e.what() << "\n";
+        return kExitUsage;
+    }
+    return kExitOk;
+}
+
+void add_named(std::vector<host::NamedPath>& to, const std::string& what, const std::vector<std::string>& paths) {
+    for (const std::string& p : paths) to.push_back({what, p});
+}
+
 namespace {
 std::string fixed(const nlohmann::json& v, int decimals, double scale = 1.0) {
     return host::fixed_text(v, decimals, "n/a", scale);

@@ -10,6 +10,7 @@
 
 #include "host/batch/manifest.h"
 #include "host/config_json.h"
+#include "host/io/output_paths.h"
 #include "host/io/sample_reader.h"
 
 namespace battsim {
@@ -61,6 +62,12 @@ int finish_report(const std::string& command, const nlohmann::json& report, cons
 // kExitOk if `path` is empty or a plot name (.png, .svg); else says why, kExitUsage. Checked
 // before the work, so a typo does not cost a long run.
 int check_plot_option(const std::string& command, const std::string& path);
+// kExitOk unless an output names an input or another output's file (host::check_output_paths);
+// then says which, prefixed with `command`, and returns kExitUsage. Called before the work.
+int check_outputs(const std::string& command, const std::vector<host::NamedPath>& inputs,
+                  const std::vector<host::NamedPath>& outputs);
+// Appends `paths` to `to`, each named `what` in check_outputs' messages ("a log").
+void add_named(std::vector<host::NamedPath>& to, const std::string& what, const std::vector<std::string>& paths);
 // Human-readable few lines about a summary.
 void print_brief(const nlohmann::json& summary, std::ostream& out);
 // The summary's `charger_check` as one line for people.

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "command.h"
+#include "host/io/atomic_file.h"
 
 namespace battsim {
 namespace cli {
@@ -17,6 +18,8 @@ std::vector<Command>& command_registry() {
 
 int main(int argc, char** argv) {
     using namespace battsim::cli;
+    // Ctrl-C during a long replay must not leave *.tmp.PID.N files beside the outputs.
+    battsim::host::install_temp_cleanup_on_signals();
     CLI::App app{"battsim: model-based drone battery monitoring, replayed and evaluated on the host"};
     app.require_subcommand(1);
     app.set_version_flag("--version", std::string("battsim ") + BATTSIM_VERSION);

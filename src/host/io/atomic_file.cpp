@@ -1,15 +1,21 @@
 #include "host/io/atomic_file.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
+#include <mutex>
 #include <stdexcept>
 
 namespace battsim {
 namespace host {
+
+namespace fs = std::filesystem;
 
 namespace {
 std::string temp_name(const std::string& path) {
@@ -17,16 +23,127 @@ std::string temp_name(const std::string& path) {
     static std::atomic<unsigned> counter{0};
     return path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
 }
+
+// The temporaries alive now, for the signal handler: it may neither lock nor allocate, so a
+// fixed array it can walk. Each slot's version is odd while its path changes (a seqlock):
+// the handler unlinks only a path it copied between two equal, even versions.
+constexpr size_t kTempSlots = 128;
+constexpr size_t kTempPathMax = 4096;
+struct TempSlot {
+    std::atomic<bool> taken{false};
+    std::atomic<unsigned> version{0};
+    char path[kTempPathMax];
+};
+static_assert(std::atomic<bool>::is_always_lock_free && std::atomic<unsigned>::is_always_lock_free,
+              "the signal handler needs lock-free atomics");
+TempSlot g_temps[kTempSlots];
+
+// -1 when the path is too long or all slots are taken: that temporary is then removed only
+// by its AtomicFile, as before.
+int register_temp(const std::string& path) {
+    if (path.size() >= kTempPathMax) return -1;
+    for (size_t i = 0; i < kTempSlots; ++i) {
+        bool expected = false;
+        if (!g_temps[i].taken.compare_exchange_strong(expected, true)) continue;
+        TempSlot& s = g_temps[i];
+        s.version.fetch_add(1);
+        std::memcpy(s.path, path.c_str(), path.size() + 1);
+        s.version.fetch_add(1);
+        return static_cast<int>(i);
+    }
+    return -1;
+}
+
+void unregister_temp(int slot) {
+    if (slot < 0) return;
+    TempSlot& s = g_temps[slot];
+    s.version.fetch_add(1);
+    s.path[0] = '\0';
+    s.version.fetch_add(1);
+    s.taken.store(false);
+}
+
+extern "C" void remove_temps_and_reraise(int sig) {
+    const int saved_errno = errno;
+    for (TempSlot& s : g_temps) {
+        if (!s.taken.load()) continue;
+        const unsigned before = s.version.load();
+        if (before & 1u) continue;
+        char copy[kTempPathMax];
+        std::memcpy(copy, s.path, sizeof copy);
+        std::atomic_thread_fence(std::memory_order_acquire);
+        if (s.version.load() != before || copy[0] == '\0') continue;
+        copy[kTempPathMax - 1] = '\0';
+        ::unlink(copy);
+    }
+    // Die of the same signal, so the parent sees how the run ended; it is delivered when
+    // this handler returns.
+    std::signal(sig, SIG_DFL);
+    std::raise(sig);
+    errno = saved_errno;
+}
 }  // namespace
 
-AtomicFile::AtomicFile(const std::string& path) : path_(path), temp_path_(temp_name(path)) {
+std::string resolve_output_path(const std::string& path) {
+    fs::path p(path);
+    for (int hop = 0;; ++hop) {
+        std::error_code ec;
+        if (!fs::is_symlink(fs::symlink_status(p, ec))) break;
+        if (hop == 40) throw std::runtime_error(path + ": too many levels of symbolic links");
+        const fs::path to = fs::read_symlink(p, ec);
+        if (ec) break;
+        p = to.is_absolute() ? to : p.parent_path() / to;
+    }
+    return p.string();
+}
+
+void install_temp_cleanup_on_signals() {
+    static std::once_flag once;
+    std::call_once(once, [] {
+        for (int sig : {SIGINT, SIGTERM}) {
+            struct sigaction old {};
+            if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) continue;
+            struct sigaction act {};
+            act.sa_handler = remove_temps_and_reraise;
+            sigemptyset(&act.sa_mask);
+            ::sigaction(sig, &act, nullptr);
+        }
+    });
+}
+
+AtomicFile::AtomicFile(const std::string& path) : path_(path) {
+    struct stat given {};
+    const bool exists = ::stat(path.c_str(), &given) == 0;
+    if (exists && S_ISDIR(given.st_mode)) throw std::runtime_error(path + ": cannot create output (is a directory)");
+    direct_ = exists && !S_ISREG(given.st_mode);
+    if (!direct_) {
+        target_ = resolve_output_path(path);
+        // A link whose text names no file the kernel reaches (/proc/self/fd/N of a deleted
+        // file): write through the name itself.
+        struct stat resolved {};
+        if (exists && (::stat(target_.c_str(), &resolved) != 0 || resolved.st_dev != given.st_dev ||
+                       resolved.st_ino != given.st_ino))
+            direct_ = true;
+    }
+    if (direct_) {
+        target_ = temp_path_ = path;
+    } else {
+        temp_path_ = temp_name(target_);
+        // Registered before it exists, so no moment has it on disk unknown to the handler.
+        temp_slot_ = register_temp(temp_path_);
+    }
     file_ = std::fopen(temp_path_.c_str(), "wb");
-    if (!file_) throw std::runtime_error(path + ": cannot create output (" + std::strerror(errno) + ")");
+    if (!file_) {
+        const int err = errno;
+        unregister_temp(temp_slot_);
+        throw std::runtime_error(path + ": cannot create output (" + std::strerror(err) + ")");
+    }
 }
 
 AtomicFile::~AtomicFile() {
     if (file_) std::fclose(file_);
-    if (!committed_) std::remove(temp_path_.c_str());
+    if (!committed_ && !direct_) std::remove(temp_path_.c_str());
+    unregister_temp(temp_slot_);
 }
 
 void AtomicFile::write(const std::string& text) { write(text.data(), text.size()); }
@@ -37,15 +154,27 @@ void AtomicFile::write(const char* data, size_t size) {
 }
 
 void AtomicFile::commit() {
+    if (direct_) {
+        // A device or FIFO cannot be fsynced (EINVAL); what it took is all there is to check.
+        const bool flushed = std::fflush(file_) == 0;
+        const int err = errno;
+        const bool closed = std::fclose(file_) == 0;
+        file_ = nullptr;
+        if (!flushed || !closed) throw std::runtime_error(path_ + ": write failed (" + std::strerror(flushed ? errno : err) + ")");
+        committed_ = true;
+        return;
+    }
     if (std::fflush(file_) != 0 || ::fsync(::fileno(file_)) != 0) {
         throw std::runtime_error(path_ + ": write failed (" + std::strerror(errno) + ")");
     }
     std::fclose(file_);
     file_ = nullptr;
-    if (std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
+    if (std::rename(temp_path_.c_str(), target_.c_str()) != 0) {
         throw std::runtime_error(path_ + ": cannot move output into place (" + std::strerror(errno) + ")");
     }
     committed_ = true;
+    unregister_temp(temp_slot_);
+    temp_slot_ = -1;
 }
 
 void write_file_atomic(const std::string& path, const std::string& text) {

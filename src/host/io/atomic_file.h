@@ -9,6 +9,9 @@ namespace host {
 
 class AtomicFile {
 public:
+    // A symlink is followed: the temporary goes beside the file it points to, which the commit
+    // replaces, so the link stays. An existing target that is not a regular file (a terminal,
+    // /dev/null, a FIFO) is written straight, without a temporary: it cannot be renamed over.
     explicit AtomicFile(const std::string& path);  // throws std::runtime_error if it cannot create
     ~AtomicFile();                                 // discards the temporary if not committed
     AtomicFile(const AtomicFile&) = delete;
@@ -16,7 +19,8 @@ public:
 
     std::FILE* handle() { return file_; }
     // Another program (e.g. gnuplot) may write the temporary by this name instead of
-    // handle(); commit() then syncs and renames whatever it wrote.
+    // handle(); commit() then syncs and renames whatever it wrote. Written straight, the
+    // output's own name.
     const std::string& temp_path() const { return temp_path_; }
     void write(const std::string& text);
     void write(const char* data, size_t size);
@@ -25,13 +29,24 @@ public:
 
 private:
     std::string path_;
+    std::string target_;  // path_ with its symlinks followed: what the commit replaces
     std::string temp_path_;
     std::FILE* file_ = nullptr;
+    bool direct_ = false;  // a device or FIFO: no temporary, no rename
+    int temp_slot_ = -1;   // in the registry the signal handler cleans, -1 = not in it
     bool committed_ = false;
 };
 
 // Writes `text` to `path` atomically ("-" = standard output).
 void write_file_atomic(const std::string& path, const std::string& text);
+
+// `path` with the symlinks of its last component followed (a dangling link gives the file it
+// would create): the file a write replaces. Throws std::runtime_error on a loop of links.
+std::string resolve_output_path(const std::string& path);
+
+// Installs SIGINT and SIGTERM handlers (once; a signal already ignored stays ignored) that
+// remove the temporaries of the AtomicFiles still open, then die of the same signal.
+void install_temp_cleanup_on_signals();
 
 }  // namespace host
 }  // namespace battsim

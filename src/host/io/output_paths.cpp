@@ -1,0 +1,68 @@
+#include "host/io/output_paths.h"
+
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <map>
+#include <stdexcept>
+
+#include "host/io/atomic_file.h"
+
+namespace battsim {
+namespace host {
+
+namespace fs = std::filesystem;
+
+namespace {
+// One key per file: device and inode for an existing file (what std::filesystem::equivalent
+// compares), the resolved path for one to be created; "" = not compared. Keys let a batch
+// of thousands of logs be checked in one pass instead of pair by pair.
+std::string file_key(const std::string& path) {
+    if (path.empty() || path == "-") return "";
+    const auto identity = [](const struct stat& st) {
+        return S_ISREG(st.st_mode) ? "i" + std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino) : std::string();
+    };
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0) return identity(st);
+    // Not there (yet): by the name the write would use, made canonical, so "x/../a.csv",
+    // a symlinked directory or a dangling link name the file they lead to.
+    std::string resolved;
+    try {
+        resolved = resolve_output_path(path);
+    } catch (const std::runtime_error&) {
+        return "";  // a loop of links: the writer reports it
+    }
+    std::error_code ec;
+    const fs::path canonical = fs::weakly_canonical(resolved, ec);
+    if (ec) return "p" + resolved;
+    if (::stat(canonical.c_str(), &st) == 0) return identity(st);
+    return "p" + canonical.string();
+}
+}  // namespace
+
+void check_output_paths(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs) {
+    std::map<std::string, const NamedPath*> read, written;
+    for (const NamedPath& in : inputs) {
+        const std::string key = file_key(in.path);
+        if (!key.empty()) read.emplace(key, &in);
+    }
+    for (const NamedPath& out : outputs) {
+        const std::string key = file_key(out.path);
+        if (key.empty()) continue;
+        auto w = written.find(key);
+        if (w != written.end())
+            throw std::invalid_argument(out.what + " and " + w->second->what + " name the same file: " + out.path);
+        auto r = read.find(key);
+        if (r != read.end() && !(out.config && r->second->config))
+            throw std::invalid_argument(out.what + " and " + r->second->what + " name the same file: " + out.path);
+        written.emplace(key, &out);
+    }
+}
+
+bool same_output_file(const std::string& a, const std::string& b) {
+    const std::string ka = file_key(a);
+    return !ka.empty() && ka == file_key(b);
+}
+
+}  // namespace host
+}  // namespace battsim

@@ -1,0 +1,28 @@
+// A command's outputs checked against its inputs and each other before it runs: an output
+// naming an input destroys the input, and two outputs naming one file keep only the last.
+#pragma once
+#include <string>
+#include <vector>
+
+namespace battsim {
+namespace host {
+
+struct NamedPath {
+    std::string what;  // how the message names it: "--series", "the log"
+    std::string path;  // "" and "-" (standard output) are never compared
+    // An input config and an output config both marked may be one file: the config is read
+    // whole before the run, and writing it back updated is the point (`--config-out PACK.json`).
+    bool config = false;
+};
+
+// Throws std::invalid_argument("--series and the log name the same file: X") when an output
+// names the same file as an input or as an earlier output. Existing files are compared by
+// identity (hard links and symlinks included), others by their resolved path; existing files
+// that are not regular (devices, FIFOs) are never compared: writing one twice destroys nothing.
+void check_output_paths(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs);
+
+// True when `a` and `b` name the same regular file, or the same file to be created.
+bool same_output_file(const std::string& a, const std::string& b);
+
+}  // namespace host
+}  // namespace battsim

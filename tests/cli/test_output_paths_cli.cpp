@@ -1,0 +1,176 @@
+// Output safety as a user meets it: outputs through symlinks and to devices, an output
+// naming an input or another output refused before any work, no temporaries after Ctrl-C.
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "cli_util.h"
+#include "raw_logs.h"
+
+using clitest::q;
+using clitest::read_file;
+using clitest::run;
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kSource = BATTSIM_SOURCE_DIR;
+const std::string kConfig = kSource + "/configs/reference-modified.json";
+const std::string kScenario = kSource + "/configs/scenarios/3s-hover-healthy.json";
+
+// The names in `dir` that look like AtomicFile's temporaries (<name>.tmp.<pid>.<n>).
+std::vector<std::string> temporaries(const std::string& dir) {
+    std::vector<std::string> found;
+    for (const auto& e : fs::directory_iterator(dir))
+        if (e.path().filename().string().find(".tmp.") != std::string::npos) found.push_back(e.path().string());
+    return found;
+}
+
+// A command that must be refused before any work: exit 2, the message naming both options,
+// and every file in `kept` byte for byte as before.
+void require_refused(const std::string& args, const std::string& message, const std::vector<std::string>& kept) {
+    std::vector<std::string> before;
+    for (const std::string& f : kept) before.push_back(read_file(f));
+    const clitest::Result r = run(args);
+    INFO(args);
+    INFO(r.err);
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains(message));
+    for (size_t k = 0; k < kept.size(); ++k) CHECK(read_file(kept[k]) == before[k]);
+}
+
+}  // namespace
+
+TEST_CASE("an output through a symlink replaces the file it points to and keeps the link", "[cli][paths]") {
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/log.csv", testsupport::raw_flight(12, 0.001));
+    fs::create_directory(dir + "/real");
+    clitest::write_file(dir + "/real/summary.json", "old\n");
+    fs::create_symlink("real/summary.json", dir + "/summary.json");
+    fs::create_symlink(dir + "/real/table.md", dir + "/table.md");  // dangling: its target is made
+    const clitest::Result r = run("replay " + q(dir + "/log.csv") + " -c " + q(kConfig) + " --summary " + q(dir + "/summary.json"));
+    REQUIRE(r.exit_code == 0);
+    CHECK(fs::is_symlink(dir + "/summary.json"));
+    CHECK(nlohmann::json::parse(read_file(dir + "/real/summary.json"))["schema"] == "battsim.summary");
+    REQUIRE(run("batch " + q(dir + "/log.csv") + " -o " + q(dir + "/table.md")).exit_code == 0);
+    CHECK(fs::is_symlink(dir + "/table.md"));
+    CHECK_THAT(read_file(dir + "/real/table.md"), Catch::Contains("log"));
+    CHECK(temporaries(dir).empty());
+    CHECK(temporaries(dir + "/real").empty());
+}
+
+TEST_CASE("outputs to devices are written straight: /dev/null, /dev/stdout, /dev/full", "[cli][paths]") {
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/log.csv", testsupport::raw_flight(12, 0.001));
+    const std::string log = q(dir + "/log.csv");
+    const std::vector<std::string> dev_before = temporaries("/dev");
+    const clitest::Result null = run("batch " + log + " -o /dev/null");
+    CHECK(null.exit_code == 0);
+    CHECK(null.out.empty());
+    CHECK(run("replay " + log + " --series /dev/null --summary /dev/null").exit_code == 0);
+    CHECK(temporaries("/dev") == dev_before);
+    CHECK(fs::is_character_file("/dev/null"));
+    // Standard output is a pipe here: the table comes through it.
+    const clitest::Result out = run("batch " + log + " --format json -o /dev/stdout");
+    REQUIRE(out.exit_code == 0);
+    CHECK(nlohmann::json::parse(out.out)["rows"].size() == 1);
+    CHECK(fs::is_symlink("/dev/stdout"));
+    const clitest::Result full = run("replay " + log + " --summary /dev/full");
+    CHECK(full.exit_code == 5);
+    CHECK_THAT(full.err, Catch::Contains("/dev/full: write failed"));
+}
+
+TEST_CASE("an output naming an input or another output is refused before any work", "[cli][paths]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string log = dir + "/log.csv", b = dir + "/b.csv", cfg = dir + "/pack.json", scenario = dir + "/s.json";
+    clitest::write_file(log, testsupport::raw_flight(12, 0.001));
+    clitest::write_file(b, testsupport::raw_flight(14, 0.002));
+    clitest::write_file(cfg, read_file(kConfig));
+    nlohmann::json sj = nlohmann::json::parse(read_file(kScenario));
+    sj["monitor_config"] = kSource + "/configs/generic-3s.json";  // absolute: the copy lives elsewhere
+    clitest::write_file(scenario, sj.dump(2));
+    clitest::write_file(dir + "/m.csv", "path\nlog.csv\nb.csv\n");
+    clitest::write_file(dir + "/F", "kept\n");
+
+    require_refused("replay " + q(log) + " --series " + q(log), "battsim replay: --series and the log name the same file: " + log, {log});
+    // The same file by other names: through a symlinked directory, a hard link.
+    fs::create_directory_symlink(dir, dir + "/again");
+    fs::create_hard_link(log, dir + "/hard.csv");
+    require_refused("replay " + q(log) + " --series " + q(dir + "/again/./log.csv"), "--series and the log name the same file", {log});
+    require_refused("replay " + q(dir + "/hard.csv") + " --summary " + q(log), "--summary and the log name the same file", {log});
+    require_refused("replay " + q(log) + " -c " + q(cfg) + " --summary " + q(cfg),
+                    "battsim replay: --summary and -c/--config name the same file: " + cfg, {log, cfg});
+    require_refused("replay " + q(log) + " --series " + q(dir + "/F") + " --summary " + q(dir + "/F"),
+                    "--summary and --series name the same file", {log, dir + "/F"});
+    require_refused("simulate " + q(scenario) + " -o " + q(scenario), "battsim simulate: -o/--output and a scenario name the same file",
+                    {scenario});
+    require_refused("simulate " + q(scenario) + " -o " + q(dir + "/same.csv") + " --truth " + q(dir + "/same.csv"),
+                    "--truth and -o/--output name the same file", {scenario});
+    CHECK_FALSE(fs::exists(dir + "/same.csv"));
+    require_refused("batch -m " + q(dir + "/m.csv") + " -o " + q(dir + "/m.csv"), "battsim batch: -o/--output and -m/--manifest name the same file",
+                    {dir + "/m.csv", log, b});
+    require_refused("batch " + q(log) + " " + q(b) + " -o " + q(log), "battsim batch: -o/--output and a log name the same file", {log, b});
+    require_refused("batch " + q(log) + " -o " + q(dir + "/T") + " --packs " + q(dir + "/T") + " --monitors " + q(dir + "/T"),
+                    "--packs and -o/--output name the same file", {log});
+    CHECK_FALSE(fs::exists(dir + "/T"));
+    // A log named like a summary in the --out directory, and --out over the goldens.
+    clitest::write_file(dir + "/out/log.json", read_file(log));
+    require_refused("batch " + q(dir + "/out/log.json") + " --out " + q(dir + "/out"), "--out's log.json and a log name the same file",
+                    {dir + "/out/log.json"});
+    clitest::write_file(dir + "/golden/log.json", "{}\n");
+    require_refused("batch " + q(log) + " --out " + q(dir + "/golden") + " --compare " + q(dir + "/golden"),
+                    "--out's log.json and --compare's log.json name the same file", {dir + "/golden/log.json"});
+    require_refused("discharge " + q(log) + " --table " + q(dir + "/t.csv") + " --curve " + q(dir + "/t.csv"),
+                    "battsim discharge: --curve and --table name the same file", {log});
+    require_refused("fit " + q(log) + " -c " + q(cfg) + " -o " + q(dir + "/f.json") + " --report " + q(dir + "/f.json"),
+                    "battsim fit: --report and -o/--output name the same file", {log, cfg});
+    require_refused("fit " + q(log) + " -c " + q(cfg) + " --report " + q(log), "--report and a log name the same file", {log, cfg});
+    require_refused("residual " + q(log) + " -c " + q(cfg) + " --report " + q(cfg), "--report and -c/--config name the same file", {log, cfg});
+    require_refused("fit-ocv " + q(log) + " -c " + q(cfg) + " --report " + q(log), "--report and a log name the same file", {log, cfg});
+    require_refused("calibrate " + q(log) + " -c " + q(cfg) + " -o " + q(log), "-o/--output and a log name the same file", {log, cfg});
+    require_refused("merge " + q(dir + "/m.csv") + " -o " + q(dir + "/m.csv"), "battsim merge: -o/--output and a table name the same file",
+                    {dir + "/m.csv"});
+    require_refused("make-config --from-log " + q(log) + " -o " + q(log), "-o/--output and --from-log name the same file", {log});
+    require_refused("export-config --firmware " + q(cfg) + " -o " + q(cfg), "-o/--output and --firmware name the same file", {cfg});
+    require_refused("score " + q(scenario) + " -o " + q(scenario), "battsim score: -o/--output and a scenario name the same file", {scenario});
+    CHECK(temporaries(dir).empty());
+}
+
+TEST_CASE("a config may still be written back over itself (--config-out, calibrate -o)", "[cli][paths][truth]") {
+    const std::string dir = clitest::temp_dir();
+    REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/4s-racing-fault-current-gain.json") + " -o " + q(dir + "/g.csv")).exit_code == 0);
+    const auto truth = nlohmann::json::parse(read_file(dir + "/g.truth.json"));
+    const double charged_mah = truth["flight"]["log_charge_ah"].get<double>() * 1000.0;
+    const std::string pack = dir + "/pack.json";
+    clitest::write_file(pack, read_file(kSource + "/configs/sim-4s.json"));
+    const clitest::Result r = run("replay " + q(dir + "/g.csv") + " -c " + q(pack) + " --estimator joint --charged-mah " +
+                                  std::to_string(charged_mah) + " --config-out " + q(pack));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const auto fixed = nlohmann::json::parse(read_file(pack));
+    CHECK(fixed["battery"]["extensions"]["current_sensor"]["gain"].get<double>() == Approx(1.0 / 1.08).epsilon(0.003));
+    // calibrate's in-place update passes the check (this flight has no rest to calibrate on: exit 1).
+    const clitest::Result c = run("calibrate " + q(dir + "/g.csv") + " -c " + q(pack) + " -o " + q(pack));
+    CHECK(c.exit_code != 2);
+    CHECK(c.err.find("name the same file") == std::string::npos);
+}
+
+TEST_CASE("Ctrl-C during a replay leaves no temporary file", "[cli][paths]") {
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/log.csv", testsupport::raw_flight(12, 0.001));  // 37 s of log
+    // timeout sends SIGINT after 1 s; --preserve-status passes on how battsim ended.
+    const std::string cmd = "timeout --preserve-status -s INT 1 " + q(BATTSIM_BINARY) + " replay " + q(dir + "/log.csv") +
+                            " --realtime --series " + q(dir + "/rt.csv") + " --summary " + q(dir + "/rt.json") + " 2>/dev/null";
+    const int status = std::system(cmd.c_str());
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 128 + 2);  // died of SIGINT, as a shell expects
+    CHECK(temporaries(dir).empty());
+    CHECK_FALSE(fs::exists(dir + "/rt.csv"));
+    CHECK_FALSE(fs::exists(dir + "/rt.json"));
+}
