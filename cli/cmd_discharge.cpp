@@ -38,6 +38,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--ocv-points", a->ocv_points,
                    "Points of the joint estimator's OCV table (per cell, SOC 0..1, I*R added back with the config's "
                    "resistance); 0 = none")
+        ->check(CLI::IsMember({0}) | CLI::Range(2, 21))
         ->capture_default_str();
     sub.add_flag("--json", a->json, "Print the summary JSON (with the table) on standard output");
     add_input_options(sub, a->input);
@@ -83,8 +84,9 @@ std::function<int()> setup(CLI::App& sub) {
                 ocv = host::discharge::ocv_table_from_discharge(result, config.monitor.cells_in_series,
                                                                 config.monitor.battery.internal_resistance_ohm, a->ocv_points);
             } catch (const std::invalid_argument& e) {
-                std::cerr << "battsim discharge: " << e.what() << "\n";
-                return kExitUsage;
+                // The options are checked above: what is left is the log (no charge drawn).
+                std::cerr << "battsim discharge: " << a->log << ": " << e.what() << "\n";
+                return kExitInputError;
             }
             for (const auto& note : ocv.notes) std::cerr << "battsim discharge: note: " << note << "\n";
             summary["ocv_table"] = host::discharge::ocv_table_to_json(ocv);

@@ -348,6 +348,22 @@ TEST_CASE("replay --estimator joint reports its own model's voltage error beside
     CHECK_THAT(run("replay " + q(log) + " -c " + q(cfg)).out, !Catch::Contains("the estimator's own"));
 }
 
+TEST_CASE("replay notes a joint estimator that lost the pack by its own model's error", "[cli][data]") {
+    // Matrice 100 flight 19 with the estimated config (no OCV table): the state of charge runs
+    // below the curve's empty, every later reading is rejected as a glitch, and the filter's
+    // own model ends volts off. Flight 1 with the same config does not.
+    const std::string cfg = kSource + "/configs/dji-tb47d-6s.json";
+    const auto lost = clitest::run_json("replay " + q(kData + "/cmu-m100/flights/19.csv") + " -c " + q(cfg) + " --estimator joint --json");
+    CHECK(lost["flight"]["voltage_error_v"]["adapted"]["mean_abs"].get<double>() > 6 * 0.25);
+    bool noted = false;
+    for (const auto& n : lost.value("config_notes", nlohmann::json::array()))
+        noted = noted || n.get<std::string>().find("its filter lost the pack") != std::string::npos;
+    CHECK(noted);
+    const auto kept = clitest::run_json("replay " + q(kData + "/cmu-m100/flights/1.csv") + " -c " + q(cfg) + " --estimator joint --json");
+    for (const auto& n : kept.value("config_notes", nlohmann::json::array()))
+        CHECK(n.get<std::string>().find("its filter lost the pack") == std::string::npos);
+}
+
 TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes the config that corrects it", "[cli][truth]") {
     // The simulated racing flight whose current sensor reads 8 % high; the truth holds the
     // charge the pack gave over the log, which is what a charger puts back.
