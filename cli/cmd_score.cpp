@@ -32,7 +32,8 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("SCENARIOS", a->paths, "Scenario files or directories (default: configs/scenarios)");
     sub.add_flag("--json", a->json, "Print the scoreboard as JSON (with per-flight detail)");
     sub.add_option("-o,--output", a->output, "Write the table (or JSON) to this file instead of standard output");
-    sub.add_option("-j,--jobs", a->jobs, "Flights scored in parallel (default: the machine's cores); the output does not depend on it");
+    sub.add_option("-j,--jobs", a->jobs, "Flights scored in parallel (default or 0: the machine's cores); the output does not depend on it")
+        ->check(CLI::Range(0, 1024));
     sub.add_option("--logs", a->logs_dir, "Read each flight's log from DIR/NAME.csv (written by `battsim simulate --out-dir`) instead of simulating it in memory");
     sub.add_option("--copies", a->copies,
                    "Fly the suite this many times: as written, then with other seeds (gusts, cell spreads, sensor "

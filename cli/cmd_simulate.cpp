@@ -1,5 +1,6 @@
 // battsim simulate SCENARIO...: fly scenarios through the truth plant and the sensor
 // layer; write each log (in a format the readers take) and its truth JSON.
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -99,6 +100,15 @@ std::function<int()> setup(CLI::App& sub) {
             }
         }
         if (int rc = check_outputs("battsim simulate", inputs, outputs)) return rc;
+        // As batch --out does: a directory that is not there yet is made.
+        if (!a->out_dir.empty()) {
+            std::error_code ec;
+            std::filesystem::create_directories(a->out_dir, ec);
+            if (ec) {
+                std::cerr << "battsim simulate: " << a->out_dir << ": cannot create the directory (" << ec.message() << ")\n";
+                return kExitOutputError;
+            }
+        }
         for (size_t k = 0; k < scenarios.size(); ++k) {
             host::sim::Scenario& s = scenarios[k];
             if (!a->seed.empty()) s.seed = seed;

@@ -1,6 +1,9 @@
 #include "host/pack_config.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <initializer_list>
 #include <memory>
 #include <stdexcept>
@@ -30,7 +33,15 @@ constexpr double kOcvCellV[] = {3.3271, 3.5607, 3.6542, 3.6925, 3.7166, 3.7358, 
 constexpr double kCutoffMinV = 2.5, kCutoffMaxV = 3.9;
 
 // Rounded so the file reads like a hand-written one and the same rating gives the same bytes.
-double round_to(double v, double step) { return std::round(v / step) * step; }
+// v to a multiple of step, as the nearest double to its decimal text: 15.26, not the
+// 15.260000000000002 that round(v / step) * step leaves in the written config.
+double round_to(double v, double step) {
+    const double r = std::round(v / step);
+    const int decimals = std::max(0, static_cast<int>(std::ceil(-std::log10(step) - 1e-9)));
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, r * step);
+    return std::strtod(buf, nullptr);
+}
 
 std::string number_text(double v, const char* format) {
     char buf[64];

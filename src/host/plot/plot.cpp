@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -24,9 +25,13 @@ namespace plot {
 
 namespace {
 
+// Case aside: "P.PNG" is a PNG too.
 bool ends_with(const std::string& s, const char* suffix) {
     const std::string x(suffix);
-    return s.size() >= x.size() && s.compare(s.size() - x.size(), x.size(), x) == 0;
+    if (s.size() < x.size()) return false;
+    for (size_t i = 0; i < x.size(); ++i)
+        if (std::tolower(static_cast<unsigned char>(s[s.size() - x.size() + i])) != x[i]) return false;
+    return true;
 }
 
 // gnuplot single-quoted string: a quote is written twice.

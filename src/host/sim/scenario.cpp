@@ -237,6 +237,11 @@ Scenario scenario_from_json(const json& j, const std::string& origin, const std:
                 e.number("capacity_factor", wc.capacity_factor, 0.05, 2.0);
                 e.number("resistance_factor", wc.resistance_factor, 0.1, 20.0);
                 e.finish();
+                // A second entry for one cell had multiplied the factors (0.8 × 0.5) unseen.
+                for (const WeakCell& earlier : p.weak_cells)
+                    if (earlier.cell == wc.cell)
+                        e.fail("$.pack.weak_cells[" + std::to_string(i) + "].cell",
+                               "cell " + std::to_string(wc.cell) + " is given twice; give each weak cell once");
                 p.weak_cells.push_back(wc);
             }
         }
