@@ -8,6 +8,8 @@ set -eu
 root=$(cd "$(dirname "$0")/.." && pwd)
 bin=${BATTSIM:-$root/build/battsim}
 data=${BATTSIM_DATA_DIR:-$root/../shared/data}
+# Absolute, since the manifests resolve it from their own folder (a relative one found no logs).
+data=$(cd "$data" 2>/dev/null && pwd) || { echo "bench: no data directory ${BATTSIM_DATA_DIR:-$root/../shared/data}" >&2; exit 2; }
 export BATTSIM_DATA_DIR="$data"  # the manifests find the logs through it
 min_time=${BENCH_MIN_TIME:-2}
 tmp=$(mktemp -d)
