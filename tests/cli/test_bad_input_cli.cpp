@@ -187,3 +187,38 @@ TEST_CASE("averaging into minute-long windows is not taken for a time column in 
     CHECK(r.exit_code == 0);
     CHECK_THAT(r.err, !Catch::Contains("--time-unit ms"));
 }
+
+TEST_CASE("small typos that read on unseen: a weak cell twice, a misspelt --fixed, an upper-case plot name", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    nlohmann::json sc = nlohmann::json::parse(clitest::read_file(kSource + "/configs/scenarios/4s-racing-healthy-a.json"));
+    sc["monitor_config"] = kConfig;
+    sc["pack"]["weak_cells"] = {{{"cell", 2}, {"capacity_factor", 0.8}}, {{"cell", 2}, {"capacity_factor", 0.5}}};
+    clitest::write_file(dir + "/twice.json", sc.dump(2));
+    auto r = run("simulate " + q(dir + "/twice.json") + " -o " + q(dir + "/t.csv"));
+    CHECK(r.exit_code == 4);
+    CHECK_THAT(r.err, Catch::Contains("$.pack.weak_cells[1].cell: cell 2 is given twice"));
+    r = run("residual " + q(kExample) + " -c " + q(kConfig) + " --fixed foo");
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains("--fixed: unknown parameter \"foo\""));
+    // Checked before the replay: an upper-case extension is a PNG as well.
+    r = run("replay " + q(kExample) + " -c " + q(kConfig) + " --plot " + q(dir + "/p.TXT"));
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains("expected a name ending in .png or .svg"));
+    r = run("replay " + q(kExample) + " -c " + q(kConfig) + " --plot " + q(dir + "/p.SVG"));
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    CHECK(std::filesystem::file_size(dir + "/p.SVG") > 1000);
+}
+
+TEST_CASE("simulate --out-dir makes the directory; make-config writes clean decimals", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    const auto r = run("simulate " + q(kSource + "/configs/scenarios/4s-racing-healthy-a.json") + " --out-dir " + q(dir + "/new/sub"));
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    CHECK(std::filesystem::exists(dir + "/new/sub/4s-racing-healthy-a.csv"));
+    const auto m = run("make-config --cells 4 --capacity-mah 1760 -o -");
+    REQUIRE(m.exit_code == 0);
+    const auto j = nlohmann::json::parse(m.out);
+    CHECK(j["battery"]["exponential_voltage_v"].dump() == "15.26");
+    CHECK(m.out.find("00000000") == std::string::npos);
+}

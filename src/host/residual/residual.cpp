@@ -529,6 +529,11 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
     o.bounds_full_voltage_v = spec.battery.full_voltage_v;
     o.bounds_capacity_ah = spec.battery.capacity_ah;
     if (o.blocks < 4 || o.blocks % 2 != 0) throw std::invalid_argument("residual: --blocks must be even and at least 4");
+    // A misspelt --fixed name had been ignored, and the parameter fitted after all.
+    const std::vector<std::string> known = fit::known_parameter_names();
+    for (const std::string& f : o.fixed)
+        if (std::find(known.begin(), known.end(), f) == known.end())
+            throw std::invalid_argument("residual: --fixed: unknown parameter \"" + f + "\"");
     ResidualReport rep;
     rep.initial = o.initial;
     for (const Trace& t : traces) rep.logs.push_back(t.path);
