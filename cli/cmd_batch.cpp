@@ -71,6 +71,12 @@ int run(const BatchArgs& a) {
         std::cerr << me << "config: " << e.what() << "\n";
         return kExitConfigError;
     }
+    // A missing golden directory is one mistake, not one "no golden" per log.
+    std::error_code dir_ec;
+    if (!a.compare.empty() && !fs::is_directory(a.compare, dir_ec)) {
+        std::cerr << me << "--compare: " << a.compare << " is not a directory of golden summaries\n";
+        return kExitUsage;
+    }
     if (!a.out_dir.empty() || !a.compare.empty()) {
         const std::vector<std::string> dups = host::duplicate_stems(all);
         if (!dups.empty()) {

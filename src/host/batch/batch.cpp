@@ -346,6 +346,9 @@ GoldenComparison compare_to_goldens(const std::vector<BatchItem>& items, const s
             c.lines.push_back(item.path + ": no golden summary " + golden);
             continue;
         }
+        // An unreadable golden counts as compared and changed, so "changed" never exceeds
+        // "compared".
+        ++c.compared;
         json expected;
         try {
             std::ifstream in(golden, std::ios::binary);
@@ -355,7 +358,6 @@ GoldenComparison compare_to_goldens(const std::vector<BatchItem>& items, const s
             c.lines.push_back(golden + ": not valid JSON (" + std::string(e.what()) + ")");
             continue;
         }
-        ++c.compared;
         const std::vector<JsonDifference> diffs = compare_json(expected, summaries[k], options);
         if (diffs.empty()) continue;
         ++c.changed;
