@@ -135,12 +135,8 @@ int run(const BatchArgs& a) {
 
     const size_t failed = result.failed;
     const nlohmann::json table = host::make_table(std::move(result.rows), all.size(), digest, shard);
-    for (const nlohmann::json& r : table["rows"]) {
-        if (r["status"] == "ok") continue;
-        // Name the log, unless its reader's message already starts with it.
-        const std::string error = r["error"].get<std::string>(), path = r.value("log", std::string());
-        std::cerr << me << "failed: " << (error.rfind(path, 0) == 0 ? "" : path + ": ") << error << "\n";
-    }
+    for (const nlohmann::json& r : table["rows"])
+        if (r["status"] != "ok") std::cerr << me << "failed: " << host::failed_row_text(r) << "\n";
     for (const std::string& u : result.unwritten) std::cerr << me << u << "\n";
     try {
         host::write_file_atomic(a.output, host::render_table(table, format));

@@ -24,8 +24,10 @@ struct DischargeArgs {
 std::function<int()> setup(CLI::App& sub) {
     auto a = std::make_shared<DischargeArgs>();
     sub.add_option("LOG", a->log, "Discharge log (any supported format)")->required();
-    sub.add_option("--min-voltage", a->min_v, "Battery connected above this; bottom of the tables (default: the config's min_voltage_v)");
-    sub.add_option("--max-voltage", a->max_v, "Top of the tables (default: the config's max_voltage_v)");
+    sub.add_option("--min-voltage", a->min_v, "Battery connected above this; bottom of the tables (default: the config's min_voltage_v)")
+        ->check(number_in(0.0, host::discharge::kMaxTableVoltage_v));
+    sub.add_option("--max-voltage", a->max_v, "Top of the tables (default: the config's max_voltage_v)")
+        ->check(number_in(0.0, host::discharge::kMaxTableVoltage_v));
     sub.add_option("--reaction", a->reaction_s, "Smoothing: moving-average (exponential) time constant in s; 0 = none")->check(number_in(0.0, 1.0e6))->capture_default_str();
     sub.add_option("--alpha", a->alpha, "Smoothing: fixed per-sample constant in (0, 1] instead of --reaction")->check(number_in(0.0, 1.0));
     sub.add_option("--decimate", a->decimate, "Average every x samples")->capture_default_str();
@@ -47,11 +49,6 @@ std::function<int()> setup(CLI::App& sub) {
         host::LoadedConfig config;
         if (int rc = resolve_input(a->input, opt.reader, config, "battsim discharge")) return rc;
         opt.reader.shunt = config.monitor.shunt;
-        // 0 means "the config's"; NaN or a negative voltage is a typo, not a default.
-        if (!(a->min_v >= 0) || !(a->max_v >= 0)) {
-            std::cerr << "battsim discharge: --min-voltage and --max-voltage take a voltage > 0\n";
-            return kExitUsage;
-        }
         opt.min_voltage_v = a->min_v > 0 ? a->min_v : config.monitor.min_voltage_v;
         opt.max_voltage_v = a->max_v > 0 ? a->max_v : config.monitor.max_voltage_v;
         opt.reaction_s = a->reaction_s;

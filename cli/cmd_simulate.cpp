@@ -6,6 +6,7 @@
 
 #include "command.h"
 #include "common_options.h"
+#include "host/io/number_text.h"
 #include "host/sim/simulate.h"
 
 namespace battsim {
@@ -66,13 +67,7 @@ std::function<int()> setup(CLI::App& sub) {
         // 64 bits had silently meant the scenario's own, or the largest.
         uint64_t seed = 0;
         if (!a->seed.empty()) {
-            std::size_t used = 0;
-            try {
-                if (a->seed.find_first_not_of("0123456789") == std::string::npos) seed = std::stoull(a->seed, &used);
-            } catch (const std::exception&) {
-                used = 0;
-            }
-            if (used != a->seed.size()) {
+            if (!host::parse_whole_number(a->seed, &seed)) {
                 std::cerr << "battsim simulate: --seed: expected a whole number from 0 to 18446744073709551615, found " << a->seed
                           << "\n";
                 return kExitUsage;

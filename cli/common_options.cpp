@@ -9,6 +9,7 @@
 #include "command.h"
 #include "host/config_reader.h"
 #include "host/io/atomic_file.h"
+#include "host/io/number_text.h"
 #include "host/plot/plot.h"
 #include "host/report/summary.h"
 
@@ -24,14 +25,8 @@ CLI::Validator number_in(double lo, double hi, bool above_lo) {
     const std::string range = (above_lo ? "(" : "[") + figure(lo) + ", " + figure(hi) + "]";
     return CLI::Validator(
         [=](std::string& text) -> std::string {
-            std::size_t used = 0;
             double v = 0.0;
-            try {
-                v = std::stod(text, &used);
-            } catch (const std::exception&) {
-                used = 0;
-            }
-            const bool ok = used == text.size() && used > 0 && std::isfinite(v) && (above_lo ? v > lo : v >= lo) && v <= hi;
+            const bool ok = host::parse_finite_number(text, &v) && (above_lo ? v > lo : v >= lo) && v <= hi;
             return ok ? std::string() : "expected a number in " + range + ", found " + text;
         },
         "NUMBER in " + range);

@@ -124,9 +124,9 @@ TEST_CASE("option typos are refused with the range in plain figures", "[cli]") {
         {"replay " + q(kExample) + " --speed 2", "--speed requires --realtime"},
         {"replay " + q(kExample) + " --realtime --speed 1e-30", "--speed: expected a number in [0.001, 1e+06]"},
         {"make-config --cells 4 --capacity-mah 0", "--capacity-mah: expected a number in (0, 1e+06], found 0"},
-        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --max-voltage 100000", "the maximum voltage must be at most 200 V"},
+        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --max-voltage 100000", "--max-voltage: expected a number in [0, 200], found 100000"},
         {"discharge " + q(kExample) + " -c " + q(kConfig) + " --alpha nan", "--alpha: expected a number in [0, 1]"},
-        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --min-voltage nan", "--min-voltage and --max-voltage take a voltage"},
+        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --min-voltage nan", "--min-voltage: expected a number in [0, 200], found nan"},
         {"fit-ocv " + q(kExample) + " --prior-sigma nan", "--prior-sigma: expected a number in (0, 1e+06]"},
     };
     for (const Case& c : cases) {

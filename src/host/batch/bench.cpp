@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "core/monitor.h"
+#include "host/batch/table.h"
 
 namespace battsim {
 namespace host {
@@ -92,8 +93,7 @@ ThroughputBench bench_batch(const std::vector<BatchItem>& items, unsigned jobs, 
         if (r.runs == 0) {
             for (const nlohmann::json& row : res.rows) {
                 if (row.value("status", std::string()) == "ok") continue;
-                const std::string log = row.value("log", std::string()), error = row.value("error", std::string());
-                r.failure = error.rfind(log, 0) == 0 ? error : log + ": " + error;
+                r.failure = failed_row_text(row);
                 return r;
             }
         }

@@ -521,6 +521,11 @@ json make_table(std::vector<json> rows, size_t inputs, const std::string& digest
     return t;
 }
 
+std::string failed_row_text(const json& row) {
+    const std::string log = row.value("log", std::string()), error = row.value("error", std::string());
+    return error.rfind(log, 0) == 0 ? error : log + ": " + error;
+}
+
 size_t failed_rows(const json& table) {
     size_t n = 0;
     for (const json& r : table["rows"]) n += r["status"] != "ok";

@@ -49,6 +49,9 @@ std::string render_packs(const nlohmann::json& table, TableFormat format);
 std::string render_monitors(const nlohmann::json& table, TableFormat format);
 
 std::size_t failed_rows(const nlohmann::json& table);
+// A failed row as one line, "log: why": the log named unless its reader's message already
+// starts with it.
+std::string failed_row_text(const nlohmann::json& row);
 
 // Reads and checks a table written by `batch --format json`. Throws InputError.
 nlohmann::json read_table_file(const std::string& path);
