@@ -27,6 +27,9 @@ BATTSIM = os.path.join(ROOT, "build", "battsim")
 DATA = os.environ.get("BATTSIM_DATA_DIR", os.path.join(ROOT, "..", "shared", "data"))
 REPEAT_S = 30  # telemetry.text_repeat_s's default
 CHARGE = {0: "undefined", 1: "ok", 2: "low", 3: "critical", 6: "unhealthy"}
+# A withdrawal's opening (telemetry.clear_hold_s) → the first 16 characters of what it withdraws.
+WITHDRAWS = {"battsim: short flight": "battsim: flight ", "battsim: low capacity": "battsim: low cap",
+             "battsim: high resistance": "battsim: high re"}
 
 
 def check(log, config, tmp):
@@ -43,6 +46,7 @@ def check(log, config, tmp):
     lines = ["%s: %d frames, %.0f B/s on the wire" % (os.path.basename(log), len(fr), (len(data) - 8 * len(fr)) / span)]
     warned = {w["name"]: w for w in summary.get("warnings", [])}
     said = {}  # a sentence's first 16 characters → [its first line's index, times said again]
+    repeats = []
     for t, msgid, p in fr:
         if msgid == 253:
             text = status_text(p)
@@ -50,11 +54,15 @@ def check(log, config, tmp):
                 said[text[:16]][1] += 1
                 continue
             at = "flight %.1f s" % (t - start) if start is not None and t >= start else "log %.1f s (on the ground)" % t
-            said[text[:16]] = [len(lines), 0]
             lines.append("  %s  \"%s\"" % (at, text))
-    for index, again in said.values():
+            withdrawn = WITHDRAWS.get(text.split(" cleared,")[0]) if " cleared," in text else None
+            if withdrawn in said:  # a withdrawn verdict said again later is news, not a repeat
+                repeats.append(said.pop(withdrawn))
+            if withdrawn is None:
+                said[text[:16]] = [len(lines) - 1, 0]
+    for index, again in repeats + list(said.values()):
         if again:
-            lines[index] += " (said again %d times in flight, at least %g s apart)" % (again, REPEAT_S)
+            lines[index] += " (said again %d time%s in flight, at least %g s apart)" % (again, "s"[:again > 1], REPEAT_S)
     batt = [p for t, m, p in fr if m == 147][-1]
     remaining, time_s, state = struct.unpack_from("<b", batt, 35)[0], struct.unpack_from("<i", batt, 36)[0], batt[40]
     lines.append("  summary warnings: %s; last battery status: %d %%, %d s left, %s" % (

@@ -292,6 +292,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("low_time_s", t.low_time_s, 0, 36000);
         r.number("critical_time_s", t.critical_time_s, 0, 36000);
         r.number("text_repeat_s", t.text_repeat_s, 0, 36000);
+        r.number("clear_hold_s", t.clear_hold_s, 0, 36000);
         if (t.critical_time_s > t.low_time_s)
             r.fail(r.child("critical_time_s"), "expected at most low_time_s (" + json_text(json(t.low_time_s)) + ")");
     }
@@ -440,7 +441,7 @@ json config_to_json(const LoadedConfig& c) {
     const auto telemetry_json = [](const telemetry::TelemetryConfig& t) {
         return json{{"system_id", t.system_id},   {"component_id", t.component_id}, {"battery_id", t.battery_id},
                     {"interval_s", t.interval_s}, {"low_time_s", t.low_time_s},     {"critical_time_s", t.critical_time_s},
-                    {"text_repeat_s", t.text_repeat_s}};
+                    {"text_repeat_s", t.text_repeat_s}, {"clear_hold_s", t.clear_hold_s}};
     };
     const json tj = telemetry_json(c.telemetry);
     if (tj != telemetry_json(telemetry::TelemetryConfig{})) j["telemetry"] = tj;

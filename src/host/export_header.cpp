@@ -126,6 +126,7 @@ std::string firmware_config_header(const LoadedConfig& config, const std::string
     h += "    t.low_time_s = " + float_literal(t.low_time_s) + ";\n";
     h += "    t.critical_time_s = " + float_literal(t.critical_time_s) + ";\n";
     h += "    t.text_repeat_s = " + float_literal(t.text_repeat_s) + ";\n";
+    h += "    t.clear_hold_s = " + float_literal(t.clear_hold_s) + ";\n";
     h += "    return t;\n}\n\n}  // namespace battsim_generated\n";
     return h;
 }

@@ -38,6 +38,14 @@ uint32_t percent_of(float value, float rated) {
     return static_cast<uint32_t>(rounded(100.0f * value / rated, 0, 99999, 0));
 }
 
+// The verdict's shortfall, % of a healthy pack's flight; false when the flight is not short.
+bool shortfall_percent(const core::MonitorStatus& status, uint32_t& percent) {
+    if (!(status.expected_time_s > 0.0f && status.total_time_s > 0.0f && status.total_time_s < status.expected_time_s))
+        return false;
+    percent = percent_of(status.expected_time_s - status.total_time_s, status.expected_time_s);
+    return true;
+}
+
 }  // namespace
 
 uint16_t mavlink_crc(const uint8_t* data, size_t length, uint16_t crc) {
@@ -147,12 +155,13 @@ size_t warning_text(core::Warning w, float rated_capacity_ah, float rated_resist
     // Integer formatting only: printf's float support costs flash on the ESP8266. What does
     // not fit the message's 50 characters is cut off.
     TextBuffer t(out, kStatusTextChars + 1);
+    uint32_t percent = 0;
     t.append("battsim: ");
     switch (w) {
         case core::kWarnShortFlight:
             t.append("flight ");
-            if (status.expected_time_s > 0.0f && status.total_time_s > 0.0f && status.total_time_s < status.expected_time_s) {
-                t.append_uint(percent_of(status.expected_time_s - status.total_time_s, status.expected_time_s));
+            if (shortfall_percent(status, percent)) {
+                t.append_uint(percent);
                 t.append("% ");
             }
             t.append("short");
@@ -216,6 +225,42 @@ size_t warning_text(core::Warning w, float rated_capacity_ah, float rated_resist
     return t.size();
 }
 
+size_t withdrawal_text(core::Warning w, float rated_capacity_ah, float rated_resistance_ohm,
+                       const core::MonitorStatus& status, char* out) {
+    TextBuffer t(out, kStatusTextChars + 1);
+    uint32_t percent = 0;
+    t.append("battsim: ");
+    switch (w) {
+        case core::kWarnShortFlight:
+            // What the verdict reads now: the pilot weighs "12% short" differently from none.
+            t.append("short flight cleared, ");
+            if (shortfall_percent(status, percent)) {
+                t.append_uint(percent);
+                t.append("% short now");
+            } else {
+                t.append("not short now");
+            }
+            break;
+        case core::kWarnLowCapacity:
+            t.append("low capacity cleared, ");
+            t.append_fixed(rounded(status.capacity_ah * 100.0f, 0, 999999, 0), 2);
+            t.append(" Ah (");
+            t.append_uint(percent_of(status.capacity_ah, rated_capacity_ah));
+            t.append("%)");
+            break;
+        case core::kWarnHighResistance:
+            t.append("high resistance cleared, ");
+            t.append_uint(static_cast<uint32_t>(rounded(status.resistance_ohm * 1000.0f, 0, 999999, 0)));
+            t.append(" mOhm (");
+            t.append_uint(percent_of(status.resistance_ohm, rated_resistance_ohm));
+            t.append("%)");
+            break;
+        default:
+            break;
+    }
+    return t.size();
+}
+
 void MavlinkTelemetry::configure(const TelemetryConfig& config, const core::MonitorConfig& monitor) {
     config_ = config;
     rated_capacity_ah_ = monitor.battery.capacity_ah;
@@ -223,7 +268,7 @@ void MavlinkTelemetry::configure(const TelemetryConfig& config, const core::Moni
     framer_.configure(config.system_id, config.component_id);
     const float interval_us = config.interval_s > 0.0f ? config.interval_s * 1.0e6f : 1.0e6f;
     interval_us_ = static_cast<uint64_t>(interval_us);
-    schedule_.configure(config.text_repeat_s);
+    schedule_.configure(config.text_repeat_s, config.clear_hold_s, monitor.joint.short_flight_fraction);
     next_us_ = 0;
     started_ = false;
 }
@@ -255,6 +300,15 @@ size_t MavlinkTelemetry::update(const core::Sample& sample, const core::MonitorS
         warning_text(static_cast<core::Warning>(w), rated_capacity_ah_, rated_resistance_ohm_, status,
                      reinterpret_cast<char*>(payload + 1));
         // text is char[50], NUL-terminated only when shorter; id 0 and chunk_seq 0: one chunk
+        n += framer_.frame(kStatusTextId, kStatusTextCrcExtra, payload, kStatusTextLength, out + n);
+    }
+    const uint8_t withdrawn = schedule_.withdrawn();
+    for (int w = 0; w < core::kWarnCount; ++w) {
+        if (!(withdrawn & (1u << w))) continue;
+        memset(payload, 0, kStatusTextLength);
+        payload[0] = kMavSeverityNotice;
+        withdrawal_text(static_cast<core::Warning>(w), rated_capacity_ah_, rated_resistance_ohm_, status,
+                        reinterpret_cast<char*>(payload + 1));
         n += framer_.frame(kStatusTextId, kStatusTextCrcExtra, payload, kStatusTextLength, out + n);
     }
     return n;

@@ -44,6 +44,7 @@ constexpr uint8_t kMavStateStandby = 3;
 constexpr uint8_t kMavStateActive = 4;
 constexpr uint8_t kMavCompIdBattery = 180;
 constexpr uint8_t kMavSeverityWarning = 4;
+constexpr uint8_t kMavSeverityNotice = 5;
 constexpr uint8_t kBatteryFunctionAll = 1;
 constexpr uint8_t kBatteryTypeLipo = 1;
 enum ChargeState : uint8_t {
@@ -100,6 +101,7 @@ struct TelemetryConfig {
     float low_time_s = 60.0f;                  // charge_state LOW below this remaining flight time
     float critical_time_s = 20.0f;             // CRITICAL below this
     float text_repeat_s = 30.0f;               // in flight, a warning still active is texted again after this (0: once)
+    float clear_hold_s = 5.0f;                 // in flight, a told verdict off this long is withdrawn (0: never)
 };
 
 // The monitor's status in BATTERY_STATUS terms (docs/telemetry.md gives each field's source).
@@ -114,9 +116,15 @@ BatteryStatusFields battery_status_fields(const TelemetryConfig& config, const c
 size_t warning_text(core::Warning w, float rated_capacity_ah, float rated_resistance_ohm,
                     const core::MonitorStatus& status, char* text);
 
+// The sentence that withdraws warning `w` (one of WarningSchedule::kWithdrawable) once its
+// verdict no longer holds in flight, with the estimate now; as warning_text.
+size_t withdrawal_text(core::Warning w, float rated_capacity_ah, float rated_resistance_ohm,
+                       const core::MonitorStatus& status, char* text);
+
 // What goes out after each monitor update: HEARTBEAT and BATTERY_STATUS every interval
 // of the samples' own time (the first sample sends at once), and a STATUSTEXT at severity
-// WARNING when WarningSchedule says a warning is due (raised; repeated in flight).
+// WARNING when WarningSchedule says a warning is due (raised; repeated in flight), and one at
+// NOTICE when it withdraws a verdict. A warning is told or withdrawn, never both at once.
 class MavlinkTelemetry {
 public:
     static constexpr size_t kMaxBytesPerUpdate = (2 + core::kWarnCount) * kMaxFrameBytes;

@@ -2,6 +2,10 @@
 // is first raised, and in flight again every repeat_s while it stays active (a link loses
 // frames, a beep is missed). A short flight names its cause, so a cause raised with it, or
 // active while it is, is never told on its own. Time is the samples' own.
+//
+// A health verdict can clear in flight (a cold pack's resistance falls as it warms): one that
+// was told and has stayed off for clear_hold_s in the air is withdrawn, so the pilot does not
+// land early on a verdict the monitor no longer holds, and told afresh if it comes back.
 #pragma once
 #include <stdint.h>
 
@@ -12,16 +16,36 @@ namespace telemetry {
 
 class WarningSchedule {
 public:
-    void configure(float repeat_s);  // 0: each warning once
+    // The verdicts that can be withdrawn: the sensor and cell warnings are not judged again
+    // in a way a pilot should hear undone (a gap is over at the next sample).
+    static constexpr uint8_t kWithdrawable = (1u << core::kWarnShortFlight) | (1u << core::kWarnLowCapacity) |
+                                             (1u << core::kWarnHighResistance);
+
+    // repeat_s 0: each warning once; clear_hold_s 0: never withdrawn. A short flight is off
+    // only while its verdict's reading is not short either (total ≥ short_flight_fraction of
+    // a healthy pack's): the verdict clears at once but takes three rounds to hold again.
+    void configure(float repeat_s, float clear_hold_s = 0.0f, float short_flight_fraction = 0.8f);
     // The warnings to tell now (bit per core::Warning); call once per monitor update.
     uint8_t due(const core::MonitorStatus& status);
+    // The warnings withdrawn by the last due(): told, then off in flight for clear_hold_s.
+    // Never a warning due in the same update.
+    uint8_t withdrawn() const { return withdrawn_now_; }
     // Warning `w` was told at `time_us`: its next repeat counts from here.
-    void told(int w, uint64_t time_us) { told_us_[w] = time_us; }
+    void told(int w, uint64_t time_us) {
+        told_us_[w] = time_us;
+        told_ |= static_cast<uint8_t>(1u << w);
+    }
 
 private:
     uint64_t repeat_us_ = 0;
-    uint8_t raised_ = 0;  // warnings raised so far
+    uint64_t clear_hold_us_ = 0;
+    float short_flight_fraction_ = 0.8f;
+    uint8_t raised_ = 0;         // warnings raised so far
+    uint8_t told_ = 0;           // told and not withdrawn since
+    uint8_t withdrawn_ = 0;      // withdrawn and not active since
+    uint8_t withdrawn_now_ = 0;  // withdrawn by the last due()
     uint64_t told_us_[core::kWarnCount] = {};
+    uint64_t off_since_us_[core::kWarnCount] = {};  // when a told warning went off in flight (0: on)
 };
 
 }  // namespace telemetry

@@ -50,7 +50,7 @@ core::MonitorStatus flying_status() {
 
 TEST_CASE("Beeper: silent on a healthy flight; chirps when LOW, fast when CRITICAL", "[firmware][beeper]") {
     fw::Beeper b;
-    b.configure(telemetry::TelemetryConfig{});
+    b.configure(telemetry::TelemetryConfig{}, core::MonitorConfig{});
     core::MonitorStatus s = flying_status();
     CHECK(listen(b, s, 0, 10000).empty());
     s.remaining_time_s = 59.0f;  // LOW: 100 ms every 2 s
@@ -62,9 +62,26 @@ TEST_CASE("Beeper: silent on a healthy flight; chirps when LOW, fast when CRITIC
     CHECK(listen(b, s, 22000, 30000).empty());
 }
 
+TEST_CASE("Beeper: a short flight back after its withdrawal beeps at once; a flicker waits for the repeat", "[firmware][beeper]") {
+    fw::Beeper b;
+    b.configure(telemetry::TelemetryConfig{}, core::MonitorConfig{});  // repeat 30 s, withdrawn after 5 s off
+    core::MonitorStatus s = flying_status();
+    s.warnings_raised = s.warnings = 1u << core::kWarnShortFlight;
+    const Beeps three = {{1000, 400}, {1900, 400}, {2800, 400}};
+    CHECK(listen(b, s, 1000, 4000) == three);
+    s.warnings = 0;  // off 4 s: under the hold, still told as far as the pilot knows
+    CHECK(listen(b, s, 4000, 8000).empty());
+    s.warnings = 1u << core::kWarnShortFlight;
+    CHECK(listen(b, s, 8000, 12000).empty());
+    s.warnings = 0;  // off 6 s: withdrawn (the ground station says so; the buzzer has no pattern for it)
+    CHECK(listen(b, s, 12000, 18000).empty());
+    s.warnings = 1u << core::kWarnShortFlight;
+    CHECK(listen(b, s, 18000, 21000) == Beeps{{18000, 400}, {18900, 400}, {19800, 400}});
+}
+
 TEST_CASE("Beeper: long beeps announce a warning, most beeps first, and again while active in flight", "[firmware][beeper]") {
     fw::Beeper b;
-    b.configure(telemetry::TelemetryConfig{});
+    b.configure(telemetry::TelemetryConfig{}, core::MonitorConfig{});
     core::MonitorStatus s = flying_status();
     // A weak cell and a short flight with its cause, raised at once: three long beeps, then two.
     s.warnings_raised = s.warnings = (1u << core::kWarnCellOutlier) | (1u << core::kWarnShortFlight) |
@@ -78,7 +95,7 @@ TEST_CASE("Beeper: long beeps announce a warning, most beeps first, and again wh
     fw::Beeper r;
     telemetry::TelemetryConfig quiet;  // no thresholds, no repeats
     quiet.low_time_s = quiet.critical_time_s = quiet.text_repeat_s = 0.0f;
-    r.configure(quiet);
+    r.configure(quiet, core::MonitorConfig{});
     core::MonitorStatus q = flying_status();
     q.warnings_raised = q.warnings = 1u << core::kWarnLowCapacity;
     CHECK(listen(r, q, 0, 5000).size() == 3);

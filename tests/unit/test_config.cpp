@@ -34,6 +34,7 @@ TEST_CASE("Config JSON round-trips", "[config]") {
     c.telemetry.interval_s = 0.25f;
     c.telemetry.low_time_s = 90.0f;
     c.telemetry.text_repeat_s = 0.0f;
+    c.telemetry.clear_hold_s = 12.5f;
     LoadedConfig back = config_from_json(config_to_json(c), "test");
     CHECK(back.telemetry.system_id == 42);
     CHECK(back.telemetry.component_id == 180);
@@ -42,6 +43,7 @@ TEST_CASE("Config JSON round-trips", "[config]") {
     CHECK(back.telemetry.low_time_s == 90.0f);
     CHECK(back.telemetry.critical_time_s == 20.0f);
     CHECK(back.telemetry.text_repeat_s == 0.0f);
+    CHECK(back.telemetry.clear_hold_s == 12.5f);
     CHECK_FALSE(back.monitor.joint.health.enabled);
     CHECK(back.monitor.joint.health.ekf.voltage_sigma_v == 0.031f);
     CHECK(back.monitor.joint.health.polarisation_slow_share == 0.35f);

@@ -106,6 +106,7 @@ TEST_CASE("export: the firmware's compiled-in config equals the JSON battsim loa
     CHECK(t.low_time_s == loaded.telemetry.low_time_s);
     CHECK(t.critical_time_s == loaded.telemetry.critical_time_s);
     CHECK(t.text_repeat_s == loaded.telemetry.text_repeat_s);
+    CHECK(t.clear_hold_s == loaded.telemetry.clear_hold_s);
 }
 
 TEST_CASE("export: every number the JSON can set reaches the header", "[export]") {

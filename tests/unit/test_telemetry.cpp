@@ -336,3 +336,130 @@ TEST_CASE("Telemetry: the warnings' sentences, by hand", "[telemetry]") {
     CHECK(n == telemetry::kStatusTextChars);
     CHECK(std::string(text) == std::string("battsim: flight 67% short, capacity 6452%, R 50000").substr(0, 50));
 }
+
+TEST_CASE("Telemetry: a short flight that clears in flight is withdrawn after clear_hold_s, and told afresh if it returns", "[telemetry]") {
+    telemetry::MavlinkTelemetry t;
+    telemetry::TelemetryConfig cfg;
+    cfg.interval_s = 1000.0f;  // no battery status in the way after the first
+    cfg.clear_hold_s = 5.0f;
+    t.configure(cfg, rated_4s());
+    core::Sample s;
+    core::MonitorStatus st;
+    st.time_us = 1;
+    st.flying = true;
+    run(t, s, st);  // the first pair
+    const uint64_t t0 = 10000000u;
+    const auto at = [&](double after_s) { st.time_us = t0 + static_cast<uint64_t>(after_s * 1e6); };
+
+    const uint8_t verdict = (1u << core::kWarnShortFlight) | (1u << core::kWarnHighResistance);
+    st.warnings_raised = st.warnings = verdict;
+    st.short_flight_cause = core::JointEstimator::kCauseResistance;
+    st.expected_time_s = 300.0f;
+    st.total_time_s = 222.0f;
+    st.resistance_ohm = 0.031f;
+    at(0);
+    mavtest::Stream m = mavtest::decode(run(t, s, st), false);
+    REQUIRE(m.frames.size() == 1);
+    CHECK(mavtest::text(m.frames[0]) == "battsim: flight 26% short, R 155%");
+
+    // Off for less than the hold, then on again: a flicker, nothing said either way.
+    st.warnings = 0;
+    st.total_time_s = 250.0f;
+    at(1);
+    CHECK(run(t, s, st).empty());
+    at(5.9);
+    CHECK(run(t, s, st).empty());
+    st.warnings = verdict;
+    at(6);
+    CHECK(run(t, s, st).empty());
+
+    // Off while its reading is still short (235 s of 300 s: the verdict needs three short
+    // rounds to hold again): not withdrawn however long.
+    st.warnings = 0;
+    st.total_time_s = 235.0f;
+    for (double k = 6.5; k < 20; k += 0.1) {
+        at(k);
+        CHECK(run(t, s, st).empty());
+    }
+    // Not short from 20 s: withdrawn at 25 s, once, at NOTICE, with the verdict's reading
+    // now (264 s of a healthy 300 s: 12 % short), and its cause with it.
+    st.total_time_s = 264.0f;
+    at(20);
+    CHECK(run(t, s, st).empty());
+    at(24.999);
+    CHECK(run(t, s, st).empty());
+    at(25);
+    m = mavtest::decode(run(t, s, st), false);
+    REQUIRE(m.error.empty());
+    REQUIRE(m.frames.size() == 1);
+    uint8_t severity = 0;
+    CHECK(mavtest::text(m.frames[0], &severity) == "battsim: short flight cleared, 12% short now");
+    CHECK(severity == telemetry::kMavSeverityNotice);
+    for (int k = 26; k < 100; ++k) {
+        at(k);
+        CHECK(run(t, s, st).empty());
+    }
+
+    // Back after its withdrawal: news again at once, not at the next 30 s repeat.
+    st.warnings = verdict;
+    st.total_time_s = 222.0f;
+    at(100);
+    m = mavtest::decode(run(t, s, st), false);
+    REQUIRE(m.frames.size() == 1);
+    CHECK(mavtest::text(m.frames[0], &severity) == "battsim: flight 26% short, R 155%");
+    CHECK(severity == telemetry::kMavSeverityWarning);
+
+    // Cleared after the landing: the charge state says it on the ground, no text.
+    st.warnings = 0;
+    st.flying = false;
+    for (int k = 101; k < 200; ++k) {
+        at(k);
+        CHECK(run(t, s, st).empty());
+    }
+}
+
+TEST_CASE("Telemetry: clear_hold_s 0 never withdraws; a cell or sensor warning is never withdrawn", "[telemetry]") {
+    for (const float hold_s : {0.0f, 5.0f}) {
+        telemetry::MavlinkTelemetry t;
+        telemetry::TelemetryConfig cfg;
+        cfg.interval_s = 1000.0f;
+        cfg.clear_hold_s = hold_s;
+        t.configure(cfg, rated_4s());
+        core::Sample s;
+        core::MonitorStatus st;
+        st.flying = true;
+        st.time_us = 1;
+        run(t, s, st);
+        st.warnings_raised = st.warnings = hold_s > 0.0f
+                                               ? (1u << core::kWarnCellOutlier) | (1u << core::kWarnSensorFault)
+                                               : (1u << core::kWarnShortFlight);
+        st.time_us = 1000000u;
+        CHECK(!run(t, s, st).empty());
+        st.warnings = 0;
+        for (int k = 2; k < 60; ++k) {
+            st.time_us = 1000000u * static_cast<uint64_t>(k);
+            CHECK(run(t, s, st).empty());
+        }
+    }
+}
+
+TEST_CASE("Telemetry: the withdrawals' sentences, by hand", "[telemetry]") {
+    char text[telemetry::kStatusTextChars + 1];
+    core::MonitorStatus st;
+    st.expected_time_s = 300.0f;
+    st.total_time_s = 300.0f;  // not short at all now
+    CHECK(std::string(text, telemetry::withdrawal_text(core::kWarnShortFlight, 1.55f, 0.02f, st, text)) ==
+          "battsim: short flight cleared, not short now");
+    st.total_time_s = 255.0f;  // 15 % short: under the bar
+    telemetry::withdrawal_text(core::kWarnShortFlight, 1.55f, 0.02f, st, text);
+    CHECK(std::string(text) == "battsim: short flight cleared, 15% short now");
+    // The reference estimator's own verdicts (it has no short flight).
+    st.capacity_ah = 1.4f;
+    st.resistance_ohm = 0.0226f;
+    telemetry::withdrawal_text(core::kWarnLowCapacity, 1.55f, 0.02f, st, text);
+    CHECK(std::string(text) == "battsim: low capacity cleared, 1.40 Ah (90%)");
+    telemetry::withdrawal_text(core::kWarnHighResistance, 1.55f, 0.02f, st, text);
+    CHECK(std::string(text) == "battsim: high resistance cleared, 23 mOhm (113%)");
+    st.resistance_ohm = 99.0f;  // absurd on purpose: within 50 characters
+    CHECK(telemetry::withdrawal_text(core::kWarnHighResistance, 1.55f, 0.02f, st, text) <= telemetry::kStatusTextChars);
+}

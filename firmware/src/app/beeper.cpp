@@ -8,10 +8,11 @@ uint64_t us(uint32_t ms) { return static_cast<uint64_t>(ms) * 1000u; }
 
 }  // namespace
 
-void Beeper::configure(const telemetry::TelemetryConfig& config) {
+void Beeper::configure(const telemetry::TelemetryConfig& config, const core::MonitorConfig& monitor) {
     low_time_s_ = config.low_time_s;
     critical_time_s_ = config.critical_time_s;
-    schedule_.configure(config.text_repeat_s);
+    // As the texts: a verdict back after its withdrawal beeps at once.
+    schedule_.configure(config.text_repeat_s, config.clear_hold_s, monitor.joint.short_flight_fraction);
     pending_ = 0;
     pattern_start_us_ = 0;
     pattern_beeps_ = 0;

@@ -25,7 +25,7 @@ public:
     static constexpr uint32_t kChirpOnMs = 100, kChirpPeriodMs = 2000;  // LOW
     static constexpr uint32_t kFastOnMs = 200, kFastPeriodMs = 400;     // CRITICAL
 
-    void configure(const telemetry::TelemetryConfig& config);
+    void configure(const telemetry::TelemetryConfig& config, const core::MonitorConfig& monitor);
     // After each monitor update: whether the buzzer sounds until the next sample.
     bool update(const core::MonitorStatus& status);
     // Long beeps announcing warning `w`.

@@ -73,7 +73,7 @@ void MonitorApp::begin(const MonitorAppConfig& config) {
     monitor_.configure(mc);
     current_average_.configure(mc.current_average);
     telemetry_.configure(config.telemetry, mc);
-    beeper_.configure(config.telemetry);
+    beeper_.configure(config.telemetry, mc);
     buzzing_ = false;
     if (buzzer_ != nullptr) buzzer_->set(false);
     sample_ = core::Sample{};
