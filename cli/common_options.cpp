@@ -237,6 +237,24 @@ std::string warning_detail(const nlohmann::json& w) {
     if (!w.value("active_at_end", false)) add("cleared before the end");
     return d.empty() ? d : " (" + d + ")";
 }
+// A warning that went off and on again: each time it was on (a few; the count says the rest).
+std::string warning_spells(const nlohmann::json& w) {
+    const uint64_t count = w.value("spell_count", uint64_t{0});
+    if (count < 2 || !w.contains("spells")) return "";
+    constexpr size_t kShown = 4;
+    std::string d = "\n      on ";
+    size_t shown = 0;
+    for (const auto& sp : w["spells"]) {
+        if (shown == kShown) break;
+        d += (shown++ ? ", " : "") + fixed(sp["from_s"], 1) + "–" +
+             (sp["to_s"].is_number() ? fixed(sp["to_s"], 1) + " s" : "the end");
+        std::string causes;
+        for (const auto& c : sp.value("cause", nlohmann::json::array())) causes += (causes.empty() ? "" : ", ") + c.get<std::string>();
+        if (!causes.empty()) d += " (" + causes + ")";
+    }
+    if (count > shown) d += ", and " + std::to_string(count - shown) + " more";
+    return d;
+}
 }  // namespace
 
 void print_brief(const nlohmann::json& s, std::ostream& out) {
@@ -285,6 +303,7 @@ void print_brief(const nlohmann::json& s, std::ostream& out) {
     if (s["warnings"].empty()) out << " none";
     for (const auto& w : s["warnings"]) {
         out << "\n    " << w["name"].get<std::string>() << " at " << fixed(w["first_time_s"], 1) << " s" << warning_detail(w);
+        out << warning_spells(w);
     }
     out << "\n";
 }

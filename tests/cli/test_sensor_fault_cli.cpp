@@ -77,6 +77,10 @@ TEST_CASE("replay says a sensor fault was a gap in the samples, and how long", "
     CHECK(r.warning["sample_gaps"]["longest_s"].get<double>() == Approx(longest_ms * 1e-3).margin(1e-3));
     CHECK_FALSE(r.warning.contains("current_offset_a"));
     CHECK(r.warning["active_at_end"] == false);  // a gap ends with the sample after it
+    // Each gap is a spell of its own, from the sample ending it to the next.
+    CHECK(r.warning["spell_count"] == gaps);
+    REQUIRE(r.warning["spells"].size() == static_cast<size_t>(std::min<long>(gaps, 16)));
+    for (const json& sp : r.warning["spells"]) CHECK(sp["to_s"].get<double>() > sp["from_s"].get<double>());
     CHECK_THAT(r.brief, Catch::Contains("sensor_fault at ") && Catch::Contains(std::to_string(gaps) + " gaps between samples, longest "));
     CHECK(said(r.texts, "battsim: sensor fault: no reading for "));
     CHECK_FALSE(said(r.texts, "battsim: sensor fault: current"));

@@ -85,6 +85,24 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
         outlier_finding_ = s.cell_finding;
     }
     seen_raised_ = s.warnings_raised;
+    for (int w = 0; w < core::kWarnCount; ++w) {
+        const uint8_t bit = static_cast<uint8_t>(1u << w);
+        const bool on = (s.warnings & bit) != 0, was_on = (previous_warnings_ & bit) != 0;
+        std::vector<Spell>& spells = spells_[w];
+        if (on && !was_on) {
+            ++spell_count_[w];
+            if (spells.size() < kMaxSpells) spells.push_back(Spell{s.time_us, s.time_us, true, 0});
+        }
+        if (on && was_on && s.time_us > previous_time_us_) active_us_[w] += s.time_us - previous_time_us_;
+        // The kept spells only: a spell past kMaxSpells is counted, not listed.
+        if (spells.empty() || !spells.back().open || spell_count_[w] != spells.size()) continue;
+        Spell& last = spells.back();
+        last.to_us = s.time_us;
+        if (on && w == core::kWarnShortFlight) last.cause |= s.short_flight_cause;
+        if (!on) last.open = false;
+    }
+    previous_warnings_ = s.warnings;
+    previous_time_us_ = s.time_us;
     fault_causes_ |= s.sensor_fault_cause;
     if (s.sensor_fault_cause & core::kFaultSampleGap) {
         ++gap_count_;
@@ -154,6 +172,13 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
 
 namespace {
 json mean_or_null(double sum, double n) { return n > 0 ? json(round_sig(sum / n)) : json(nullptr); }
+
+json short_cause_names(uint8_t cause) {
+    json names = json::array();
+    if (cause & core::JointEstimator::kCauseCapacity) names.push_back("capacity");
+    if (cause & core::JointEstimator::kCauseResistance) names.push_back("resistance");
+    return names;
+}
 }  // namespace
 
 json sensor_fault_cause_names(uint8_t causes) {
@@ -286,16 +311,25 @@ json SummaryAccumulator::to_json(int cells) const {
                                          : json(nullptr);
             }
             e["active_at_end"] = (last_.warnings & bit) != 0;
+            // Each time it was on: from its first sample to the first sample without it (null
+            // when still on at the end); the short flight with the causes seen meanwhile.
+            json spells = json::array();
+            for (const Spell& sp : spells_[w]) {
+                json o = {{"from_s", round_sig(sp.from_us * 1e-6, 9)},
+                          {"to_s", sp.open ? json(nullptr) : json(round_sig(sp.to_us * 1e-6, 9))}};
+                if (w == core::kWarnShortFlight) o["cause"] = short_cause_names(sp.cause);
+                spells.push_back(o);
+            }
+            e["spells"] = spells;
+            e["spell_count"] = spell_count_[w];
+            e["active_s"] = round_sig(active_us_[w] * 1e-6, 7);
             if (w == core::kWarnCellOutlier && outlier_cell_ >= 0) {
                 e["cell"] = outlier_cell_ + 1;
                 if (outlier_finding_ == core::CellAnalyzer::kHighResistance) e["finding"] = "high_resistance";
                 if (outlier_finding_ == core::CellAnalyzer::kLowCapacity) e["finding"] = "low_capacity";
             }
             if (w == core::kWarnShortFlight) {
-                json cause = json::array();
-                if (short_cause_ & core::JointEstimator::kCauseCapacity) cause.push_back("capacity");
-                if (short_cause_ & core::JointEstimator::kCauseResistance) cause.push_back("resistance");
-                e["cause"] = cause;
+                e["cause"] = short_cause_names(short_cause_);
             }
             if (w == core::kWarnSensorFault) add_fault_causes(e);
             warnings.push_back(e);

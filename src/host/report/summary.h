@@ -88,6 +88,20 @@ private:
     uint8_t short_cause_ = 0;        // cause bits when the short-flight warning was first raised
     int8_t outlier_cell_ = -1;       // cell named when the cell warning was first raised
     uint8_t outlier_finding_ = 0;
+    // When each warning was on: a verdict can clear and hold again (a cold pack warms, then
+    // its capacity shows), which the first raise alone does not say. The first kMaxSpells
+    // are kept (memory stays bounded on a flickering sensor fault); all are counted.
+    struct Spell {
+        uint64_t from_us = 0, to_us = 0;
+        bool open = true;
+        uint8_t cause = 0;  // short flight: every cause seen while it was on
+    };
+    static constexpr size_t kMaxSpells = 16;
+    std::vector<Spell> spells_[core::kWarnCount];
+    uint64_t spell_count_[core::kWarnCount] = {};
+    uint64_t active_us_[core::kWarnCount] = {};
+    uint8_t previous_warnings_ = 0;
+    uint64_t previous_time_us_ = 0;
     uint8_t fault_causes_ = 0;        // core::SensorFaultCause bits seen on any sample
     uint64_t gap_count_ = 0;          // samples ending a gap the joint estimator called a fault
     float longest_gap_s_ = 0.0f;

@@ -1,0 +1,80 @@
+// The summary's record of when each warning was on (src/host/report/summary.*), on statuses
+// made by hand: a verdict that clears and holds again, its causes per spell, the time on,
+// and a flickering warning's spells counted past the ones kept.
+#include <catch2/catch.hpp>
+
+#include "core/estimate/joint_estimator.h"
+#include "host/report/summary.h"
+
+using namespace battsim;
+using nlohmann::json;
+
+namespace {
+
+const json* warning(const json& summary, const char* name) {
+    for (const json& w : summary["warnings"])
+        if (w["name"] == name) return &w;
+    return nullptr;
+}
+
+}  // namespace
+
+TEST_CASE("Summary: a short flight that clears and holds again has two spells, each with its causes", "[summary]") {
+    host::SummaryAccumulator acc;
+    core::MonitorStatus s;
+    s.initialised = true;
+    s.sample_valid = true;
+    s.flying = true;
+    constexpr uint8_t kShort = 1u << core::kWarnShortFlight;
+    for (int k = 0; k <= 100; ++k) {  // one sample a second, 0 … 100 s
+        s.time_us = 1000000ull * static_cast<uint64_t>(k);
+        s.warnings = 0;
+        s.short_flight_cause = 0;
+        if (k >= 10 && k < 30) {  // resistance first, capacity joining at 20 s
+            s.warnings = kShort;
+            s.short_flight_cause = core::JointEstimator::kCauseResistance;
+            if (k >= 20) s.short_flight_cause |= core::JointEstimator::kCauseCapacity;
+        }
+        if (k >= 70) {  // again from 70 s to the end, capacity alone
+            s.warnings = kShort;
+            s.short_flight_cause = core::JointEstimator::kCauseCapacity;
+        }
+        if (s.warnings) {
+            if (!s.warnings_raised) s.warning_time_us[core::kWarnShortFlight] = s.time_us;
+            s.warnings_raised |= s.warnings;
+        }
+        acc.add(s);
+    }
+    const json j = acc.to_json(4);
+    const json* w = warning(j, "short_flight");
+    REQUIRE(w != nullptr);
+    CHECK((*w)["cause"] == json::array({"resistance"}));  // at the first raise
+    CHECK((*w)["spell_count"] == 2);
+    REQUIRE((*w)["spells"].size() == 2);
+    CHECK((*w)["spells"][0] == json{{"from_s", 10.0}, {"to_s", 30.0}, {"cause", json::array({"capacity", "resistance"})}});
+    CHECK((*w)["spells"][1] == json{{"from_s", 70.0}, {"to_s", nullptr}, {"cause", json::array({"capacity"})}});
+    CHECK((*w)["active_s"] == 19.0 + 30.0);  // 10 → 29 s, then 70 → 100 s, sample to sample
+    CHECK((*w)["active_at_end"] == true);
+}
+
+TEST_CASE("Summary: a flickering warning keeps its first 16 spells and counts them all", "[summary]") {
+    host::SummaryAccumulator acc;
+    core::MonitorStatus s;
+    s.initialised = true;
+    s.sample_valid = true;
+    constexpr uint8_t kFault = 1u << core::kWarnSensorFault;
+    for (int k = 0; k < 100; ++k) {  // on at every odd second: 50 spells of 1 s each
+        s.time_us = 1000000ull * static_cast<uint64_t>(k);
+        s.warnings = (k % 2) ? kFault : 0;
+        s.warnings_raised |= s.warnings;
+        acc.add(s);
+    }
+    const json j = acc.to_json(4);
+    const json* w = warning(j, "sensor_fault");
+    REQUIRE(w != nullptr);
+    CHECK((*w)["spell_count"] == 50);
+    REQUIRE((*w)["spells"].size() == 16);
+    CHECK((*w)["spells"][15] == json{{"from_s", 31.0}, {"to_s", 32.0}});
+    CHECK((*w)["active_s"] == 0.0);  // never on for two samples in a row
+    CHECK((*w)["active_at_end"] == true);
+}
