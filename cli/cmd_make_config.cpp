@@ -7,6 +7,7 @@
 #include "command.h"
 #include "common_options.h"
 #include "host/config_json.h"
+#include "host/config_keys.h"
 #include "host/io/atomic_file.h"
 #include "host/pack_config.h"
 
@@ -24,11 +25,33 @@ struct MakeConfigArgs {
     double cutoff_delay_s = NAN;
     std::string name;
     std::string output = "-";
+    bool list_keys = false;
+    bool json = false;
 };
+
+// The config reference instead of a config: every key, from the reader itself.
+int list_keys(const MakeConfigArgs& a) {
+    const std::vector<host::ConfigKey> keys = host::config_keys();
+    host::write_file_atomic(a.output, a.json ? host::json_text(host::config_keys_json(keys), 2) + "\n"
+                                             : host::config_keys_markdown(keys));
+    return kExitOk;
+}
 
 int run(const MakeConfigArgs& a) {
     const char* me = "battsim make-config";
     if (int rc = check_outputs(me, {{"--from-log", a.from_log}}, {{"-o/--output", a.output}})) return rc;
+    if (a.list_keys) {
+        if (!a.from_log.empty() || a.cells > 0 || std::isfinite(a.capacity_mah) || std::isfinite(a.resistance_mohm) ||
+            std::isfinite(a.cutoff_v) || std::isfinite(a.cutoff_delay_s) || !a.name.empty()) {
+            std::cerr << me << ": --list-keys lists the keys of any config; it takes no pack options\n";
+            return kExitUsage;
+        }
+        return list_keys(a);
+    }
+    if (a.json) {
+        std::cerr << me << ": --json goes with --list-keys (a config is JSON already)\n";
+        return kExitUsage;
+    }
     host::PackRating r;
     r.name = a.name;
     host::LogPack log;
@@ -101,6 +124,10 @@ std::function<int()> setup(CLI::App& sub) {
         ->check(number_in(0.0, 600.0));
     sub.add_option("--name", a->name, "Config name (default pack-<cells>s-<mAh>)");
     sub.add_option("-o,--output", a->output, "Config JSON to write (\"-\" = standard output)")->capture_default_str();
+    sub.add_flag("--list-keys", a->list_keys,
+                 "Instead of a config: every key a config may hold, with its type, default, accepted range and "
+                 "meaning (Markdown, as docs/config-keys.md)");
+    sub.add_flag("--json", a->json, "With --list-keys: the keys as JSON");
     return [a]() -> int {
         try {
             return run(*a);

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -23,6 +24,23 @@ class ConfigError : public JsonValueError {
 public:
     using JsonValueError::JsonValueError;
 };
+
+// Every setting a reader meets, for the key reference (config_keys.h): collected only while
+// a recorder is installed (the probe), so reading a config costs nothing extra.
+struct ConfigKeyRecord {
+    std::string path;  // as in messages: "$.joint.health_filter.enabled"
+    std::string type;  // "number", "integer", "boolean", "string", or "member" (an object or array)
+    nlohmann::json default_value;
+    double lo = 0, hi = 0;
+};
+inline std::vector<ConfigKeyRecord>*& config_key_recorder() {
+    static thread_local std::vector<ConfigKeyRecord>* recorder = nullptr;
+    return recorder;
+}
+
+// The shortest decimal that reads back as the same float, so written configs stay readable
+// (0.004, not 0.004000000189989805) and still round-trip exactly.
+nlohmann::json config_number(float x);
 
 class ConfigObjectReader {
 public:
@@ -42,7 +60,12 @@ public:
     // A missing member keeps `out` (the default).
     template <typename T>
     void number(const char* key, T& out, double lo, double hi) {
-        if (const nlohmann::json* v = member(key)) {
+        if (std::is_integral<T>::value) {
+            record(key, "integer", nlohmann::json(static_cast<long long>(out)), lo, hi);
+        } else {
+            record(key, "number", config_number(static_cast<float>(out)), lo, hi);
+        }
+        if (const nlohmann::json* v = find(key)) {
             const double x = check(*v, child(key), lo, hi);
             // An integer setting given 2.5 had been read as 2 without a word.
             if (std::is_integral<T>::value && x != std::floor(x)) fail(child(key), "expected a whole number, found " + json_brief(*v));
@@ -50,22 +73,24 @@ public:
         }
     }
     void string(const char* key, std::string& out) {
-        if (const nlohmann::json* v = member(key)) {
+        record(key, "string", nlohmann::json(out), 0, 0);
+        if (const nlohmann::json* v = find(key)) {
             if (!v->is_string()) fail(child(key), "expected a string");
             out = v->get<std::string>();
         }
     }
     void boolean(const char* key, bool& out) {
-        if (const nlohmann::json* v = member(key)) {
+        record(key, "boolean", nlohmann::json(out), 0, 0);
+        if (const nlohmann::json* v = find(key)) {
             if (!v->is_boolean()) fail(child(key), "expected true or false");
             out = v->get<bool>();
         }
     }
-    // The member, or nullptr when absent; marked as known either way.
+    // The member (an object or array read by the caller), or nullptr when absent; marked as
+    // known either way.
     const nlohmann::json* member(const char* key) {
-        used_.insert(key);
-        auto it = j_.find(key);
-        return it == j_.end() ? nullptr : &*it;
+        record(key, "member", nullptr, 0, 0);
+        return find(key);
     }
     // A number anywhere below this object (array elements), checked like number().
     double check(const nlohmann::json& v, const std::string& where, double lo, double hi) const {
@@ -85,15 +110,21 @@ public:
     }
 
 private:
+    const nlohmann::json* find(const char* key) {
+        used_.insert(key);
+        auto it = j_.find(key);
+        return it == j_.end() ? nullptr : &*it;
+    }
+    void record(const char* key, const char* type, nlohmann::json default_value, double lo, double hi) const {
+        if (std::vector<ConfigKeyRecord>* r = config_key_recorder())
+            r->push_back(ConfigKeyRecord{child(key), type, std::move(default_value), lo, hi});
+    }
+
     const nlohmann::json& j_;
     std::string path_;
     const std::string& origin_;
     std::set<std::string> used_;
 };
-
-// The shortest decimal that reads back as the same float, so written configs stay readable
-// (0.004, not 0.004000000189989805) and still round-trip exactly.
-nlohmann::json config_number(float x);
 
 }  // namespace host
 }  // namespace battsim
