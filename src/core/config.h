@@ -50,7 +50,7 @@ struct MonitorConfig {
     int cells_in_series = 4;
     TremblayParams battery;
     ModelExtensions extensions;   // optional effects on top of the model (all off by default)
-    float max_voltage_v = 16.8f;  // pack range used for state of charge
+    float max_voltage_v = 16.8f;  // the pack's range: bench-discharge tables and the exported header (the monitor does not read it)
     float min_voltage_v = 13.3f;
     LowPassFilter::Config current_filter;  // i* of the model: the reaction time
     ResistanceEstimator::Config resistance;

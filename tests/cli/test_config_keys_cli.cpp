@@ -1,0 +1,34 @@
+// `battsim make-config --list-keys`: the config reference docs/config-keys.md is its output,
+// byte for byte (regenerate: build/battsim make-config --list-keys -o docs/config-keys.md).
+#include <string>
+
+#include "cli_util.h"
+
+using nlohmann::json;
+
+TEST_CASE("make-config --list-keys prints docs/config-keys.md, and --json the same keys", "[cli][keys]") {
+    const clitest::Result md = clitest::run("make-config --list-keys");
+    INFO(md.err);
+    REQUIRE(md.exit_code == 0);
+    CHECK(md.out == clitest::read_file(std::string(BATTSIM_SOURCE_DIR) + "/docs/config-keys.md"));
+    const json j = clitest::run_json("make-config --list-keys --json");
+    REQUIRE(j["keys"].is_array());
+    size_t rows = 0;
+    for (size_t at = md.out.find("\n| `"); at != std::string::npos; at = md.out.find("\n| `", at + 1)) ++rows;
+    CHECK(rows == j["keys"].size());
+    CHECK(j["keys"].size() > 150);
+    for (const json& k : j["keys"]) {
+        INFO(k.dump());
+        CHECK(!k["about"].get<std::string>().empty());
+        if (k["type"] == "number" || k["type"] == "integer") CHECK(k["range"].size() == 2);
+    }
+}
+
+TEST_CASE("make-config --list-keys takes no pack options, and --json needs it", "[cli][keys]") {
+    const clitest::Result both = clitest::run("make-config --list-keys --cells 4");
+    CHECK(both.exit_code == 2);
+    CHECK(both.err.find("--list-keys") != std::string::npos);
+    const clitest::Result alone = clitest::run("make-config --cells 4 --capacity-mah 1500 --json");
+    CHECK(alone.exit_code == 2);
+    CHECK(alone.err.find("--json goes with --list-keys") != std::string::npos);
+}
