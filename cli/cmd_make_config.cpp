@@ -28,7 +28,7 @@ struct MakeConfigArgs {
 
 int run(const MakeConfigArgs& a) {
     const char* me = "battsim make-config";
-    if (int rc = check_outputs(me, {{"--from-log", a.from_log}}, {{"-o/--output", a.output}})) return rc;
+    if (int rc = check_outputs(me, {{"--from-log", a.from_log}}, {text_output("-o/--output", a.output)})) return rc;
     host::PackRating r;
     r.name = a.name;
     host::LogPack log;
