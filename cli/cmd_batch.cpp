@@ -26,6 +26,7 @@ struct BatchArgs {
     std::string manifest;
     std::string format = "md";
     std::string output = "-";
+    bool output_given = false;
     std::string packs;
     std::string monitors;
     std::string out_dir;
@@ -70,6 +71,9 @@ int run(const BatchArgs& a) {
     } catch (const host::ConfigError& e) {
         std::cerr << me << "config: " << e.what() << "\n";
         return kExitConfigError;
+    } catch (const std::invalid_argument& e) {  // a log the command line names twice
+        std::cerr << me << e.what() << "\n";
+        return kExitUsage;
     }
     // A missing golden directory is one mistake, not one "no golden" per log.
     std::error_code dir_ec;
@@ -90,11 +94,18 @@ int run(const BatchArgs& a) {
     for (const host::BatchItem& it : all)
         if (shard.contains(it.index)) items.push_back(it);
 
-    // Every log listed is an input, the goldens too (a summary written over its golden
-    // would compare equal); every summary --out writes is an output.
+    // Every log listed and every config read is an input, the goldens too (a summary
+    // written over its golden would compare equal); every summary --out writes is an output.
     std::vector<host::NamedPath> inputs{{"-m/--manifest", a.manifest}};
-    for (const host::BatchItem& it : all) inputs.push_back({"a log", it.path});
-    std::vector<host::NamedPath> outputs{{"-o/--output", a.output}, {"--packs", a.packs}, {"--monitors", a.monitors}};
+    for (const host::BatchItem& it : all) {
+        inputs.push_back({"a log", it.path});
+        inputs.push_back({"the config of " + it.path, it.config_path});
+    }
+    std::vector<host::NamedPath> outputs{
+        text_output(a.output_given ? "-o/--output" : "the table (standard output without -o)", a.output),
+        text_output("--packs", a.packs),
+        text_output("--monitors", a.monitors),
+        {"--out", a.out_dir}};
     for (const host::BatchItem& it : items) {
         if (!a.compare.empty())
             inputs.push_back({"--compare's " + it.stem + ".json", (fs::path(a.compare) / (it.stem + ".json")).string()});
@@ -167,10 +178,11 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("-m,--manifest", a->manifest, "Manifest (JSON or CSV) mapping logs to packs, configs and columns");
     sub.add_option("-j,--jobs", a->jobs, "Parallel replays (default: all cores)");
 
-    sub.add_option("-o,--output", a->output, "Write the table here (atomically) instead of standard output");
-    sub.add_option("--packs", a->packs, "Also write the per-pack table here, in --format");
+    auto* output = sub.add_option("-o,--output", a->output, "Write the table here (atomically) instead of standard output");
+    sub.add_option("--packs", a->packs, "Also write the per-pack table here, in --format (\"-\" = standard output)");
     sub.add_option("--monitors", a->monitors,
-                   "Also write the per-monitor table (charger checks pooled per current sensor) here, in --format");
+                   "Also write the per-monitor table (charger checks pooled per current sensor) here, in --format "
+                   "(\"-\" = standard output)");
     sub.add_option("--out", a->out_dir, "Write each log's summary JSON here as <log stem>.json, as it completes");
     sub.add_option("--shard", a->shard, "Replay only shard K of N (K/N, 1-based): inputs whose index mod N is K-1");
     sub.add_option("--compare", a->compare, "Compare each summary with GOLDEN_DIR/<log stem>.json; exit 1 on a change");
@@ -183,7 +195,10 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--log-format", a->input.format, "Log format: auto, raw, csv, dataflash-text, dataflash-bin, ulog")
         ->capture_default_str();
     sub.add_option("--format", a->format, "Table format: md, csv or json (json is what merge reads)")->capture_default_str();
-    return [a]() { return run(*a); };
+    return [a, output]() {
+        a->output_given = output->count() > 0;
+        return run(*a);
+    };
 }
 
 const RegisterCommand reg{{"batch", "Replay many logs in parallel into one table (shards, goldens, packs)", setup}};

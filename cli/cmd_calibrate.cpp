@@ -60,7 +60,8 @@ std::function<int()> setup(CLI::App& sub) {
         const char* const command = "battsim calibrate";
         std::vector<host::NamedPath> inputs{{"-c/--config", a->input.config, true}};
         add_named(inputs, "a log", a->logs);
-        if (int rc = check_outputs(command, inputs, {{"-o/--output", a->output, true}})) return rc;
+        const std::vector<host::NamedPath> outputs{printed_output("--json", a->json), text_output("-o/--output", a->output, true)};
+        if (int rc = check_outputs(command, inputs, outputs)) return rc;
         if (int rc = run_job(command, [&] { c = host::calibrate_slow_share(a->logs, opt, a->options); })) return rc;
         if (c.logs.empty()) {
             std::cerr << command << ": no log has a rest after a flight to read the capacity from (" << a->logs.size()
@@ -77,7 +78,7 @@ std::function<int()> setup(CLI::App& sub) {
                 return rc;
         }
         if (a->json) std::cout << host::json_text(host::to_json(c), 2) << "\n";
-        else print_table(c, std::cout);
+        else print_table(c, people_out(outputs));
         return kExitOk;
     };
 }

@@ -55,13 +55,15 @@ std::function<int()> setup(CLI::App& sub) {
         opt.alpha = a->alpha;
         opt.decimate = a->decimate;
         if (int rc = check_plot_option("battsim discharge", a->plot)) return rc;
-        if (int rc = check_outputs("battsim discharge", {{"the log", a->log}, {"-c/--config", a->input.config, true}},
-                                   {{"--table", a->table},
-                                    {"--curve", a->curve},
-                                    {"--summary", a->summary},
-                                    {"--plot", a->plot},
-                                    {"--config-out", a->config_out, true}}))
+        const std::vector<host::NamedPath> outputs{printed_output("--json", a->json),
+                                                   text_output("--table", a->table),
+                                                   text_output("--curve", a->curve),
+                                                   text_output("--summary", a->summary),
+                                                   {"--plot", a->plot},
+                                                   text_output("--config-out", a->config_out, true)};
+        if (int rc = check_outputs("battsim discharge", {{"the log", a->log}, {"-c/--config", a->input.config, true}}, outputs))
             return rc;
+        std::ostream& people = people_out(outputs);
         host::discharge::DischargeResult result;
         try {
             result = host::discharge::process_discharge(a->log, opt);
@@ -109,22 +111,22 @@ std::function<int()> setup(CLI::App& sub) {
             std::cout << host::json_text(summary, 2) << "\n";
             return kExitOk;
         }
-        std::cout << a->log << ": " << result.samples_kept << " of " << result.samples_read << " samples above "
-                  << opt.min_voltage_v << " V, " << summary["duration_s"] << " s\n";
-        std::cout << "  " << summary["capacity_mah"] << " mAh, " << summary["energy_mwh"] << " mWh at a mean "
-                  << summary["mean_current_a"] << " A; " << summary["first_voltage_v"] << " -> " << summary["last_voltage_v"] << " V\n";
+        people << a->log << ": " << result.samples_kept << " of " << result.samples_read << " samples above "
+               << opt.min_voltage_v << " V, " << summary["duration_s"] << " s\n";
+        people << "  " << summary["capacity_mah"] << " mAh, " << summary["energy_mwh"] << " mWh at a mean "
+               << summary["mean_current_a"] << " A; " << summary["first_voltage_v"] << " -> " << summary["last_voltage_v"] << " V\n";
         if (with_ocv) {
-            std::cout << "  OCV table (" << ocv.cell_voltage_v.size() << " points per cell, SOC 0 -> 1): "
-                      << summary["ocv_table"]["cell_voltage_v"].front() << " ... " << summary["ocv_table"]["cell_voltage_v"].back()
-                      << " V\n";
+            people << "  OCV table (" << ocv.cell_voltage_v.size() << " points per cell, SOC 0 -> 1): "
+                   << summary["ocv_table"]["cell_voltage_v"].front() << " ... " << summary["ocv_table"]["cell_voltage_v"].back()
+                   << " V\n";
         }
         if (result.zones.found) {
-            std::cout << "  exponential zone ends at " << summary["zones"]["exponential_end"]["capacity_ah"] << " Ah, "
-                      << summary["zones"]["exponential_end"]["voltage_v"] << " V; nominal zone ends at "
-                      << summary["zones"]["nominal_end"]["capacity_ah"] << " Ah, " << summary["zones"]["nominal_end"]["voltage_v"]
-                      << " V\n";
+            people << "  exponential zone ends at " << summary["zones"]["exponential_end"]["capacity_ah"] << " Ah, "
+                   << summary["zones"]["exponential_end"]["voltage_v"] << " V; nominal zone ends at "
+                   << summary["zones"]["nominal_end"]["capacity_ah"] << " Ah, " << summary["zones"]["nominal_end"]["voltage_v"]
+                   << " V\n";
         } else {
-            std::cout << "  zones not found: " << result.zones.note << "\n";
+            people << "  zones not found: " << result.zones.note << "\n";
         }
         return kExitOk;
     };

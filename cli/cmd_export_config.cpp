@@ -23,7 +23,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--estimator", a->estimator, "Estimator compiled in: reference or joint; default from the config")
         ->check(CLI::IsMember({"reference", "joint"}));
     return [a]() -> int {
-        if (int rc = check_outputs("battsim export-config", {{"--firmware", a->firmware}}, {{"-o/--output", a->output}}))
+        if (int rc = check_outputs("battsim export-config", {{"--firmware", a->firmware}}, {text_output("-o/--output", a->output)}))
             return rc;
         try {
             for (const std::string& note : host::export_firmware_config(a->firmware, a->output, a->estimator))

@@ -1,4 +1,5 @@
 // battsim fit LOG...: least-squares fit of the model parameters along discharges and flights.
+#include <filesystem>
 #include <iostream>
 
 #include "command.h"
@@ -49,12 +50,7 @@ std::function<int()> setup(CLI::App& sub) {
         const char* me = "battsim fit";
         host::fit::FitJob job;
         if (int rc = resolve_input(a->common.input, job.reader, job.config, me)) return rc;
-        std::vector<host::NamedPath> inputs{{"-c/--config", a->common.input.config, true}};
-        add_named(inputs, "a log", a->logs);
-        add_named(inputs, "a --test log", a->tests);
-        if (int rc = check_outputs(me, inputs,
-                                   {{"-o/--output", a->output, true}, {"--report", a->common.report}, {"--plot", a->common.plot}}))
-            return rc;
+        if (int rc = check_plot_option(me, a->common.plot)) return rc;
         job.logs = a->logs;
         job.options.max_capacity_factor = a->common.max_capacity_factor;
         job.test_logs = a->tests;
@@ -63,6 +59,23 @@ std::function<int()> setup(CLI::App& sub) {
         job.output_dir = a->output_dir;
         job.name = a->name;
         job.plot_path = a->common.plot;
+        std::vector<host::NamedPath> inputs{{"-c/--config", a->common.input.config, true}};
+        add_named(inputs, "a log", a->logs);
+        add_named(inputs, "a --test log", a->tests);
+        std::vector<host::NamedPath> outputs{printed_output("--json", a->common.json),
+                                             text_output("-o/--output", a->output, true),
+                                             text_output("--report", a->common.report),
+                                             {"--plot", a->common.plot},
+                                             {"--output-dir", a->output_dir}};
+        // One config per log: none may land on a log or the config read (a log's stem is its
+        // name there), nor two logs of one stem on one file.
+        if (!a->output_dir.empty()) {
+            for (const std::string& log : a->logs) {
+                const std::string path = host::fit::per_log_config_path(job, log);
+                outputs.push_back({"--output-dir's " + std::filesystem::path(path).filename().string() + " (for " + log + ")", path});
+            }
+        }
+        if (int rc = check_outputs(me, inputs, outputs)) return rc;
         job.options.params = a->params;
         job.options.per_log_params = a->per_log;
         job.options.max_points_per_log = a->max_points;
@@ -76,7 +89,7 @@ std::function<int()> setup(CLI::App& sub) {
         });
         if (rc != kExitOk) return rc;
         return finish_report(me, report, a->common.report, a->common.json,
-                             [&](std::ostream& out) { host::fit::print_fit_brief(report, out); });
+                             [&](std::ostream& out) { host::fit::print_fit_brief(report, out); }, people_out(outputs));
     };
 }
 

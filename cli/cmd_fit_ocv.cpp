@@ -103,6 +103,7 @@ std::function<int()> setup(CLI::App& sub) {
         }
         if (int rc = resolve_input(a->input, reader, config, command)) return rc;
         std::vector<host::fit::OcvStitchLog> logs;
+        std::vector<host::BatchItem> items;  // from the manifest
         if (a->manifest.empty()) {
             for (const std::string& p : a->logs) logs.push_back({p, reader, false});
         } else {
@@ -111,7 +112,6 @@ std::function<int()> setup(CLI::App& sub) {
             host::BatchPlanRequest plan;
             plan.paths = a->logs;
             plan.manifest = a->manifest;
-            std::vector<host::BatchItem> items;
             if (int rc = run_job(command, [&] {
                     plan.command_line = host::settings_from_strings(setting_strings(a->input));
                     items = host::plan_batch(plan);
@@ -130,9 +130,15 @@ std::function<int()> setup(CLI::App& sub) {
         std::vector<host::NamedPath> inputs{{"-c/--config", a->input.config, true}, {"-m/--manifest", a->manifest}};
         for (const host::fit::OcvStitchLog& l : logs) inputs.push_back({"a log", l.path});
         add_named(inputs, "a --test log", a->test_logs);
-        if (int rc = check_outputs(command, inputs,
-                                   {{"-o/--output", a->output, true}, {"--report", a->report}, {"--plot", a->plot}}))
-            return rc;
+        // The configs the manifest names are inputs too; only the one fitted (the first
+        // log's, when -c is not given) may be written back over.
+        for (size_t k = 0; k < items.size(); ++k)
+            inputs.push_back({"the config of " + items[k].path, items[k].config_path, k == 0});
+        const std::vector<host::NamedPath> outputs{printed_output("--json", a->json),
+                                                   text_output("-o/--output", a->output, true),
+                                                   text_output("--report", a->report),
+                                                   {"--plot", a->plot}};
+        if (int rc = check_outputs(command, inputs, outputs)) return rc;
         if (a->test_every > 0)
             for (size_t k = 0; k < logs.size(); ++k) logs[k].test = k % a->test_every == 1 % a->test_every;
         for (const std::string& p : a->test_logs) logs.push_back({p, reader, true});
@@ -149,7 +155,8 @@ std::function<int()> setup(CLI::App& sub) {
         }
         if (!a->plot.empty())
             if (int rc = run_job(command, [&] { host::plot::plot_ocv_stitch(s, "battsim fit-ocv", a->plot); })) return rc;
-        return finish_report(command, host::fit::to_json(s), a->report, a->json, [&](std::ostream& os) { print_brief(s, os); });
+        return finish_report(command, host::fit::to_json(s), a->report, a->json, [&](std::ostream& os) { print_brief(s, os); },
+                             people_out(outputs));
     };
 }
 

@@ -50,6 +50,9 @@ std::function<int()> setup(CLI::App& sub) {
         } catch (const std::invalid_argument& e) {
             std::cerr << "battsim log: " << e.what() << "\n";
             return kExitUsage;
+        } catch (const host::serial::NotASerialDevice& e) {
+            std::cerr << "battsim log: --port " << e.what() << "\n";
+            return kExitUsage;
         } catch (const host::serial::HeaderMismatch& e) {
             std::cerr << "battsim log: " << e.what() << "\n";
             return kExitInputError;
@@ -63,7 +66,7 @@ std::function<int()> setup(CLI::App& sub) {
         if (stats.held_dropped > 0) std::cerr << ", " << stats.held_dropped << " lines lost waiting for a header";
         std::cerr << ")\n";
         if (stats.device_gone && stats.connections == 0) {
-            std::cerr << "battsim log: " << a->options.port << " never appeared\n";
+            std::cerr << "battsim log: " << a->options.port << " never appeared (expected a serial device, tty)\n";
             rc = kExitInputError;
         }
         return rc;

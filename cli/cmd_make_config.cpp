@@ -39,7 +39,7 @@ int list_keys(const MakeConfigArgs& a) {
 
 int run(const MakeConfigArgs& a) {
     const char* me = "battsim make-config";
-    if (int rc = check_outputs(me, {{"--from-log", a.from_log}}, {{"-o/--output", a.output}})) return rc;
+    if (int rc = check_outputs(me, {{"--from-log", a.from_log}}, {text_output("-o/--output", a.output)})) return rc;
     if (a.list_keys) {
         if (!a.from_log.empty() || a.cells > 0 || std::isfinite(a.capacity_mah) || std::isfinite(a.resistance_mohm) ||
             std::isfinite(a.cutoff_v) || std::isfinite(a.cutoff_delay_s) || !a.name.empty()) {

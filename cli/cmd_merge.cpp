@@ -16,6 +16,7 @@ struct MergeArgs {
     std::vector<std::string> tables;
     std::string format = "md";
     std::string output = "-";
+    bool output_given = false;
     std::string packs;
     std::string monitors;
 };
@@ -32,7 +33,9 @@ int run(const MergeArgs& a) {
     std::vector<host::NamedPath> inputs;
     add_named(inputs, "a table", a.tables);
     if (int rc = check_outputs("battsim merge", inputs,
-                               {{"-o/--output", a.output}, {"--packs", a.packs}, {"--monitors", a.monitors}}))
+                               {text_output(a.output_given ? "-o/--output" : "the table (standard output without -o)", a.output),
+                                text_output("--packs", a.packs),
+                                text_output("--monitors", a.monitors)}))
         return rc;
     nlohmann::json merged;
     try {
@@ -61,10 +64,13 @@ std::function<int()> setup(CLI::App& sub) {
     auto a = std::make_shared<MergeArgs>();
     sub.add_option("TABLES", a->tables, "Tables written by `battsim batch --shard K/N --format json`")->required();
     sub.add_option("--format", a->format, "Output format: md, csv or json")->capture_default_str();
-    sub.add_option("-o,--output", a->output, "Write the table here (atomically) instead of standard output");
-    sub.add_option("--packs", a->packs, "Also write the per-pack table here, in --format");
-    sub.add_option("--monitors", a->monitors, "Also write the per-monitor table here, in --format");
-    return [a]() { return run(*a); };
+    auto* output = sub.add_option("-o,--output", a->output, "Write the table here (atomically) instead of standard output");
+    sub.add_option("--packs", a->packs, "Also write the per-pack table here, in --format (\"-\" = standard output)");
+    sub.add_option("--monitors", a->monitors, "Also write the per-monitor table here, in --format (\"-\" = standard output)");
+    return [a, output]() {
+        a->output_given = output->count() > 0;
+        return run(*a);
+    };
 }
 
 const RegisterCommand reg{{"merge", "Join shard tables of `battsim batch` into the table of one run", setup}};

@@ -38,8 +38,8 @@ struct ReplayArgs {
 std::function<int()> setup(CLI::App& sub) {
     auto a = std::make_shared<ReplayArgs>();
     sub.add_option("LOG", a->log, "Log file to replay")->required();
-    sub.add_option("--series", a->series, "Write the per-sample series CSV here");
-    sub.add_option("--summary", a->summary, "Write the summary JSON here");
+    sub.add_option("--series", a->series, "Write the per-sample series CSV here (\"-\" = standard output)");
+    sub.add_option("--summary", a->summary, "Write the summary JSON here (\"-\" = standard output)");
     sub.add_option("--plot", a->plot,
                    "Plot measured and model voltage, capacity and resistance estimates, flight time and cell "
                    "voltages (.png or .svg)");
@@ -65,14 +65,18 @@ std::function<int()> setup(CLI::App& sub) {
         host::ReplayOptions opt;
         if (int rc = resolve_input(a->input, opt.reader, opt.config)) return rc;
         if (int rc = check_plot_option("battsim replay", a->plot)) return rc;
-        if (int rc = check_outputs("battsim replay", {{"the log", a->log}, {"-c/--config", a->input.config, true}},
-                                   {{"--series", a->series},
-                                    {"--summary", a->summary},
-                                    {"--plot", a->plot},
-                                    {"--mavlink", a->mavlink},
-                                    {"--tlog", a->tlog},
-                                    {"--config-out", a->config_out, true}}))
+        // The texts may go to standard output ("-"), one of them; the MAVLink stream, the
+        // tlog and the plot are binary (or drawn by gnuplot) and need a file.
+        const std::vector<host::NamedPath> outputs{printed_output("--json", a->json),
+                                                   text_output("--series", a->series),
+                                                   text_output("--summary", a->summary),
+                                                   {"--plot", a->plot},
+                                                   {"--mavlink", a->mavlink},
+                                                   {"--tlog", a->tlog},
+                                                   text_output("--config-out", a->config_out, true)};
+        if (int rc = check_outputs("battsim replay", {{"the log", a->log}, {"-c/--config", a->input.config, true}}, outputs))
             return rc;
+        std::ostream& people = people_out(outputs);
         opt.series_path = a->series;
         if (a->realtime_flag) opt.realtime_speed = a->realtime > 0 ? a->realtime : 1.0;
         nlohmann::json summary;
@@ -146,8 +150,8 @@ std::function<int()> setup(CLI::App& sub) {
         }
         if (a->json) std::cout << text;
         if (!a->json && a->summary.empty() && a->series.empty() && a->plot.empty() && !stream)
-            print_brief(summary, std::cout);
-        if (!a->json && summary.contains("charger_check")) print_charger_check(summary["charger_check"], std::cout);
+            print_brief(summary, people);
+        if (!a->json && summary.contains("charger_check")) print_charger_check(summary["charger_check"], people);
         if (refuse_config) {
             std::cerr << "battsim replay: --config-out: no correction found ("
                       << (check ? "the charger check suggests no gain, see its notes; " : "no --charged-mah; ")

@@ -45,9 +45,11 @@ std::function<int()> setup(CLI::App& sub) {
         if (int rc = resolve_input(a->common.input, job.reader, job.config, me)) return rc;
         std::vector<host::NamedPath> inputs{{"-c/--config", a->common.input.config, true}};
         add_named(inputs, "a log", a->logs);
-        if (int rc = check_outputs(me, inputs,
-                                   {{"-o/--output", a->output, true}, {"--report", a->common.report}, {"--plot", a->common.plot}}))
-            return rc;
+        const std::vector<host::NamedPath> outputs{printed_output("--json", a->common.json),
+                                                   text_output("-o/--output", a->output, true),
+                                                   text_output("--report", a->common.report),
+                                                   {"--plot", a->common.plot}};
+        if (int rc = check_outputs(me, inputs, outputs)) return rc;
         job.logs = a->logs;
         job.options.max_capacity_factor = a->common.max_capacity_factor;
         job.output_config = a->output;
@@ -69,7 +71,7 @@ std::function<int()> setup(CLI::App& sub) {
         });
         if (rc != kExitOk) return rc;
         return finish_report(me, j, a->common.report, a->common.json,
-                             [&](std::ostream& out) { host::residual::print_report(report, out); });
+                             [&](std::ostream& out) { host::residual::print_report(report, out); }, people_out(outputs));
     };
 }
 

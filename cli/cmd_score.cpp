@@ -59,7 +59,7 @@ std::function<int()> setup(CLI::App& sub) {
             inputs.push_back({"a scenario", s.source_path});
             if (!a->logs_dir.empty()) inputs.push_back({"--logs' " + s.name + ".csv", a->logs_dir + "/" + s.name + ".csv"});
         }
-        if (int rc = check_outputs("battsim score", inputs, {{"-o/--output", a->output}})) return rc;
+        if (int rc = check_outputs("battsim score", inputs, {text_output("-o/--output", a->output)})) return rc;
         for (host::sim::Scenario& s : scenarios) {
             if (a->log_format.empty()) continue;
             const std::string problem = host::sim::log_format_problem(a->log_format, s.pack.cells);

@@ -163,7 +163,7 @@ int run_job(const std::string& command, const std::function<void()>& job) {
 }
 
 int finish_report(const std::string& command, const nlohmann::json& report, const std::string& path, bool json,
-                  const std::function<void(std::ostream&)>& brief) {
+                  const std::function<void(std::ostream&)>& brief, std::ostream& people) {
     const std::string text = host::json_text(report, 2) + "\n";
     try {
         if (!path.empty()) host::write_file_atomic(path, text);
@@ -174,7 +174,7 @@ int finish_report(const std::string& command, const nlohmann::json& report, cons
     if (json) {
         std::cout << text;
     } else {
-        brief(std::cout);
+        brief(people);
     }
     return kExitOk;
 }
@@ -198,6 +198,20 @@ int check_outputs(const std::string& command, const std::vector<host::NamedPath>
         return kExitUsage;
     }
     return kExitOk;
+}
+
+host::NamedPath text_output(const std::string& what, const std::string& path, bool config) {
+    return {what, path, config, host::Dash::StandardOutput};
+}
+
+host::NamedPath printed_output(const std::string& flag, bool given) {
+    return text_output(flag, given ? "-" : "");
+}
+
+std::ostream& people_out(const std::vector<host::NamedPath>& outputs) {
+    for (const host::NamedPath& out : outputs)
+        if (out.path == "-") return std::cerr;
+    return std::cout;
 }
 
 void add_named(std::vector<host::NamedPath>& to, const std::string& what, const std::vector<std::string>& paths) {

@@ -56,9 +56,9 @@ host::LogSettingStrings setting_strings(const InputArgs& a);
 // bad input 3, a bad config 4, bad arguments 2, anything else (outputs) 5.
 int run_job(const std::string& command, const std::function<void()>& job);
 // Writes the report JSON to `path` (if given) atomically, then prints it (`json`) or the
-// brief; returns the exit code.
+// brief to `people`; returns the exit code.
 int finish_report(const std::string& command, const nlohmann::json& report, const std::string& path, bool json,
-                  const std::function<void(std::ostream&)>& brief);
+                  const std::function<void(std::ostream&)>& brief, std::ostream& people = std::cout);
 // kExitOk if `path` is empty or a plot name (.png, .svg); else says why, kExitUsage. Checked
 // before the work, so a typo does not cost a long run.
 int check_plot_option(const std::string& command, const std::string& path);
@@ -66,6 +66,14 @@ int check_plot_option(const std::string& command, const std::string& path);
 // then says which, prefixed with `command`, and returns kExitUsage. Called before the work.
 int check_outputs(const std::string& command, const std::vector<host::NamedPath>& inputs,
                   const std::vector<host::NamedPath>& outputs);
+// An output of text that "-" sends to standard output (a table, a CSV, a JSON document).
+host::NamedPath text_output(const std::string& what, const std::string& path, bool config = false);
+// A flag that prints a document on standard output (--json), as check_outputs' output "-":
+// a second output "-" beside it is refused.
+host::NamedPath printed_output(const std::string& flag, bool given);
+// Where the lines for people go: standard error when one of `outputs` is standard output
+// ("-"), so that they do not mix into it; else standard output.
+std::ostream& people_out(const std::vector<host::NamedPath>& outputs);
 // Appends `paths` to `to`, each named `what` in check_outputs' messages ("a log").
 void add_named(std::vector<host::NamedPath>& to, const std::string& what, const std::vector<std::string>& paths);
 // Human-readable few lines about a summary.

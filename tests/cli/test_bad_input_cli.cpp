@@ -222,3 +222,69 @@ TEST_CASE("simulate --out-dir makes the directory; make-config writes clean deci
     CHECK(j["battery"]["exponential_voltage_v"].dump() == "15.26");
     CHECK(m.out.find("00000000") == std::string::npos);
 }
+
+TEST_CASE("a CSV log with time_s and time_ms is refused until one is chosen (--time-col, a manifest's columns)", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string log = dir + "/two.csv";
+    // time_ms is not time_s x 1000 here: which one was read had changed the flight's length.
+    std::string text = "time_s,time_ms,voltage_v,current_a\n";
+    for (int k = 0; k < 600; ++k)
+        text += std::to_string(k) + "," + std::to_string(k * 500) + "," + std::to_string(16.6 - 0.001 * k) + "," + (k < 100 ? "0.3" : "12") + "\n";
+    clitest::write_file(log, text);
+    auto r = run("replay " + q(log) + " -c " + q(kConfig));
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains(log + ":1:2: columns \"time_s\" (field 1) and \"time_ms\" (field 2) both give the time; "
+                                            "expected one, or choose it with --time-col NAME (in a manifest, columns.time or time_col)"));
+    const auto s = clitest::run_json("replay " + q(log) + " -c " + q(kConfig) + " --time-col time_ms --json");
+    CHECK(s["duration_s"].get<double>() == Approx(299.5));
+    clitest::write_file(dir + "/m.csv", "path,time_col\ntwo.csv,time_s\n");
+    r = run("batch -m " + q(dir + "/m.csv") + " --no-progress --format json");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK(nlohmann::json::parse(r.out)["rows"][0]["status"] == "ok");
+}
+
+TEST_CASE("a log listed twice, in a manifest or on the command line, is refused naming both", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/logs/a.csv", clitest::read_file(kExample));
+    clitest::write_file(dir + "/logs/b.csv", clitest::read_file(kExample));
+    clitest::write_file(dir + "/m.csv", "path,pack\nlogs/a.csv,P\nlogs/b.csv,P\nlogs/a.csv,P\n");
+    auto r = run("batch -m " + q(dir + "/m.csv") + " -c " + q(kConfig) + " --no-progress");
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains(dir + "/m.csv:4: \"" + dir + "/logs/a.csv\" names the same log as \"" + dir +
+                                      "/logs/a.csv\" on line 2; list each log once"));
+    CHECK(r.out.empty());
+    r = run("batch " + q(dir + "/logs/a.csv") + " " + q(dir + "/logs/b.csv") + " " + q(dir + "/logs/./a.csv") + " -c " +
+            q(kConfig) + " --no-progress");
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains("battsim batch: \"" + dir + "/logs/./a.csv\" names the same log as \"" + dir + "/logs/a.csv\""));
+    // A directory and one of its files: the same log twice.
+    r = run("batch " + q(dir + "/logs") + " " + q(dir + "/logs/b.csv") + " -c " + q(kConfig) + " --no-progress");
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains("(from \"" + dir + "/logs\")"));
+    r = run("fit-ocv -m " + q(dir + "/m.csv") + " -c " + q(kConfig));
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("names the same log as"));
+}
+
+TEST_CASE("log --port names what it expected when the path is no serial device", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/file", "x\n");
+    std::filesystem::create_directory(dir + "/dir");
+    for (const auto& [port, is] : {std::pair<std::string, std::string>{dir + "/file", "it is a regular file"},
+                                   {dir + "/dir", "it is a directory"},
+                                   {"/dev/null", "a character device that is no terminal"}}) {
+        const auto r = run("log --port " + q(port) + " --out " + q(dir + "/out.csv") + " --max-wait 1");
+        INFO(r.err);
+        CHECK(r.exit_code == 2);
+        CHECK_THAT(r.err, Catch::Contains("battsim log: --port " + port + ": not a serial device (tty): " + is +
+                                          "; expected the serial port of the battsim firmware, e.g. /dev/ttyUSB0"));
+        // Refused before the output is made (a character device shows itself only when opened).
+        if (port != "/dev/null") CHECK_FALSE(std::filesystem::exists(dir + "/out.csv"));
+    }
+    // A path not there yet is waited for (a device plugged in later), and said so.
+    const auto r = run("log --port " + q(dir + "/none") + " --out " + q(dir + "/n.csv") + " --max-wait 0.2");
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("waiting for " + dir + "/none to appear (a serial device, tty)"));
+    CHECK_THAT(r.err, Catch::Contains("never appeared (expected a serial device, tty)"));
+}

@@ -1,9 +1,13 @@
 // Output safety as a user meets it: outputs through symlinks and to devices, an output
-// naming an input or another output refused before any work, no temporaries after Ctrl-C.
+// naming an input or another output refused before any work, "-" as standard output, no
+// temporaries after Ctrl-C.
 #include <catch2/catch.hpp>
+#include <fcntl.h>
 #include <nlohmann/json.hpp>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -173,4 +177,136 @@ TEST_CASE("Ctrl-C during a replay leaves no temporary file", "[cli][paths]") {
     CHECK(temporaries(dir).empty());
     CHECK_FALSE(fs::exists(dir + "/rt.csv"));
     CHECK_FALSE(fs::exists(dir + "/rt.json"));
+}
+
+TEST_CASE("\"-\" is standard output for a text output, one at a time; refused for the others", "[cli][paths]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string log = dir + "/log.csv";
+    clitest::write_file(log, testsupport::raw_flight(12, 0.001));
+    // Run from `dir`, so that a file named "-" made by mistake would show there.
+    const auto in_dir = [&](const std::string& args) {
+        return testsupport::run_program("sh", "-c " + q("cd \"" + dir + "\" && \"" + BATTSIM_BINARY + "\" " + args));
+    };
+    clitest::Result r = in_dir("replay log.csv --series - --charged-mah 400");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.out.compare(0, 17, "time_s,voltage_v,") == 0);
+    CHECK(r.out.find("charger check") == std::string::npos);  // the line for people goes to stderr
+    CHECK_THAT(r.err, Catch::Contains("charger check: counted"));
+    r = in_dir("replay log.csv --summary -");
+    REQUIRE(r.exit_code == 0);
+    CHECK(nlohmann::json::parse(r.out)["schema"] == "battsim.summary");
+    r = in_dir("discharge log.csv --table -");
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.out.compare(0, 23, "voltage_v,consumed_mah,") == 0);
+    CHECK(r.out.find("samples above") == std::string::npos);
+    CHECK_THAT(r.err, Catch::Contains("samples above"));
+    r = in_dir("batch log.csv --no-progress --format csv -o t.csv --packs -");
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.out.compare(0, 5, "pack,") == 0);
+    CHECK_FALSE(fs::exists(dir + "/-"));
+
+    const std::vector<std::string> kept{log};
+    require_refused("replay " + q(log) + " --series - --json", "battsim replay: --series and --json would both write to standard output", kept);
+    require_refused("replay " + q(log) + " --series - --summary -", "--summary and --series would both write to standard output", kept);
+    require_refused("replay " + q(log) + " --tlog -", "battsim replay: --tlog: expected a path, found \"-\" (this output cannot go to standard output)", kept);
+    require_refused("replay " + q(log) + " --mavlink -", "--mavlink: expected a path, found \"-\"", kept);
+    require_refused("replay " + q(log) + " --plot -", "expected a name ending in .png or .svg", kept);
+    require_refused("discharge " + q(log) + " --table - --curve -", "--curve and --table would both write to standard output", kept);
+    require_refused("batch " + q(log) + " --packs -", "--packs and the table (standard output without -o) would both write", kept);
+    require_refused("batch " + q(log) + " -o - --monitors -", "--monitors and -o/--output would both write", kept);
+    require_refused("batch " + q(log) + " --out -", "--out: expected a path, found \"-\"", kept);
+    require_refused("fit " + q(log) + " --output-dir -", "battsim fit: --output-dir: expected a path", kept);
+    require_refused("fit " + q(log) + " --report - --json", "--report and --json would both write", kept);
+    require_refused("residual " + q(log) + " -o - --json", "-o/--output and --json would both write", kept);
+    require_refused("fit-ocv " + q(log) + " --report - -o -", "--report and -o/--output would both write", kept);
+    require_refused("calibrate " + q(log) + " -o - --json", "-o/--output and --json would both write", kept);
+    require_refused("simulate " + q(kScenario) + " -o -", "battsim simulate: -o/--output: expected a path", kept);
+    require_refused("simulate " + q(kScenario) + " --out-dir -", "--out-dir: expected a path", kept);
+    require_refused("log --port " + q(dir + "/none") + " --out -", "battsim log: --out: expected a path", kept);
+    CHECK_FALSE(fs::exists(dir + "/-"));
+}
+
+TEST_CASE("fit --output-dir's per-log configs and a manifest's configs are checked like any output", "[cli][paths]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string a = dir + "/a.csv", b = dir + "/b/a.csv", cfg = dir + "/pack.json", other = dir + "/other.json";
+    clitest::write_file(a, testsupport::raw_flight(12, 0.001));
+    clitest::write_file(b, testsupport::raw_flight(14, 0.002));
+    clitest::write_file(dir + "/fitted-a.json", clitest::read_file(a));  // a log named like a per-log config
+    clitest::write_file(cfg, read_file(kConfig));
+    clitest::write_file(other, read_file(kConfig));
+    clitest::write_file(dir + "/x-a.json", read_file(kConfig));
+    const std::vector<std::string> kept{a, b, dir + "/fitted-a.json", cfg, other, dir + "/x-a.json"};
+    require_refused("fit " + q(a) + " " + q(dir + "/fitted-a.json") + " --output-dir " + q(dir),
+                    "battsim fit: --output-dir's fitted-a.json (for " + a + ") and a log name the same file: " + dir + "/fitted-a.json",
+                    kept);
+    require_refused("fit " + q(a) + " -c " + q(dir + "/x-a.json") + " --name x --output-dir " + q(dir),
+                    "--output-dir's x-a.json (for " + a + ") and -c/--config name the same file", kept);
+    require_refused("fit " + q(a) + " " + q(b) + " --output-dir " + q(dir + "/out"),
+                    "--output-dir's fitted-a.json (for " + b + ") and --output-dir's fitted-a.json (for " + a + ") name the same file",
+                    kept);
+    // A manifest's configs: no output may land on one; fit-ocv may write back over the one it fits.
+    clitest::write_file(dir + "/m.csv", "path,config\na.csv,pack.json\nb/a.csv,other.json\n");
+    require_refused("batch -m " + q(dir + "/m.csv") + " --no-progress -o " + q(other),
+                    "battsim batch: -o/--output and the config of " + b + " name the same file: " + other, kept);
+    require_refused("batch " + q(a) + " -c " + q(cfg) + " --no-progress --packs " + q(cfg),
+                    "--packs and the config of " + a + " name the same file", kept);
+    require_refused("fit-ocv -m " + q(dir + "/m.csv") + " -o " + q(other),
+                    "battsim fit-ocv: -o/--output and the config of " + b + " name the same file: " + other, kept);
+    const clitest::Result back = run("fit-ocv -m " + q(dir + "/m.csv") + " -o " + q(cfg));
+    CHECK(back.err.find("name the same file") == std::string::npos);
+    CHECK(back.exit_code != 2);
+}
+
+namespace {
+// Runs battsim with `args` (no shell) and `env` added, its output to /dev/null; sends it
+// `sig` once `ready` exists (or after 20 s); returns the signal it died of, 0 if none.
+int signalled_when_ready(const std::vector<std::string>& args, const std::vector<std::string>& env, const std::string& ready,
+                         int sig) {
+    const pid_t pid = ::fork();
+    REQUIRE(pid >= 0);
+    if (pid == 0) {
+        for (const std::string& e : env) ::putenv(const_cast<char*>(e.c_str()));
+        const int null = ::open("/dev/null", O_WRONLY);
+        ::dup2(null, 1);
+        ::dup2(null, 2);
+        std::vector<char*> argv{const_cast<char*>(BATTSIM_BINARY)};
+        for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+        argv.push_back(nullptr);
+        ::execv(BATTSIM_BINARY, argv.data());
+        ::_exit(127);
+    }
+    for (int k = 0; k < 400 && !fs::exists(ready); ++k) ::usleep(50000);
+    ::kill(pid, sig);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return WIFSIGNALED(status) ? WTERMSIG(status) : 0;
+}
+}  // namespace
+
+TEST_CASE("Ctrl-C while gnuplot draws leaves neither its message file nor the plot's temporary", "[cli][paths]") {
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/log.csv", testsupport::raw_flight(12, 0.001));
+    fs::create_directories(dir + "/bin");
+    fs::create_directories(dir + "/tmp");
+    // A gnuplot that notes where its messages go, then hangs (deaf to the signal) until its
+    // input closes and a little longer.
+    clitest::write_file(dir + "/bin/gnuplot", "#!/bin/sh\ntrap '' INT TERM\nmessages=$(readlink /proc/$$/fd/1)\necho \"$messages\" > " +
+                                                  q(dir + "/where.tmp") + "\nmv " + q(dir + "/where.tmp") + " " + q(dir + "/where") +
+                                                  "\ncat > /dev/null\nsleep 3\n");
+    fs::permissions(dir + "/bin/gnuplot", fs::perms::owner_all);
+    const std::string path = std::string("PATH=") + dir + "/bin:" + std::getenv("PATH");
+    const std::string tmpdir = "TMPDIR=" + dir + "/tmp";
+    for (int sig : {SIGINT, SIGTERM}) {
+        fs::remove(dir + "/where");
+        CHECK(signalled_when_ready({"replay", dir + "/log.csv", "--plot", dir + "/p.png"}, {path, tmpdir}, dir + "/where", sig) == sig);
+        REQUIRE(fs::exists(dir + "/where"));
+        std::string messages = read_file(dir + "/where");
+        messages = messages.substr(0, messages.find('\n'));
+        CHECK(messages.rfind(dir + "/tmp/battsim-gnuplot-", 0) == 0);  // it was there...
+        CHECK_FALSE(fs::exists(messages));                             // ...and is gone
+        CHECK(fs::is_empty(dir + "/tmp"));
+        CHECK(temporaries(dir).empty());
+        CHECK_FALSE(fs::exists(dir + "/p.png"));
+    }
 }

@@ -71,9 +71,16 @@ TEST_CASE("directories, patterns and files expand in a fixed order", "[batch]") 
     CHECK(paths_of(dir) == std::vector<std::string>{"9.csv", "10.csv", "100.csv", "notes.txt"});
     for (const auto& e : dir) CHECK(e.error.empty());
 
-    const auto glob = expand_inputs({t.path() + "/*.csv", t.path("9.csv"), t.path("sub/1.csv")});
-    // The explicit 9.csv is a duplicate of the pattern's and is kept once, at its first place.
+    const auto glob = expand_inputs({t.path() + "/*.csv", t.path("sub/1.csv")});
     CHECK(paths_of(glob) == std::vector<std::string>{"9.csv", "10.csv", "100.csv", "1.csv"});
+    // A file met twice, however spelt or reached, is refused: it would count twice.
+    CHECK_THROWS_WITH(expand_inputs({t.path() + "/*.csv", t.path("sub/../9.csv")}),
+                      "\"" + t.path("sub/../9.csv") + "\" names the same log as \"" + t.path("9.csv") + "\" (from \"" +
+                          t.path() + "/*.csv\"); list each log once (twice, it would count twice in the per-pack and "
+                                     "per-monitor tables)");
+    fs::create_symlink(t.path("10.csv"), t.path("link.csv"));
+    CHECK_THROWS_AS(expand_inputs({t.path("10.csv"), t.path("link.csv")}), std::invalid_argument);
+    CHECK_THROWS_AS(expand_inputs({t.path("gone.csv"), t.path("sub/../gone.csv")}), std::invalid_argument);
 
     const auto none = expand_inputs({t.path() + "/*.bin", t.path("missing.csv")});
     REQUIRE(none.size() == 2);
@@ -332,6 +339,32 @@ TEST_CASE("plan: manifest order, settings per file, paths matched to entries", "
       "logs": [{"path": "logs/1.csv", "config": "missing.json"}]})");
     req.manifest = badcfg;
     CHECK_THROWS_AS(plan_batch(req), ConfigError);
+}
+
+TEST_CASE("plan: a log listed twice is refused, naming both places", "[batch]") {
+    TempDir t;
+    t.write("logs/1.csv", raw_flight(20, 0.001));
+    t.write("logs/2.csv", raw_flight(25, 0.001));
+    BatchPlanRequest req;
+    // CSV: the same file by two names (a hard link), on lines 2 and 4.
+    fs::create_hard_link(t.path("logs/1.csv"), t.path("hard.csv"));
+    req.manifest = t.write("m.csv", "path,pack\nlogs/1.csv,A\nlogs/2.csv,A\nhard.csv,A\n");
+    CHECK(input_error([&] { plan_batch(req); }) ==
+          req.manifest + ":4: \"" + t.path("hard.csv") + "\" names the same log as \"" + t.path("logs/1.csv") +
+              "\" on line 2; list each log once (twice, it would count twice in the per-pack and per-monitor tables)");
+    // JSON: a file that a pattern of another entry already holds.
+    req.manifest = t.write("m.json", R"({"schema": "battsim.manifest",
+      "logs": [{"path": "logs/*.csv"}, {"path": "logs/2.csv", "pack": "B"}]})");
+    CHECK(input_error([&] { plan_batch(req); }) ==
+          req.manifest + ":2:40: \"" + t.path("logs/2.csv") + "\" names the same log as \"" + t.path("logs/2.csv") +
+              "\" (from \"" + t.path("logs/*.csv") + "\") on line 2, column 16; list each log once (twice, it would "
+              "count twice in the per-pack and per-monitor tables)");
+    // Paths on the command line: the same, as a usage error.
+    req = BatchPlanRequest();
+    req.paths = {t.path("logs/1.csv"), t.path("logs/2.csv"), t.path("logs/../logs/1.csv")};
+    CHECK_THROWS_AS(plan_batch(req), std::invalid_argument);
+    req.paths.pop_back();
+    CHECK(plan_batch(req).size() == 2);
 }
 
 // ---------------------------------------------------------------------------------------

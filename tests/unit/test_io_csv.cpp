@@ -378,6 +378,25 @@ TEST_CASE("bad input: duplicate column, unclosed quote, bare CR, cell gap, long 
     CHECK(read_error(l) == l + ":2: line is longer than 1048576 bytes; expected a text log with one record per line");
 }
 
+TEST_CASE("bad input: two columns of one quantity by the default names need the choice mapped", "[io]") {
+    TempDir t;
+    const std::string p = t.write("two.csv", "time_s,voltage_v,time_ms,current_a\n0,16.5,0,1\n1,16.4,1000,1\n");
+    CHECK(read_error(p) == p + ":1:3: columns \"time_s\" (field 1) and \"time_ms\" (field 3) both give the time; "
+                               "expected one, or choose it with --time-col NAME (in a manifest, columns.time or time_col)");
+    ReaderOptions opt;
+    opt.columns.time = "time_ms";
+    const auto s = read_all(p, opt);
+    REQUIRE(s.size() == 2);
+    CHECK(s[1].time_us == 1000000u);
+    const std::string c = t.write("amps.csv", "time_s,voltage_v,current_ma,current_a\n0,16.5,1000,2\n");
+    CHECK(read_error(c) == c + ":1:4: columns \"current_ma\" (field 3) and \"current_a\" (field 4) both give the "
+                               "current; expected one, or choose it with --current-col NAME (in a manifest, "
+                               "columns.current or current_col)");
+    opt = ReaderOptions();
+    opt.columns.current = "current_a";
+    CHECK(read_all(c, opt)[0].current_a == 2.0f);
+}
+
 // ---------------------------------------------------------------------------------------
 // Headered CSV
 

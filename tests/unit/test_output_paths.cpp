@@ -12,6 +12,7 @@
 
 using battsim::host::AtomicFile;
 using battsim::host::check_output_paths;
+using battsim::host::Dash;
 using battsim::host::same_output_file;
 using battsim::host::write_file_atomic;
 
@@ -80,9 +81,34 @@ TEST_CASE("check_output_paths names the two options; a config may be written bac
           "--report and --config-out name the same file: " + cfg);
     // A config written over a log is no in-place update.
     CHECK_FALSE(refusal({{"the log", log}}, {{"--config-out", log, true}}).empty());
-    CHECK(refusal({{"the log", log}, {"-c/--config", ""}}, {{"-o/--output", "-"}, {"--packs", "-"}, {"--plot", ""}}).empty());
+    CHECK(refusal({{"the log", log}, {"-c/--config", ""}}, {{"-o/--output", "-", false, Dash::StandardOutput}, {"--plot", ""}}).empty());
     // Inputs may repeat (a log listed twice); /dev/null twice as an output destroys nothing.
     CHECK(refusal({{"a log", log}, {"a log", log}}, {{"-o", "/dev/null"}, {"--packs", "/dev/null"}}).empty());
+}
+
+TEST_CASE("\"-\": standard output for one text output, refused for the others", "[output_paths]") {
+    const auto text = [](const std::string& what, const std::string& path) {
+        return battsim::host::NamedPath{what, path, false, Dash::StandardOutput};
+    };
+    CHECK(refusal({}, {text("--json", ""), text("--series", "-"), {"--tlog", "t.tlog"}}).empty());
+    CHECK(refusal({}, {text("--json", "-"), text("--series", "-")}) ==
+          "--series and --json would both write to standard output; at most one output may be \"-\"");
+    CHECK(refusal({}, {text("--series", ""), {"--tlog", "-"}}) ==
+          "--tlog: expected a path, found \"-\" (this output cannot go to standard output)");
+}
+
+TEST_CASE("ScratchFile: an empty file of its own in the temporary directory, gone with the object", "[output_paths]") {
+    std::string path;
+    {
+        const battsim::host::ScratchFile a("battsim-scratch-"), b("battsim-scratch-");
+        path = a.path();
+        CHECK(a.path() != b.path());
+        CHECK(fs::equivalent(fs::path(path).parent_path(), fs::temp_directory_path()));
+        CHECK(fs::path(path).filename().string().rfind("battsim-scratch-", 0) == 0);
+        CHECK(fs::is_regular_file(path));
+        CHECK(fs::file_size(path) == 0);
+    }
+    CHECK_FALSE(fs::exists(path));
 }
 
 TEST_CASE("AtomicFile writes through a symlink and keeps it; writes a device straight", "[output_paths]") {

@@ -43,8 +43,26 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
     // Each manifest entry expanded (directories, patterns) with its layered settings.
     std::vector<Planned> from_manifest;
     if (manifest) {
+        // Where each file was first listed: a log listed twice would count twice in its
+        // pack's and its monitor's rows, and which entry's settings hold would be a guess.
+        std::map<std::string, std::pair<const ManifestEntry*, ExpandedPath>> listed;
+        const auto place = [](const ManifestEntry& e) {
+            return "line " + std::to_string(e.line) + (e.column > 0 ? ", column " + std::to_string(e.column) : "");
+        };
         for (const ManifestEntry& e : manifest->logs) {
-            const std::vector<ExpandedPath> files = expand_inputs({e.path});
+            std::vector<ExpandedPath> files;
+            try {
+                files = expand_inputs({e.path});
+            } catch (const std::invalid_argument& why) {
+                throw InputError(manifest->path, e.line, e.column, why.what());
+            }
+            for (const ExpandedPath& f : files) {
+                if (!f.error.empty()) continue;
+                const auto [it, fresh] = listed.emplace(log_file_key(f.path), std::make_pair(&e, f));
+                if (!fresh)
+                    throw InputError(manifest->path, e.line, e.column,
+                                     listed_twice(f, it->second.second, "on " + place(*it->second.first)));
+            }
             if (e.settings.charged_mah && files.size() != 1) {
                 throw InputError(manifest->path, e.line, e.column,
                                  "\"charged_mah\" is the charger's count after one log, but \"" + e.path + "\" names " +
@@ -92,6 +110,7 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
         item.monitor = p.settings.monitor ? *p.settings.monitor : std::string();
         item.charged_mah = p.settings.charged_mah ? *p.settings.charged_mah : 0.0;
         item.replay.reader = p.settings.reader_options();
+        item.config_path = p.settings.config ? *p.settings.config : std::string();
         if (p.settings.config) {
             auto it = configs.find(*p.settings.config);
             if (it == configs.end()) it = configs.emplace(*p.settings.config, load_config_file(*p.settings.config)).first;

@@ -26,6 +26,7 @@ struct BatchItem {
     std::string monitor;     // empty = none
     double charged_mah = 0;  // the charger's count after this log (0 = none): `charger_check`
     std::string error;       // non-empty: failed before replay (a pattern that matched nothing)
+    std::string config_path; // the config file read (empty = the built-in one), an input of the run
     ReplayOptions replay;    // reader settings and the loaded config
 };
 
@@ -38,7 +39,8 @@ struct BatchPlanRequest {
 // The full ordered list. With a manifest and no paths: the manifest's logs in its order
 // (directories and patterns in entries expanded in place). With paths: the expanded
 // paths, each taking the settings of the manifest entry naming the same file (or the
-// manifest's defaults). Throws InputError (manifest) or ConfigError (a config file).
+// manifest's defaults). Throws InputError (manifest; a log it lists twice, by any name,
+// included), ConfigError (a config file) or std::invalid_argument (a log the paths name twice).
 std::vector<BatchItem> plan_batch(const BatchPlanRequest& request);
 
 // Identifies the full list (paths, labels, packs, configs) so merge can tell shards of

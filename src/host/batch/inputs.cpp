@@ -1,11 +1,12 @@
 #include "host/batch/inputs.h"
 
 #include <glob.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
-#include <set>
+#include <map>
 #include <stdexcept>
 #include <system_error>
 
@@ -89,13 +90,31 @@ std::vector<std::string> glob_paths(const std::string& pattern) {
 
 bool is_glob_pattern(const std::string& s) { return s.find_first_of("*?[") != std::string::npos; }
 
+std::string log_file_key(const std::string& path) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0) return "i" + std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino);
+    std::error_code ec;
+    const fs::path resolved = fs::weakly_canonical(path, ec);
+    return "p" + (ec ? fs::path(path).lexically_normal() : resolved).string();
+}
+
+std::string listed_twice(const ExpandedPath& again, const ExpandedPath& first, const std::string& where) {
+    const auto named = [](const ExpandedPath& e) {
+        const std::string path = "\"" + e.path + "\"";
+        return e.argument == e.path ? path : path + " (from \"" + e.argument + "\")";
+    };
+    return named(again) + " names the same log as " + named(first) + (where.empty() ? "" : " " + where) +
+           "; list each log once (twice, it would count twice in the per-pack and per-monitor tables)";
+}
+
 std::vector<ExpandedPath> expand_inputs(const std::vector<std::string>& arguments) {
     std::vector<ExpandedPath> out;
-    std::set<std::string> seen;
+    std::map<std::string, size_t> seen;  // file key -> its entry in `out`
     auto add = [&](const std::string& path, const std::string& arg) {
-        const std::string key = fs::path(path).lexically_normal().string();
-        if (!seen.insert(key).second) return;
-        out.push_back({path, arg, ""});
+        const ExpandedPath e{path, arg, ""};
+        const auto [it, fresh] = seen.emplace(log_file_key(path), out.size());
+        if (!fresh) throw std::invalid_argument(listed_twice(e, out[it->second]));
+        out.push_back(e);
     };
     for (const std::string& arg : arguments) {
         if (is_directory(arg)) {

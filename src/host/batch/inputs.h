@@ -16,9 +16,20 @@ struct ExpandedPath {
 };
 
 // In argument order; a directory gives its regular, non-hidden files (not recursive), a
-// pattern (*, ?, [ and no such file) its matches; both sorted by natural_less. An argument that yields nothing gives one entry with `error` set, so it shows up
-// as a failed row instead of vanishing. A path met twice is kept at its first place.
+// pattern (*, ?, [ and no such file) its matches; both sorted by natural_less. An argument
+// that yields nothing gives one entry with `error` set, so it shows up as a failed row
+// instead of vanishing. A file met twice, by any name (log_file_key), throws
+// std::invalid_argument naming both: listed twice, a log would count twice in the per-pack
+// and per-monitor tables.
 std::vector<ExpandedPath> expand_inputs(const std::vector<std::string>& arguments);
+
+// Equal for two names of one file: an existing file by device and inode (symlinks and hard
+// links included), another by its path made canonical (std::filesystem::weakly_canonical).
+std::string log_file_key(const std::string& path);
+
+// Why `again` is refused: it names the same log as `first` (listed `where`, e.g. "on line 2",
+// or "" to say nothing more); each named as given, with the argument it came from.
+std::string listed_twice(const ExpandedPath& again, const ExpandedPath& first, const std::string& where = "");
 
 // Digit runs compare as numbers ("9.csv" < "10.csv"), everything else by bytes; no
 // locale. Ties such as "01"/"1" fall back to byte order, so the order is total.

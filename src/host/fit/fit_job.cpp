@@ -80,6 +80,10 @@ std::vector<std::string> enable_extension(ModelSpec& s, const std::string& what)
                                 "\"; expected rc, temperature, thermal, hysteresis, ocv, sensor or timing");
 }
 
+std::string per_log_config_path(const FitJob& job, const std::string& log) {
+    return job.output_dir + "/" + (job.name.empty() ? std::string("fitted") : job.name) + "-" + trace_label(log) + ".json";
+}
+
 nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
     if (job.logs.empty()) throw std::invalid_argument("no logs to fit");
     std::vector<Trace> traces;
@@ -164,7 +168,7 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
     if (!job.output_dir.empty()) {
         for (size_t t = 0; t < traces.size(); ++t) {
             const std::string name = (job.name.empty() ? std::string("fitted") : job.name) + "-" + traces[t].label;
-            const std::string path = job.output_dir + "/" + name + ".json";
+            const std::string path = per_log_config_path(job, traces[t].path);
             write_file_atomic(path, json_text(config_to_json(make_config(result.specs[t], name)), 2) + "\n");
             written.push_back(path);
         }

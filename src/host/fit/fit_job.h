@@ -39,6 +39,10 @@ struct FitJob {
     std::string plot_path;              // measured vs model per log, .png or .svg
 };
 
+// Where `job.output_dir` takes the config fitted to `log`: DIR/<name, else "fitted">-<log's
+// label>.json. The CLI checks these against the inputs before the fit.
+std::string per_log_config_path(const FitJob& job, const std::string& log);
+
 // Runs the job; returns the report (schema battsim.fit). Throws InputError (logs),
 // std::invalid_argument (options) and std::runtime_error (outputs).
 nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress = nullptr);

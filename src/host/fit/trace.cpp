@@ -6,20 +6,18 @@ namespace battsim {
 namespace host {
 namespace fit {
 
-namespace {
-std::string stem(const std::string& path) {
+std::string trace_label(const std::string& path) {
     const size_t slash = path.find_last_of('/');
     std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
     const size_t dot = name.find_last_of('.');
     if (dot != std::string::npos && dot > 0) name = name.substr(0, dot);
     return name;
 }
-}  // namespace
 
 Trace load_trace(const std::string& path, const ReaderOptions& reader, const LoadedConfig& config) {
     Trace t;
     t.path = path;
-    t.label = stem(path);
+    t.label = trace_label(path);
     ReplayOptions options;
     options.reader = reader;
     options.config = config;

@@ -41,6 +41,9 @@ struct Trace {
     bool has_temperature = false;  // any valid sample carries one
 };
 
+// A trace's label: the file name of `path` without directory and extension.
+std::string trace_label(const std::string& path);
+
 // Replays `path` with `config` (the base model; extensions play no part in the monitor's
 // decisions) and keeps every sample. Throws InputError like replay_log().
 Trace load_trace(const std::string& path, const ReaderOptions& reader, const LoadedConfig& config);

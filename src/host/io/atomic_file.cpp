@@ -1,15 +1,18 @@
 #include "host/io/atomic_file.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <mutex>
+#include <random>
 #include <stdexcept>
 
 namespace battsim {
@@ -112,6 +115,12 @@ void install_temp_cleanup_on_signals() {
 }
 
 AtomicFile::AtomicFile(const std::string& path) : path_(path) {
+    if (path == "-") {
+        direct_ = stdout_ = true;
+        target_ = temp_path_ = path;
+        file_ = stdout;
+        return;
+    }
     struct stat given {};
     const bool exists = ::stat(path.c_str(), &given) == 0;
     if (exists && S_ISDIR(given.st_mode)) throw std::runtime_error(path + ": cannot create output (is a directory)");
@@ -141,7 +150,7 @@ AtomicFile::AtomicFile(const std::string& path) : path_(path) {
 }
 
 AtomicFile::~AtomicFile() {
-    if (file_) std::fclose(file_);
+    if (file_ && !stdout_) std::fclose(file_);
     if (!committed_ && !direct_) std::remove(temp_path_.c_str());
     unregister_temp(temp_slot_);
 }
@@ -158,7 +167,7 @@ void AtomicFile::commit() {
         // A device or FIFO cannot be fsynced (EINVAL); what it took is all there is to check.
         const bool flushed = std::fflush(file_) == 0;
         const int err = errno;
-        const bool closed = std::fclose(file_) == 0;
+        const bool closed = stdout_ || std::fclose(file_) == 0;
         file_ = nullptr;
         if (!flushed || !closed) throw std::runtime_error(path_ + ": write failed (" + std::strerror(flushed ? errno : err) + ")");
         committed_ = true;
@@ -175,6 +184,39 @@ void AtomicFile::commit() {
     committed_ = true;
     unregister_temp(temp_slot_);
     temp_slot_ = -1;
+}
+
+ScratchFile::ScratchFile(const std::string& prefix) {
+    std::error_code ec;
+    fs::path dir = fs::temp_directory_path(ec);
+    if (ec) dir = "/tmp";
+    // A name nobody can guess, registered before it exists (as AtomicFile's temporaries), and
+    // O_EXCL: a file of that name already there is someone else's and is never touched.
+    static std::random_device entropy;
+    static std::atomic<unsigned> counter{0};
+    for (int attempt = 0; attempt < 100; ++attempt) {
+        char tag[32];
+        std::snprintf(tag, sizeof tag, "%d.%u.%08x", static_cast<int>(::getpid()), counter++, entropy());
+        const std::string path = (dir / (prefix + tag)).string();
+        const int slot = register_temp(path);
+        const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+        if (fd >= 0) {
+            ::close(fd);
+            path_ = path;
+            slot_ = slot;
+            return;
+        }
+        const int err = errno;
+        unregister_temp(slot);
+        if (err != EEXIST)
+            throw std::runtime_error(path + ": cannot create a temporary file (" + std::strerror(err) + ")");
+    }
+    throw std::runtime_error(dir.string() + ": cannot create a temporary file (every name tried exists)");
+}
+
+ScratchFile::~ScratchFile() {
+    ::unlink(path_.c_str());
+    unregister_temp(slot_);
 }
 
 void write_file_atomic(const std::string& path, const std::string& text) {

@@ -12,6 +12,7 @@ public:
     // A symlink is followed: the temporary goes beside the file it points to, which the commit
     // replaces, so the link stays. An existing target that is not a regular file (a terminal,
     // /dev/null, a FIFO) is written straight, without a temporary: it cannot be renamed over.
+    // "-" is standard output, written straight too.
     explicit AtomicFile(const std::string& path);  // throws std::runtime_error if it cannot create
     ~AtomicFile();                                 // discards the temporary if not committed
     AtomicFile(const AtomicFile&) = delete;
@@ -33,8 +34,25 @@ private:
     std::string temp_path_;
     std::FILE* file_ = nullptr;
     bool direct_ = false;  // a device or FIFO: no temporary, no rename
+    bool stdout_ = false;  // "-": never closed here
     int temp_slot_ = -1;   // in the registry the signal handler cleans, -1 = not in it
     bool committed_ = false;
+};
+
+// A scratch file of this process that is no output (gnuplot's messages): made empty, with a
+// name of its own, in the temporary directory ($TMPDIR, else /tmp); removed by the
+// destructor, or by the handler of install_temp_cleanup_on_signals when a signal comes first.
+class ScratchFile {
+public:
+    explicit ScratchFile(const std::string& prefix);  // throws std::runtime_error if it cannot create
+    ~ScratchFile();
+    ScratchFile(const ScratchFile&) = delete;
+    ScratchFile& operator=(const ScratchFile&) = delete;
+    const std::string& path() const { return path_; }
+
+private:
+    std::string path_;
+    int slot_ = -1;
 };
 
 // Writes `text` to `path` atomically ("-" = standard output).
@@ -45,7 +63,8 @@ void write_file_atomic(const std::string& path, const std::string& text);
 std::string resolve_output_path(const std::string& path);
 
 // Installs SIGINT and SIGTERM handlers (once; a signal already ignored stays ignored) that
-// remove the temporaries of the AtomicFiles still open, then die of the same signal.
+// remove the temporaries of the AtomicFiles still open and the ScratchFiles, then die of the
+// same signal.
 void install_temp_cleanup_on_signals();
 
 }  // namespace host

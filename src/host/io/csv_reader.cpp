@@ -620,6 +620,29 @@ private:
         return i;
     }
 
+    // The column among the default `names` of one quantity, -1 if none. Two of them in one
+    // header (time_s and time_ms) would silently give one reading or the other: refused,
+    // saying which option picks one.
+    int find_one_of(std::initializer_list<const char*> names, const std::string& what, const std::string& option,
+                    const std::string& manifest_key) const {
+        int found = -1;
+        for (const char* n : names) {
+            const int i = find(n);
+            if (i < 0) continue;
+            if (found >= 0) {
+                const int first = std::min(found, i), second = std::max(found, i);
+                throw InputError(info_.path, header_line_, second + 1,
+                                 "columns \"" + names_[static_cast<std::size_t>(first)] + "\" (field " +
+                                     std::to_string(first + 1) + ") and \"" + names_[static_cast<std::size_t>(second)] +
+                                     "\" (field " + std::to_string(second + 1) + ") both give the " + what +
+                                     "; expected one, or choose it with " + option + " NAME (in a manifest, " +
+                                     manifest_key + ")");
+            }
+            found = i;
+        }
+        return found;
+    }
+
     // The first column (case-insensitive) whose name starts with one of `prefixes`, in the
     // order given; -1 if none.
     int find_prefixed(std::initializer_list<const char*> prefixes) const {
@@ -694,10 +717,7 @@ private:
             time_col_ = require("time", m.time);
             time_name = lower_names_[static_cast<std::size_t>(time_col_)];
         } else {
-            for (const char* cand : {"time_s", "time_ms", "time_us"}) {
-                time_col_ = find(cand);
-                if (time_col_ >= 0) break;
-            }
+            time_col_ = find_one_of({"time_s", "time_ms", "time_us"}, "time", "--time-col", "columns.time or time_col");
             if (time_col_ < 0) missing("time", "(expected time_s, time_ms or time_us)");
             time_name = lower_names_[static_cast<std::size_t>(time_col_)];
         }
@@ -750,8 +770,8 @@ private:
             if (!m.current.empty()) {
                 current_col_ = require("current", m.current);
             } else {
-                current_col_ = find("current_a");
-                if (current_col_ < 0) current_col_ = find("current_ma");
+                current_col_ = find_one_of({"current_a", "current_ma"}, "current", "--current-col",
+                                           "columns.current or current_col");
                 if (current_col_ < 0) missing("current", "(expected current_a or current_ma)");
             }
             const std::string& cname = lower_names_[static_cast<std::size_t>(current_col_)];

@@ -23,7 +23,8 @@ std::unique_ptr<SampleReader> open_raw_pbms(const std::string& path, const Reade
 
 // CSV with a header row. Columns come from options.columns; an empty entry uses the
 // default names: time_s|time_ms|time_us, voltage_v, current_a|current_ma, cell1_v..cellN_v,
-// temperature_c. Units come from the scale fields, or else from the name suffix
+// temperature_c (a header with two of one quantity's names, time_s and time_ms, is refused
+// unless that column is mapped). Units come from the scale fields, or else from the name suffix
 // (time: _s/_ms/_us; current: _a/_ma; voltages: _mv means millivolts, anything else volts).
 // CurrentSource::Shunt needs a shunt_mv column.
 std::unique_ptr<SampleReader> open_csv(const std::string& path, const ReaderOptions& options);

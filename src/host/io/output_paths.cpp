@@ -41,6 +41,16 @@ std::string file_key(const std::string& path) {
 }  // namespace
 
 void check_output_paths(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs) {
+    const NamedPath* to_stdout = nullptr;
+    for (const NamedPath& out : outputs) {
+        if (out.path != "-") continue;
+        if (out.dash == Dash::Refused)
+            throw std::invalid_argument(out.what + ": expected a path, found \"-\" (this output cannot go to standard output)");
+        if (to_stdout)
+            throw std::invalid_argument(out.what + " and " + to_stdout->what +
+                                        " would both write to standard output; at most one output may be \"-\"");
+        to_stdout = &out;
+    }
     std::map<std::string, const NamedPath*> read, written;
     for (const NamedPath& in : inputs) {
         const std::string key = file_key(in.path);

@@ -7,18 +7,26 @@
 namespace battsim {
 namespace host {
 
+// What an output named "-" means. Only a text its writer can send to standard output takes
+// it; for the others (binary streams, plots, directories, a log a device appends to) "-"
+// would silently become a file of that name.
+enum class Dash { Refused, StandardOutput };
+
 struct NamedPath {
     std::string what;  // how the message names it: "--series", "the log"
     std::string path;  // "" and "-" (standard output) are never compared
     // An input config and an output config both marked may be one file: the config is read
     // whole before the run, and writing it back updated is the point (`--config-out PACK.json`).
     bool config = false;
+    Dash dash = Dash::Refused;  // outputs only
 };
 
 // Throws std::invalid_argument("--series and the log name the same file: X") when an output
 // names the same file as an input or as an earlier output. Existing files are compared by
 // identity (hard links and symlinks included), others by their resolved path; existing files
 // that are not regular (devices, FIFOs) are never compared: writing one twice destroys nothing.
+// An output "-" is refused unless it is Dash::StandardOutput, and so are two outputs "-"
+// (list a flag that prints to standard output, such as --json, as an output "-").
 void check_output_paths(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs);
 
 // True when `a` and `b` name the same regular file, or the same file to be created.

@@ -48,7 +48,8 @@ LogFormat parse_log_format(const std::string& name);
 enum class CurrentSource { Auto, Current, Shunt };
 
 // How headered CSV columns map to sample fields. Empty = use the default names
-// (time_s|time_ms|time_us, voltage_v, current_a|current_ma, cellN_v, temperature_c).
+// (time_s|time_ms|time_us, voltage_v, current_a|current_ma, cellN_v, temperature_c; a
+// header holding two names of one quantity needs that one mapped).
 struct ColumnMapping {
     std::string time;            // column name
     double time_scale_to_s = 0;  // 0 = infer from the name suffix (_s, _ms, _us); else multiply

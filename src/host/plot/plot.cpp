@@ -1,7 +1,5 @@
 #include "host/plot/plot.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -59,6 +57,13 @@ std::string range_command(const char* axis, double lo, double hi) {
     cmd += ':';
     append_number(cmd, "%.9g", hi);
     return cmd + "]\n";
+}
+
+// `s` as one word for /bin/sh ($TMPDIR may hold spaces or quotes).
+std::string shell_quoted(const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
 }
 
 std::string read_all(const std::string& path) {
@@ -152,11 +157,14 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
         throw std::runtime_error(std::string("plot: ") + e.what());
     }
     const std::string& temp = out->temp_path();
-    char err_template[] = "/tmp/battsim-gnuplot-XXXXXX";
-    const int fd = ::mkstemp(err_template);
-    if (fd < 0) throw std::runtime_error("plot: cannot create a temporary file for gnuplot's messages");
-    ::close(fd);
-    const std::string err_path = err_template;
+    // gnuplot's messages, removed on Ctrl-C too (the signal handler knows it).
+    std::unique_ptr<ScratchFile> err_file;
+    try {
+        err_file = std::make_unique<ScratchFile>("battsim-gnuplot-");
+    } catch (const std::runtime_error& e) {
+        throw std::runtime_error(std::string("plot: gnuplot's messages: ") + e.what());
+    }
+    const std::string& err_path = err_file->path();
 
     std::string script;
     script.reserve(1 << 20);
@@ -249,16 +257,15 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
     script += std::string("print '") + kDone + "'\n";
 
     try {
-        Gnuplot gp("gnuplot > " + err_path + " 2>&1");
+        Gnuplot gp("gnuplot > " + shell_quoted(err_path) + " 2>&1");
         gp << script;
         gp.flush();
     } catch (const std::exception& e) {
-        std::remove(err_path.c_str());
         throw std::runtime_error(std::string("plot: cannot run gnuplot: ") + e.what());
     }
     // The Gnuplot object has closed the pipe and waited for gnuplot to exit.
     const std::string messages = read_all(err_path);
-    std::remove(err_path.c_str());
+    err_file.reset();
     std::ifstream check(temp, std::ios::binary | std::ios::ate);
     const bool ok = check && check.tellg() > 0 && messages.find("rror") == std::string::npos &&
                     messages.find(kDone) != std::string::npos;

@@ -133,7 +133,11 @@ public:
             if (!port_.is_open()) {
                 if (!try_open()) {
                     if (!reported_absent) {
-                        say("waiting for " + o_.port);
+                        // Not there yet is the usual case (plugged in later); anything else
+                        // (no permission) is said, as the user may have to act on it.
+                        struct stat st;
+                        say("waiting for " + o_.port +
+                            (::stat(o_.port.c_str(), &st) == 0 ? " (" + open_error_ + ")" : " to appear (a serial device, tty)"));
                         reported_absent = true;
                     }
                     if (o_.max_wait_s > 0 && seconds_since(absent_since) >= o_.max_wait_s) {
@@ -174,7 +178,12 @@ private:
     bool try_open() {
         try {
             port_.open(o_.port, o_.baud);
-        } catch (const SerialError&) {
+        } catch (const NotASerialDevice&) {
+            throw;  // waiting would not make it one
+        } catch (const SerialError& e) {
+            open_error_ = e.what();
+            const std::string prefix = o_.port + ": ";
+            if (open_error_.compare(0, prefix.size(), prefix) == 0) open_error_.erase(0, prefix.size());
             return false;
         }
         ++stats_.connections;
@@ -277,6 +286,7 @@ private:
     LineFile file_;
     SerialPort port_;
     LineSplitter splitter_;
+    std::string open_error_;  // why the port did not open last time
     std::deque<std::string> held_;
     bool confirmed_ = false;
     bool expect_header_ = false;
@@ -288,6 +298,7 @@ private:
 SerialLogStats run_serial_logger(const SerialLogOptions& options, const std::atomic<bool>& stop,
                                  const MessageSink& message) {
     baud_constant(options.baud);  // a bad rate is a usage error, before any file is touched
+    check_serial_device(options.port);  // likewise a port that is a file or a directory
     SerialLogStats stats;
     Session session(options, message, stats);
     session.run(stop);

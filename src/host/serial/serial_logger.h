@@ -15,6 +15,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "host/serial/serial_port.h"
+
 namespace battsim {
 namespace host {
 namespace serial {
@@ -54,7 +56,9 @@ using MessageSink = std::function<void(const std::string&)>;
 
 // Runs until `stop` becomes true or the device has been gone for max_wait_s. Throws
 // std::runtime_error for output problems (file exists without append, write or fsync
-// failure), HeaderMismatch, std::invalid_argument for a bad baud rate.
+// failure), HeaderMismatch, std::invalid_argument for a bad baud rate, NotASerialDevice for a
+// port that is there but no terminal (before the output is made, unless it is a character
+// device: that shows only on opening it).
 SerialLogStats run_serial_logger(const SerialLogOptions& options, const std::atomic<bool>& stop,
                                  const MessageSink& message = nullptr);
 

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <sys/stat.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -28,9 +29,26 @@ unsigned baud_constant(unsigned baud) {
                                 " (expected 9600, 19200, 38400, 57600, 115200, 230400, 460800 or 921600)");
 }
 
+namespace {
+const char* const kExpectedDevice = "; expected the serial port of the battsim firmware, e.g. /dev/ttyUSB0";
+}  // namespace
+
+void check_serial_device(const std::string& path) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0 || S_ISCHR(st.st_mode)) return;
+    const char* kind = S_ISREG(st.st_mode)    ? "a regular file"
+                       : S_ISDIR(st.st_mode)  ? "a directory"
+                       : S_ISFIFO(st.st_mode) ? "a FIFO"
+                       : S_ISSOCK(st.st_mode) ? "a socket"
+                       : S_ISBLK(st.st_mode)  ? "a block device"
+                                              : "not a character device";
+    throw NotASerialDevice(path + ": not a serial device (tty): it is " + kind + kExpectedDevice);
+}
+
 void SerialPort::open(const std::string& path, unsigned baud) {
     close();
     const speed_t speed = baud_constant(baud);
+    check_serial_device(path);
     // O_NOCTTY: a logger must never become the device's controlling process.
     const int fd = ::open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) throw SerialError(path + ": cannot open: " + std::strerror(errno));
@@ -38,6 +56,9 @@ void SerialPort::open(const std::string& path, unsigned baud) {
     if (::tcgetattr(fd, &tio) != 0) {
         const int err = errno;
         ::close(fd);
+        if (err == ENOTTY)
+            throw NotASerialDevice(path + ": not a serial device (tty): a character device that is no terminal" +
+                                   kExpectedDevice);
         throw SerialError(path + ": not a serial device: " + std::strerror(err));
     }
     ::cfmakeraw(&tio);

@@ -15,8 +15,19 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+// The path names something that is there but is no terminal (a file, a directory,
+// /dev/null): it will not turn into the device, so waiting for it would wait forever.
+class NotASerialDevice : public SerialError {
+public:
+    using SerialError::SerialError;
+};
+
 // Baud rates termios knows; throws std::invalid_argument for others.
 unsigned baud_constant(unsigned baud);
+
+// Throws NotASerialDevice when `path` exists and is not a character device. A missing path
+// passes: the device may be plugged in later.
+void check_serial_device(const std::string& path);
 
 class SerialPort {
 public:
@@ -27,7 +38,8 @@ public:
     SerialPort(const SerialPort&) = delete;
     SerialPort& operator=(const SerialPort&) = delete;
 
-    // Opens and configures `path`. Throws SerialError with the path and the reason.
+    // Opens and configures `path`. Throws SerialError with the path and the reason,
+    // NotASerialDevice for a path that is there but no terminal.
     // DTR/RTS are left as the driver sets them on open and HUPCL is cleared, so closing
     // the port does not pulse the NodeMCU's auto-reset lines.
     void open(const std::string& path, unsigned baud);
