@@ -426,6 +426,20 @@ TEST_CASE("headered CSV: default names, units, cells, temperature", "[io]") {
     CHECK(s[0].temperature_c == 21.5f);
 }
 
+TEST_CASE("headered CSV: cell columns in millivolts by name, and one column per cell", "[io]") {
+    TempDir t;
+    const std::string p = t.write("mv.csv", "time_s,voltage_v,current_a,cell1_mv,cell2_mv,cell3_v\n0,12.3,1,4100,4096,4.104\n");
+    SourceInfo info;
+    const auto s = read_all(p, ReaderOptions(), &info);
+    REQUIRE(s.size() == 1);
+    CHECK(info.cell_count == 3);
+    CHECK(s[0].cell_voltage_v[0] == Approx(4.1));
+    CHECK(s[0].cell_voltage_v[1] == Approx(4.096));
+    CHECK(s[0].cell_voltage_v[2] == Approx(4.104));  // units may differ per column
+    const std::string two = t.write("two.csv", "time_s,voltage_v,current_a,cell1_v,cell1_mv\n0,4.1,1,4.1,4100\n");
+    CHECK(read_error(two) == two + ":1:5: cell 1 has two columns (cell1_v, cell1_mv); expected one per cell, or choose with --cell-cols");
+}
+
 TEST_CASE("headered CSV: time units and sign flip", "[io]") {
     TempDir t;
     const std::string p = t.write("s.csv", "time_s,voltage_v,current_a\n0.1,4.1,-2.5\n1.000001,4.0,0.5\n");

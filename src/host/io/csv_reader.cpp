@@ -802,12 +802,13 @@ private:
                 cell_names.push_back(c);
             }
         } else {
-            // cell1_v, cell2_v, ... numbered 1..N without gaps.
+            // cell1_v, cell2_v, ... (or cellN_mv) numbered 1..N without gaps.
             std::vector<std::pair<long, int>> numbered;
             for (std::size_t i = 0; i < lower_names_.size(); ++i) {
                 const std::string& n = lower_names_[i];
-                if (n.size() < 7 || n.compare(0, 4, "cell") != 0 || !ends_with(n, "_v")) continue;
-                const std::string digits = n.substr(4, n.size() - 6);
+                const std::size_t unit = ends_with(n, "_mv") ? 3 : ends_with(n, "_v") ? 2 : 0;
+                if (unit == 0 || n.size() < 5 + unit || n.compare(0, 4, "cell") != 0) continue;
+                const std::string digits = n.substr(4, n.size() - 4 - unit);
                 if (digits.empty() || digits.size() > 3 ||
                     digits.find_first_not_of("0123456789") != std::string::npos)
                     continue;
@@ -818,8 +819,10 @@ private:
                 const long want = static_cast<long>(k) + 1;
                 if (k > 0 && numbered[k].first == numbered[k - 1].first) {
                     throw InputError(info_.path, header_line_, numbered[k].second + 1,
-                                     "column cell" + std::to_string(numbered[k].first) +
-                                         "_v appears twice in the header; expected unique column names");
+                                     "cell " + std::to_string(numbered[k].first) + " has two columns (" +
+                                         names_[static_cast<std::size_t>(numbered[k - 1].second)] + ", " +
+                                         names_[static_cast<std::size_t>(numbered[k].second)] +
+                                         "); expected one per cell, or choose with --cell-cols");
                 }
                 if (numbered[k].first != want) {
                     throw InputError(info_.path, header_line_, 0,
