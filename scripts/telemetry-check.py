@@ -7,7 +7,13 @@ time, each STATUSTEXT with its flight time against the summary's warning, and th
 BATTERY_STATUS. Without LOGs: the dissertation's four flights (configs/sim-4s.json) and every
 scenario of --suite (simulated into a scratch directory, each with its own monitor config).
 
-    python3 scripts/telemetry-check.py [--suite configs/scenarios] [LOG ...] [-c CONFIG]
+    python3 scripts/telemetry-check.py [--suite configs/scenarios] [LOG ...] [-c CONFIG] [--args "REPLAY OPTIONS"]
+
+The last line counts the verdicts withdrawn in flight (telemetry.clear_hold_s) and how many of
+them were warned again later, e.g. on the Matrice 100 fleet:
+
+    python3 scripts/telemetry-check.py ../shared/data/cmu-m100/flights/*.csv -c configs/dji-tb47d-6s.json \
+        --args "--time-col time --time-unit s --voltage-col battery_voltage --current-col battery_current --current-unit A"
 
 Standard library only; about a minute for the suite on two cores.
 """
@@ -32,9 +38,12 @@ WITHDRAWS = {"battsim: short flight": "battsim: flight ", "battsim: low capacity
              "battsim: high resistance": "battsim: high re"}
 
 
-def check(log, config, tmp):
+TOTALS = {"logs": 0, "warned": 0, "withdrawn": 0, "warned again": 0}
+
+
+def check(log, config, tmp, extra=()):
     tlog = os.path.join(tmp, "out.tlog")
-    r = subprocess.run([BATTSIM, "replay", log, "-c", config, "--estimator", "joint", "--json", "--tlog", tlog],
+    r = subprocess.run([BATTSIM, "replay", log, "-c", config, "--estimator", "joint", "--json", "--tlog", tlog] + list(extra),
                        capture_output=True, text=True)
     if r.returncode != 0:
         return "%s: replay failed: %s" % (os.path.basename(log), r.stderr.strip())
@@ -60,6 +69,12 @@ def check(log, config, tmp):
                 repeats.append(said.pop(withdrawn))
             if withdrawn is None:
                 said[text[:16]] = [len(lines) - 1, 0]
+    texts = [status_text(p) for t, m, p in fr if m == 253]
+    cleared = [i for i, x in enumerate(texts) if x.startswith("battsim: short flight cleared")]
+    TOTALS["logs"] += 1
+    TOTALS["warned"] += any(x.startswith("battsim: flight ") for x in texts)
+    TOTALS["withdrawn"] += len(cleared)
+    TOTALS["warned again"] += sum(any(x.startswith("battsim: flight ") for x in texts[i + 1:]) for i in cleared)
     for index, again in repeats + list(said.values()):
         if again:
             lines[index] += " (said again %d time%s in flight, at least %g s apart)" % (again, "s"[:again > 1], REPEAT_S)
@@ -78,6 +93,7 @@ def main():
     ap.add_argument("logs", nargs="*")
     ap.add_argument("-c", "--config", default=os.path.join(ROOT, "configs", "sim-4s.json"))
     ap.add_argument("--suite", default=os.path.join(ROOT, "configs", "scenarios"))
+    ap.add_argument("--args", default="", help="more replay options for every log (column mapping)")
     a = ap.parse_args()
     if not os.path.exists(BATTSIM):
         sys.exit("telemetry-check: build first (build/battsim)")
@@ -91,7 +107,9 @@ def main():
                 cfg = json.load(open(scenario))["monitor_config"]
                 runs.append((log, os.path.normpath(os.path.join(os.path.dirname(scenario), cfg))))
         for log, config in runs:
-            print(check(log, config, tmp))
+            print(check(log, config, tmp, a.args.split()))
+    print("%(logs)d logs: a short flight warned on %(warned)d; %(withdrawn)d withdrawn in flight, "
+          "%(warned again)d of them warned again later" % TOTALS)
 
 
 if __name__ == "__main__":

@@ -181,7 +181,7 @@ const std::map<std::string, std::string>& config_key_descriptions() {
     {"telemetry.low_time_s", "Remaining flight time (s) below which the charge state is LOW and the buzzer chirps; 0: never."},
     {"telemetry.critical_time_s", "Remaining flight time (s) below which the charge state is CRITICAL and the buzzer beeps fast; at most `low_time_s`, 0: never."},
     {"telemetry.text_repeat_s", "In flight, a warning still active is texted (and beeped) again after this long (s); 0: once."},
-    {"telemetry.clear_hold_s", "In flight, a told verdict (short flight; with the reference estimator low capacity or high resistance) that has been off this long (s), its reading no longer short, is withdrawn at severity NOTICE; 0: never."},
+    {"telemetry.clear_hold_s", "In flight, a told verdict (the joint estimator's short flight, its reading 5 points clear of the bar; the reference estimator's low capacity or high resistance) that has been off this long (s) is withdrawn at severity NOTICE, and said afresh if it holds again; 0: never."},
     };
     return about;
 }

@@ -268,7 +268,7 @@ void MavlinkTelemetry::configure(const TelemetryConfig& config, const core::Moni
     framer_.configure(config.system_id, config.component_id);
     const float interval_us = config.interval_s > 0.0f ? config.interval_s * 1.0e6f : 1.0e6f;
     interval_us_ = static_cast<uint64_t>(interval_us);
-    schedule_.configure(config.text_repeat_s, config.clear_hold_s, monitor.joint.short_flight_fraction);
+    schedule_.configure(config.text_repeat_s, config.clear_hold_s, monitor);
     next_us_ = 0;
     started_ = false;
 }

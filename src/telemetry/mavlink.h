@@ -116,7 +116,7 @@ BatteryStatusFields battery_status_fields(const TelemetryConfig& config, const c
 size_t warning_text(core::Warning w, float rated_capacity_ah, float rated_resistance_ohm,
                     const core::MonitorStatus& status, char* text);
 
-// The sentence that withdraws warning `w` (one of WarningSchedule::kWithdrawable) once its
+// The sentence that withdraws warning `w` (WarningSchedule's withdrawable ones) once its
 // verdict no longer holds in flight, with the estimate now; as warning_text.
 size_t withdrawal_text(core::Warning w, float rated_capacity_ah, float rated_resistance_ohm,
                        const core::MonitorStatus& status, char* text);

@@ -8,10 +8,11 @@ uint64_t microseconds(float s) { return s > 0.0f ? static_cast<uint64_t>(s * 1.0
 
 }  // namespace
 
-void WarningSchedule::configure(float repeat_s, float clear_hold_s, float short_flight_fraction) {
+void WarningSchedule::configure(float repeat_s, float clear_hold_s, const core::MonitorConfig& monitor) {
     repeat_us_ = microseconds(repeat_s);
     clear_hold_us_ = microseconds(clear_hold_s);
-    short_flight_fraction_ = short_flight_fraction;
+    short_flight_fraction_ = monitor.joint.short_flight_fraction;
+    withdrawable_ = monitor.estimator == core::EstimatorKind::Joint ? kWithdrawableJoint : kWithdrawableReference;
     raised_ = told_ = withdrawn_ = withdrawn_now_ = 0;
     for (uint64_t& t : told_us_) t = 0;
     for (uint64_t& t : off_since_us_) t = 0;
@@ -37,11 +38,11 @@ uint8_t WarningSchedule::due(const core::MonitorStatus& status) {
 
     withdrawn_now_ = 0;
     const bool reads_short = status.expected_time_s > 0.0f && status.total_time_s > 0.0f &&
-                             status.total_time_s < short_flight_fraction_ * status.expected_time_s;
+                             status.total_time_s < (short_flight_fraction_ + kClearMargin) * status.expected_time_s;
     for (int w = 0; w < core::kWarnCount && clear_hold_us_ > 0; ++w) {
         const uint8_t bit = static_cast<uint8_t>(1u << w);
         const bool on = (status.warnings & bit) || (w == core::kWarnShortFlight && reads_short);
-        if (!(kWithdrawable & told_ & bit) || on || !status.flying) {
+        if (!(withdrawable_ & told_ & bit) || on || !status.flying) {
             off_since_us_[w] = 0;  // on, never told, or on the ground (the charge state says it there)
             continue;
         }

@@ -16,15 +16,19 @@ namespace telemetry {
 
 class WarningSchedule {
 public:
-    // The verdicts that can be withdrawn: the sensor and cell warnings are not judged again
-    // in a way a pilot should hear undone (a gap is over at the next sample).
-    static constexpr uint8_t kWithdrawable = (1u << core::kWarnShortFlight) | (1u << core::kWarnLowCapacity) |
-                                             (1u << core::kWarnHighResistance);
+    // The verdicts that can be withdrawn: the joint estimator's short flight, or the
+    // reference estimator's low capacity and high resistance. Not the joint estimator's
+    // causes (a cause giving way to another is no withdrawal of the verdict), nor the sensor
+    // and cell warnings (a gap is over at the next sample; a named cell is worth measuring).
+    static constexpr uint8_t kWithdrawableJoint = 1u << core::kWarnShortFlight;
+    static constexpr uint8_t kWithdrawableReference = (1u << core::kWarnLowCapacity) | (1u << core::kWarnHighResistance);
 
     // repeat_s 0: each warning once; clear_hold_s 0: never withdrawn. A short flight is off
-    // only while its verdict's reading is not short either (total ≥ short_flight_fraction of
-    // a healthy pack's): the verdict clears at once but takes three rounds to hold again.
-    void configure(float repeat_s, float clear_hold_s = 0.0f, float short_flight_fraction = 0.8f);
+    // only while its verdict's reading is clear of the bar too (total ≥ short_flight_fraction
+    // + kClearMargin of a healthy pack's): the verdict clears on one round but takes three to
+    // hold again, and a flight reading 19–21 % short would be withdrawn and warned in turn.
+    static constexpr float kClearMargin = 0.05f;
+    void configure(float repeat_s, float clear_hold_s, const core::MonitorConfig& monitor);
     // The warnings to tell now (bit per core::Warning); call once per monitor update.
     uint8_t due(const core::MonitorStatus& status);
     // The warnings withdrawn by the last due(): told, then off in flight for clear_hold_s.
@@ -40,6 +44,7 @@ private:
     uint64_t repeat_us_ = 0;
     uint64_t clear_hold_us_ = 0;
     float short_flight_fraction_ = 0.8f;
+    uint8_t withdrawable_ = 0;
     uint8_t raised_ = 0;         // warnings raised so far
     uint8_t told_ = 0;           // told and not withdrawn since
     uint8_t withdrawn_ = 0;      // withdrawn and not active since

@@ -64,7 +64,9 @@ TEST_CASE("Beeper: silent on a healthy flight; chirps when LOW, fast when CRITIC
 
 TEST_CASE("Beeper: a short flight back after its withdrawal beeps at once; a flicker waits for the repeat", "[firmware][beeper]") {
     fw::Beeper b;
-    b.configure(telemetry::TelemetryConfig{}, core::MonitorConfig{});  // repeat 30 s, withdrawn after 5 s off
+    core::MonitorConfig joint;
+    joint.estimator = core::EstimatorKind::Joint;
+    b.configure(telemetry::TelemetryConfig{}, joint);  // repeat 30 s, withdrawn after 5 s off
     core::MonitorStatus s = flying_status();
     s.warnings_raised = s.warnings = 1u << core::kWarnShortFlight;
     const Beeps three = {{1000, 400}, {1900, 400}, {2800, 400}};

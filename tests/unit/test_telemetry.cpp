@@ -342,7 +342,9 @@ TEST_CASE("Telemetry: a short flight that clears in flight is withdrawn after cl
     telemetry::TelemetryConfig cfg;
     cfg.interval_s = 1000.0f;  // no battery status in the way after the first
     cfg.clear_hold_s = 5.0f;
-    t.configure(cfg, rated_4s());
+    core::MonitorConfig joint = rated_4s();
+    joint.estimator = core::EstimatorKind::Joint;
+    t.configure(cfg, joint);
     core::Sample s;
     core::MonitorStatus st;
     st.time_us = 1;
@@ -373,10 +375,11 @@ TEST_CASE("Telemetry: a short flight that clears in flight is withdrawn after cl
     at(6);
     CHECK(run(t, s, st).empty());
 
-    // Off while its reading is still short (235 s of 300 s: the verdict needs three short
-    // rounds to hold again): not withdrawn however long.
+    // Off while its reading is within 5 points of the bar (250 s of 300 s: 17 % short; a
+    // verdict hovering at the bar would be withdrawn and warned in turn): not withdrawn
+    // however long.
     st.warnings = 0;
-    st.total_time_s = 235.0f;
+    st.total_time_s = 250.0f;
     for (double k = 6.5; k < 20; k += 0.1) {
         at(k);
         CHECK(run(t, s, st).empty());
@@ -418,13 +421,64 @@ TEST_CASE("Telemetry: a short flight that clears in flight is withdrawn after cl
     }
 }
 
+TEST_CASE("Telemetry: the joint estimator's cause giving way to another is no withdrawal; the reference's low capacity is withdrawn", "[telemetry]") {
+    telemetry::TelemetryConfig cfg;
+    cfg.interval_s = 1000.0f;
+    core::Sample s;
+    constexpr uint8_t kShort = 1u << core::kWarnShortFlight, kCap = 1u << core::kWarnLowCapacity,
+                      kRes = 1u << core::kWarnHighResistance;
+    // Joint: short for resistance, then capacity joins (told on its own), then resistance
+    // leaves while the flight stays short: nothing is withdrawn.
+    core::MonitorConfig joint = rated_4s();
+    joint.estimator = core::EstimatorKind::Joint;
+    telemetry::MavlinkTelemetry t;
+    t.configure(cfg, joint);
+    core::MonitorStatus st;
+    st.flying = true;
+    st.expected_time_s = 300.0f;
+    st.total_time_s = 200.0f;
+    st.time_us = 1;
+    run(t, s, st);
+    st.warnings_raised = st.warnings = kShort | kRes;
+    st.time_us = 1000000u;
+    CHECK(mavtest::decode(run(t, s, st), false).frames.size() == 1);
+    st.warnings_raised = st.warnings = kShort | kRes | kCap;
+    st.time_us = 2000000u;
+    CHECK(mavtest::decode(run(t, s, st), false).frames.size() == 1);  // the capacity, on its own
+    st.warnings = kShort | kCap;
+    for (int k = 3; k < 29; ++k) {
+        st.time_us = 1000000u * static_cast<uint64_t>(k);
+        CHECK(run(t, s, st).empty());
+    }
+    // Reference: low capacity told, then off for the hold: withdrawn.
+    telemetry::MavlinkTelemetry r;
+    r.configure(cfg, rated_4s());
+    core::MonitorStatus rs;
+    rs.flying = true;
+    rs.capacity_ah = 1.4f;
+    rs.time_us = 1;
+    run(r, s, rs);
+    rs.warnings_raised = rs.warnings = kCap;
+    rs.time_us = 1000000u;
+    CHECK(mavtest::decode(run(r, s, rs), false).frames.size() == 1);
+    rs.warnings = 0;
+    rs.time_us = 2000000u;
+    CHECK(run(r, s, rs).empty());
+    rs.time_us = 7000000u;
+    const mavtest::Stream m = mavtest::decode(run(r, s, rs), false);
+    REQUIRE(m.frames.size() == 1);
+    CHECK(mavtest::text(m.frames[0]) == "battsim: low capacity cleared, 1.40 Ah (90%)");
+}
+
 TEST_CASE("Telemetry: clear_hold_s 0 never withdraws; a cell or sensor warning is never withdrawn", "[telemetry]") {
     for (const float hold_s : {0.0f, 5.0f}) {
         telemetry::MavlinkTelemetry t;
         telemetry::TelemetryConfig cfg;
         cfg.interval_s = 1000.0f;
         cfg.clear_hold_s = hold_s;
-        t.configure(cfg, rated_4s());
+        core::MonitorConfig joint = rated_4s();
+        joint.estimator = core::EstimatorKind::Joint;
+        t.configure(cfg, joint);
         core::Sample s;
         core::MonitorStatus st;
         st.flying = true;

@@ -12,7 +12,7 @@ void Beeper::configure(const telemetry::TelemetryConfig& config, const core::Mon
     low_time_s_ = config.low_time_s;
     critical_time_s_ = config.critical_time_s;
     // As the texts: a verdict back after its withdrawal beeps at once.
-    schedule_.configure(config.text_repeat_s, config.clear_hold_s, monitor.joint.short_flight_fraction);
+    schedule_.configure(config.text_repeat_s, config.clear_hold_s, monitor);
     pending_ = 0;
     pattern_start_us_ = 0;
     pattern_beeps_ = 0;
