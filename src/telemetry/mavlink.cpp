@@ -38,6 +38,19 @@ uint32_t percent_of(float value, float rated) {
     return static_cast<uint32_t>(rounded(100.0f * value / rated, 0, 99999, 0));
 }
 
+// "1.05 Ah (68" and "34 mOhm (168": an estimate and its share of the rated value, as the
+// warning and its withdrawal both say it (the caller closes the bracket).
+void append_capacity(TextBuffer& t, const core::MonitorStatus& status, float rated_capacity_ah) {
+    t.append_fixed(rounded(status.capacity_ah * 100.0f, 0, 999999, 0), 2);
+    t.append(" Ah (");
+    t.append_uint(percent_of(status.capacity_ah, rated_capacity_ah));
+}
+void append_resistance(TextBuffer& t, const core::MonitorStatus& status, float rated_resistance_ohm) {
+    t.append_uint(static_cast<uint32_t>(rounded(status.resistance_ohm * 1000.0f, 0, 999999, 0)));
+    t.append(" mOhm (");
+    t.append_uint(percent_of(status.resistance_ohm, rated_resistance_ohm));
+}
+
 // The verdict's shortfall, % of a healthy pack's flight; false when the flight is not short.
 bool shortfall_percent(const core::MonitorStatus& status, uint32_t& percent) {
     if (!(status.expected_time_s > 0.0f && status.total_time_s > 0.0f && status.total_time_s < status.expected_time_s))
@@ -178,16 +191,12 @@ size_t warning_text(core::Warning w, float rated_capacity_ah, float rated_resist
             break;
         case core::kWarnLowCapacity:
             t.append("low capacity ");
-            t.append_fixed(rounded(status.capacity_ah * 100.0f, 0, 999999, 0), 2);
-            t.append(" Ah (");
-            t.append_uint(percent_of(status.capacity_ah, rated_capacity_ah));
+            append_capacity(t, status, rated_capacity_ah);
             t.append("% of rated)");
             break;
         case core::kWarnHighResistance:
             t.append("high resistance ");
-            t.append_uint(static_cast<uint32_t>(rounded(status.resistance_ohm * 1000.0f, 0, 999999, 0)));
-            t.append(" mOhm (");
-            t.append_uint(percent_of(status.resistance_ohm, rated_resistance_ohm));
+            append_resistance(t, status, rated_resistance_ohm);
             t.append("%)");
             break;
         case core::kWarnCellOutlier:
@@ -243,16 +252,12 @@ size_t withdrawal_text(core::Warning w, float rated_capacity_ah, float rated_res
             break;
         case core::kWarnLowCapacity:
             t.append("low capacity cleared, ");
-            t.append_fixed(rounded(status.capacity_ah * 100.0f, 0, 999999, 0), 2);
-            t.append(" Ah (");
-            t.append_uint(percent_of(status.capacity_ah, rated_capacity_ah));
+            append_capacity(t, status, rated_capacity_ah);
             t.append("%)");
             break;
         case core::kWarnHighResistance:
             t.append("high resistance cleared, ");
-            t.append_uint(static_cast<uint32_t>(rounded(status.resistance_ohm * 1000.0f, 0, 999999, 0)));
-            t.append(" mOhm (");
-            t.append_uint(percent_of(status.resistance_ohm, rated_resistance_ohm));
+            append_resistance(t, status, rated_resistance_ohm);
             t.append("%)");
             break;
         default:
