@@ -191,18 +191,24 @@ std::string config_keys_markdown(const std::vector<ConfigKey>& keys) {
         "and the range the reader accepts. Every key is optional; an unknown key or a value out of\n"
         "range is an error naming the file, line and key. A test keeps this file equal to the\n"
         "command's output.\n";
-    std::string section = "\x01";
+    // One table per section, the sections in the order the reader first meets them (it reads
+    // `estimator` after `monitor`, and the filters' sections amid `joint`'s keys).
+    std::vector<std::string> sections;
+    std::map<std::string, std::vector<const ConfigKey*>> by_section;
     for (const ConfigKey& k : keys) {
         const size_t dot = k.key.rfind('.');
         const std::string s = dot == std::string::npos ? "" : k.key.substr(0, dot);
-        if (s != section) {
-            section = s;
-            md += "\n## " + (s.empty() ? std::string("Top level") : "`" + s + "`") + "\n\n";
-            md += "| key | type | default | range | meaning |\n|---|---|---|---|---|\n";
+        if (!by_section.count(s)) sections.push_back(s);
+        by_section[s].push_back(&k);
+    }
+    for (const std::string& s : sections) {
+        md += "\n## " + (s.empty() ? std::string("Top level") : "`" + s + "`") + "\n\n";
+        md += "| key | type | default | range | meaning |\n|---|---|---|---|---|\n";
+        for (const ConfigKey* k : by_section[s]) {
+            const std::string name = s.empty() ? k->key : k->key.substr(s.size() + 1);
+            const std::string def = k->default_value.is_null() ? "none" : "`" + k->default_value.dump() + "`";
+            md += "| `" + name + "` | " + k->type + " | " + def + " | " + range_text(*k) + " | " + k->about + " |\n";
         }
-        const std::string name = dot == std::string::npos ? k.key : k.key.substr(dot + 1);
-        const std::string def = k.default_value.is_null() ? "none" : "`" + k.default_value.dump() + "`";
-        md += "| `" + name + "` | " + k.type + " | " + def + " | " + range_text(k) + " | " + k.about + " |\n";
     }
     return md;
 }
