@@ -1,6 +1,7 @@
 // battsim replay LOG: one log through the core monitor; series CSV and summary JSON; with
 // --charged-mah, the current sensor checked against the charger's count; with --mavlink/--tlog, what the
 // monitor's telemetry UART sends.
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <stdexcept>
@@ -27,6 +28,7 @@ struct ReplayArgs {
     std::string mavlink;
     std::string tlog;
     bool json = false;
+    bool said = false;
     double realtime = 0;
     bool realtime_flag = false;
     double charged_mah = 0;
@@ -48,6 +50,9 @@ std::function<int()> setup(CLI::App& sub) {
                    "docs/telemetry.md)");
     sub.add_option("--tlog", a->tlog, "Write that stream as a .tlog, which ground stations open to replay");
     sub.add_flag("--json", a->json, "Print the summary JSON on standard output");
+    sub.add_flag("--said", a->said,
+                 "List what a ground station would show and speak for this log: the monitor's MAVLink texts "
+                 "(warnings, and verdicts withdrawn) with their times (summary `said`)");
     auto* realtime = sub.add_flag("--realtime", a->realtime_flag, "Pace the replay to wall-clock time (the monitor still uses the log's time stamps)");
     sub.add_option("--speed", a->realtime, "With --realtime: speed-up factor (default 1)")->check(number_in(1.0e-3, 1.0e6))->needs(realtime);
     auto* charged = sub.add_option("--charged-mah", a->charged_mah,
@@ -84,7 +89,7 @@ std::function<int()> setup(CLI::App& sub) {
         host::SampleObserver observer;
         std::unique_ptr<host::TelemetryWriter> stream;
         try {
-            if (!a->mavlink.empty() || !a->tlog.empty())
+            if (!a->mavlink.empty() || !a->tlog.empty() || a->said)
                 stream = std::make_unique<host::TelemetryWriter>(a->mavlink, a->tlog, opt.config.telemetry, opt.config.monitor);
         } catch (const std::runtime_error& e) {
             std::cerr << "battsim replay: " << e.what() << "\n";
@@ -105,6 +110,11 @@ std::function<int()> setup(CLI::App& sub) {
         } catch (const std::runtime_error& e) {
             std::cerr << "battsim replay: " << e.what() << "\n";
             return kExitOutputError;
+        }
+        if (a->said) {
+            const nlohmann::json& flight = summary["flight"];
+            const double start_s = flight.is_object() && flight["start_s"].is_number() ? flight["start_s"].get<double>() : NAN;
+            summary["said"] = host::said_json(stream->said(), start_s);
         }
         for (const auto& note : summary["input"]["notes"]) std::cerr << "battsim replay: note: " << note.get<std::string>() << "\n";
         for (const auto& note : summary.value("config_notes", nlohmann::json::array()))
@@ -149,8 +159,9 @@ std::function<int()> setup(CLI::App& sub) {
             return kExitOutputError;
         }
         if (a->json) std::cout << text;
-        if (!a->json && a->summary.empty() && a->series.empty() && a->plot.empty() && !stream)
+        if (!a->json && a->summary.empty() && a->series.empty() && a->plot.empty() && a->mavlink.empty() && a->tlog.empty())
             print_brief(summary, people);
+        if (!a->json && a->said) print_said(summary["said"], people);
         if (!a->json && summary.contains("charger_check")) print_charger_check(summary["charger_check"], people);
         if (refuse_config) {
             std::cerr << "battsim replay: --config-out: no correction found ("

@@ -322,6 +322,16 @@ void print_brief(const nlohmann::json& s, std::ostream& out) {
     out << "\n";
 }
 
+void print_said(const nlohmann::json& said, std::ostream& out) {
+    out << "  said (ground station):" << (said.empty() ? " nothing" : "") << "\n";
+    for (const auto& t : said) {
+        const std::string when = t["flight_time_s"].is_number() ? fixed(t["flight_time_s"], 1) + " s into the flight"
+                                                               : fixed(t["time_s"], 1) + " s, on the ground";
+        out << "    " << when << "  " << (t["severity"] == "notice" ? "notice " : "warning") << "  "
+            << t["text"].get<std::string>() << "\n";
+    }
+}
+
 void print_charger_check(const nlohmann::json& c, std::ostream& out) {
     const nlohmann::json& fault = c["fault"];
     out << "  charger check: counted " << fixed(c["counted_ah"], 3) << " Ah against " << fixed(c["charged_ah"], 3)

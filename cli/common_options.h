@@ -78,6 +78,8 @@ std::ostream& people_out(const std::vector<host::NamedPath>& outputs);
 void add_named(std::vector<host::NamedPath>& to, const std::string& what, const std::vector<std::string>& paths);
 // Human-readable few lines about a summary.
 void print_brief(const nlohmann::json& summary, std::ostream& out);
+// The summary's `said` (replay --said): each text with its time.
+void print_said(const nlohmann::json& said, std::ostream& out);
 // The summary's `charger_check` as one line for people.
 void print_charger_check(const nlohmann::json& check, std::ostream& out);
 

@@ -144,3 +144,53 @@ TEST_CASE("replay --mavlink: a bad telemetry section or an unwritable path is a 
     }
     CHECK(last_state == 1);  // MAV_BATTERY_CHARGE_STATE_OK, on the ground after the landing
 }
+
+TEST_CASE("replay --said lists the texts the stream carried, at their times", "[cli][telemetry]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string log = dir + "/cap75.csv";
+    REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/4s-racing-capacity-75.json") + " -o " + q(log)).exit_code == 0);
+    const std::string tlog = dir + "/out.tlog";
+    const json summary = clitest::run_json("replay " + q(log) + " -c " + q(kSource + "/configs/sim-4s.json") +
+                                           " --estimator joint --json --said --tlog " + q(tlog));
+    const mavtest::Stream t = mavtest::decode(clitest::read_file(tlog), true);
+    REQUIRE(t.error.empty());
+    std::vector<std::pair<double, std::string>> sent;
+    for (const mavtest::Frame& f : t.frames)
+        if (f.msgid == 253) sent.emplace_back(static_cast<double>(f.tlog_time_us) * 1e-6, mavtest::text(f));
+    const json& said = summary["said"];
+    REQUIRE(said.size() == sent.size());
+    REQUIRE(sent.size() >= 2);  // the short flight, and its repeat
+    const double start_s = summary["flight"]["start_s"].get<double>();
+    for (size_t i = 0; i < sent.size(); ++i) {
+        CHECK(said[i]["text"] == sent[i].second);
+        CHECK(said[i]["time_s"].get<double>() == Approx(sent[i].first).margin(1e-6));
+        CHECK(said[i]["flight_time_s"].get<double>() == Approx(sent[i].first - start_s).margin(1e-3));
+        CHECK(said[i]["severity"] == "warning");
+    }
+    // For people: the same lines after the brief.
+    const clitest::Result brief = run("replay " + q(log) + " -c " + q(kSource + "/configs/sim-4s.json") + " --estimator joint --said");
+    REQUIRE(brief.exit_code == 0);
+    CHECK(brief.out.find("  said (ground station):\n") != std::string::npos);
+    CHECK(brief.out.find("s into the flight  warning  " + sent[0].second + "\n") != std::string::npos);
+}
+
+TEST_CASE("replay --said: the aged pack's short flight that cleared is withdrawn in flight", "[cli][telemetry][data]") {
+    const std::string flight = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/29.csv";
+    const json summary = clitest::run_json("replay " + q(flight) + " -c " + q(kSource + "/configs/sim-4s.json") +
+                                           " --estimator joint --json --said");
+    json short_flight;
+    for (const json& w : summary["warnings"])
+        if (w["name"] == "short_flight") short_flight = w;
+    REQUIRE(short_flight.is_object());
+    REQUIRE(short_flight["spell_count"] == 1);  // on for 3.3 s, then off to the end
+    const double off_s = short_flight["spells"][0]["to_s"].get<double>();
+    const json& said = summary["said"];
+    REQUIRE(said.size() == 2);
+    CHECK(said[0]["severity"] == "warning");
+    CHECK(said[0]["text"].get<std::string>().rfind("battsim: flight ", 0) == 0);
+    CHECK(said[1]["severity"] == "notice");
+    CHECK(said[1]["text"] == "battsim: short flight cleared, not short now");
+    // After telemetry.clear_hold_s (5 s) of it off (and its reading clear of the bar).
+    CHECK(said[1]["time_s"].get<double>() >= off_s + 5.0);
+    CHECK(said[1]["flight_time_s"].is_number());
+}
