@@ -210,7 +210,7 @@ host::NamedPath printed_output(const std::string& flag, bool given) {
 
 std::ostream& people_out(const std::vector<host::NamedPath>& outputs) {
     for (const host::NamedPath& out : outputs)
-        if (out.path == "-") return std::cerr;
+        if (host::names_standard_output(out.path)) return std::cerr;
     return std::cout;
 }
 

@@ -279,12 +279,19 @@ TEST_CASE("log --port names what it expected when the path is no serial device",
         CHECK(r.exit_code == 2);
         CHECK_THAT(r.err, Catch::Contains("battsim log: --port " + port + ": not a serial device (tty): " + is +
                                           "; expected the serial port of the battsim firmware, e.g. /dev/ttyUSB0"));
-        // Refused before the output is made (a character device shows itself only when opened).
-        if (port != "/dev/null") CHECK_FALSE(std::filesystem::exists(dir + "/out.csv"));
+        // No output is left behind: refused before it is made, or (a character device shows
+        // itself only when opened) the empty file made for it removed.
+        CHECK_FALSE(std::filesystem::exists(dir + "/out.csv"));
     }
-    // A path not there yet is waited for (a device plugged in later), and said so.
+    // A path not there yet is waited for (a device plugged in later), and said so; the output
+    // made for it goes again when nothing came.
     const auto r = run("log --port " + q(dir + "/none") + " --out " + q(dir + "/n.csv") + " --max-wait 0.2");
     CHECK(r.exit_code == 3);
     CHECK_THAT(r.err, Catch::Contains("waiting for " + dir + "/none to appear (a serial device, tty)"));
     CHECK_THAT(r.err, Catch::Contains("never appeared (expected a serial device, tty)"));
+    CHECK_FALSE(std::filesystem::exists(dir + "/n.csv"));
+    // An existing output, even an empty one, is the user's: kept.
+    clitest::write_file(dir + "/kept.csv", "");
+    CHECK(run("log --port /dev/null --out " + q(dir + "/kept.csv") + " --max-wait 1").exit_code == 2);
+    CHECK(std::filesystem::exists(dir + "/kept.csv"));
 }

@@ -310,3 +310,26 @@ TEST_CASE("Ctrl-C while gnuplot draws leaves neither its message file nor the pl
         CHECK_FALSE(fs::exists(dir + "/p.png"));
     }
 }
+
+TEST_CASE("standard output by another name is standard output: /dev/stdout beside --json is refused", "[cli][paths]") {
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/log.csv", testsupport::raw_flight(12, 0.001));
+    const std::string log = q(dir + "/log.csv");
+    // Here standard output is a pipe: both would interleave in it.
+    clitest::Result r = run("replay " + log + " --series /dev/stdout --json");
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains("--series (/dev/stdout) and --json would both write to standard output"));
+    CHECK(r.out.empty());
+    // Alone it is the one output there, and text for people goes to standard error, as with "-".
+    r = run("replay " + log + " --series /dev/stdout --said");
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.out.rfind("time_s,", 0) == 0);
+    CHECK(r.out.find("said") == std::string::npos);
+    CHECK_THAT(r.err, Catch::Contains("said"));
+    // Redirected to a file, the atomic write would replace the file the shell opened and the
+    // JSON written to the old one would be lost; refused the same way.
+    const std::string shell = "cd " + q(dir) + " && " + q(BATTSIM_BINARY) + " replay log.csv --series /dev/stdout --json > out.txt 2> err.txt; echo $? > rc.txt";
+    REQUIRE(std::system(shell.c_str()) == 0);
+    CHECK(read_file(dir + "/rc.txt") == "2\n");
+    CHECK_THAT(read_file(dir + "/err.txt"), Catch::Contains("would both write to standard output"));
+}

@@ -1,6 +1,7 @@
 // The output-path check (an output naming an input or another output) and AtomicFile on
 // symlinks and devices.
 #include <catch2/catch.hpp>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -92,7 +93,19 @@ TEST_CASE("\"-\": standard output for one text output, refused for the others", 
     };
     CHECK(refusal({}, {text("--json", ""), text("--series", "-"), {"--tlog", "t.tlog"}}).empty());
     CHECK(refusal({}, {text("--json", "-"), text("--series", "-")}) ==
-          "--series and --json would both write to standard output; at most one output may be \"-\"");
+          "--series and --json would both write to standard output; at most one output may go there");
+    // Standard output by another name counts as "-" (here standard output is whatever the test
+    // runner gave: a pipe, a file or a terminal, which all count).
+    struct stat st {};
+    if (::fstat(STDOUT_FILENO, &st) == 0 && (S_ISREG(st.st_mode) || S_ISFIFO(st.st_mode) || ::isatty(STDOUT_FILENO))) {
+        CHECK(battsim::host::names_standard_output("/dev/stdout"));
+        CHECK(battsim::host::names_standard_output("/proc/self/fd/1"));
+        CHECK(refusal({}, {text("--json", "-"), text("--series", "/dev/stdout")}) ==
+              "--series (/dev/stdout) and --json would both write to standard output; at most one output may go there");
+        CHECK(refusal({}, {text("--json", ""), {"--tlog", "/proc/self/fd/1"}}).empty());
+    }
+    CHECK_FALSE(battsim::host::names_standard_output(""));
+    CHECK_FALSE(battsim::host::names_standard_output("/dev/null"));
     CHECK(refusal({}, {text("--series", ""), {"--tlog", "-"}}) ==
           "--tlog: expected a path, found \"-\" (this output cannot go to standard output)");
 }

@@ -1,6 +1,7 @@
 #include "host/io/output_paths.h"
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <map>
@@ -40,15 +41,29 @@ std::string file_key(const std::string& path) {
 }
 }  // namespace
 
+bool names_standard_output(const std::string& path) {
+    if (path.empty()) return false;
+    if (path == "-") return true;
+    struct stat named {}, out {};
+    if (::stat(path.c_str(), &named) != 0 || ::fstat(STDOUT_FILENO, &out) != 0 || named.st_dev != out.st_dev ||
+        named.st_ino != out.st_ino)
+        return false;
+    // Two writers lose data on a file (the atomic rename replaces what the shell opened) and
+    // interleave on a pipe or a terminal; /dev/null with standard output sent there too is fine.
+    return S_ISREG(out.st_mode) || S_ISFIFO(out.st_mode) || S_ISSOCK(out.st_mode) || ::isatty(STDOUT_FILENO);
+}
+
 void check_output_paths(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs) {
     const NamedPath* to_stdout = nullptr;
     for (const NamedPath& out : outputs) {
-        if (out.path != "-") continue;
-        if (out.dash == Dash::Refused)
+        if (out.path == "-" && out.dash == Dash::Refused)
             throw std::invalid_argument(out.what + ": expected a path, found \"-\" (this output cannot go to standard output)");
-        if (to_stdout)
-            throw std::invalid_argument(out.what + " and " + to_stdout->what +
-                                        " would both write to standard output; at most one output may be \"-\"");
+        if (!names_standard_output(out.path)) continue;
+        if (to_stdout) {
+            const auto named = [](const NamedPath& o) { return o.what + (o.path == "-" ? "" : " (" + o.path + ")"); };
+            throw std::invalid_argument(named(out) + " and " + named(*to_stdout) +
+                                        " would both write to standard output; at most one output may go there");
+        }
         to_stdout = &out;
     }
     std::map<std::string, const NamedPath*> read, written;

@@ -25,9 +25,15 @@ struct NamedPath {
 // names the same file as an input or as an earlier output. Existing files are compared by
 // identity (hard links and symlinks included), others by their resolved path; existing files
 // that are not regular (devices, FIFOs) are never compared: writing one twice destroys nothing.
-// An output "-" is refused unless it is Dash::StandardOutput, and so are two outputs "-"
-// (list a flag that prints to standard output, such as --json, as an output "-").
+// An output "-" is refused unless it is Dash::StandardOutput, and so are two outputs on
+// standard output, "-" or a name for it (names_standard_output); list a flag that prints
+// to standard output, such as --json, as an output "-".
 void check_output_paths(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs);
+
+// True for "-" and for a path that is standard output's file by another name (/dev/stdout,
+// /proc/self/fd/1, or the file the shell redirected standard output to), unless that is a
+// device such as /dev/null, which any number of writers may share.
+bool names_standard_output(const std::string& path);
 
 // True when `a` and `b` name the same regular file, or the same file to be created.
 bool same_output_file(const std::string& a, const std::string& b);

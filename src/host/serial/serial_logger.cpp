@@ -37,10 +37,17 @@ public:
         }
         fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
         if (fd_ < 0) throw std::runtime_error(path + ": cannot open for writing: " + errno_text());
+        created_ = !exists;
         if (exists && st.st_size > 0) load_existing(repaired);
     }
+    // A file this run created and never wrote (the port was no serial device, or it never
+    // appeared) is removed: an empty --out would read as a log of a flight with no samples.
     ~LineFile() {
-        if (fd_ >= 0) ::close(fd_);
+        if (fd_ < 0) return;
+        struct stat st;
+        const bool empty = ::fstat(fd_, &st) == 0 && S_ISREG(st.st_mode) && st.st_size == 0;
+        ::close(fd_);
+        if (created_ && empty) ::unlink(path_.c_str());
     }
     LineFile(const LineFile&) = delete;
     LineFile& operator=(const LineFile&) = delete;
@@ -112,6 +119,7 @@ private:
 
     std::string path_;
     int fd_ = -1;
+    bool created_ = false;
     std::string header_;
     bool dirty_ = false;
     Clock::time_point last_sync_ = Clock::now();
