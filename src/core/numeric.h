@@ -30,14 +30,17 @@ private:
     float carry_ = 0.0f;
 };
 
+// The oldest pair a lag of `lag_us` accepts: further apart, a logging gap (or a log written
+// once a second) would pair two samples between which the polarisation moved.
+inline uint64_t max_pair_span_us(uint64_t lag_us) { return 3 * lag_us + 200000u; }
+
 // Index in a ring of time stamps (newest at head − 1) of the newest entry at least
-// `lag_us` older than `now_us`; −1 if there is none or the gap to it is far longer than the
-// lag (a logging gap must not pair two unrelated samples). Shared by the difference-based
-// resistance estimators.
+// `lag_us` older than `now_us`; −1 if there is none or it is more than max_pair_span_us
+// old. Shared by the difference-based resistance estimators.
 inline int pick_lagged(const uint64_t* t_us, int head, int count, int capacity, uint64_t now_us, uint64_t lag_us) {
     for (int n = 0; n < count; ++n) {
         const int k = (head - 1 - n + capacity) % capacity;
-        if (now_us >= t_us[k] + lag_us) return now_us - t_us[k] <= 3 * lag_us + 200000u ? k : -1;
+        if (now_us >= t_us[k] + lag_us) return now_us - t_us[k] <= max_pair_span_us(lag_us) ? k : -1;
     }
     return -1;
 }

@@ -7,6 +7,7 @@
 #include <memory>
 #include <thread>
 
+#include "core/numeric.h"
 #include "host/pack_config.h"
 #include "host/report/series_writer.h"
 #include "host/report/summary.h"
@@ -45,9 +46,14 @@ public:
             max_a_ = std::max(max_a_, static_cast<double>(s.current_a));
         }
     }
-    // fastest_s: the shortest median interval at which the joint estimator's resistance lags
-    // are reached (0: no such limit, the reference estimator).
-    std::vector<std::string> notes(bool flew, double takeoff_a, double fastest_s, double window_s) const {
+    // Whether the joint estimator's resistance can pair this log's samples:
+    struct Lags {
+        double fastest_s = 0.0;  // the shortest median interval at which its lags are reached (0: no limit)
+        double slowest_s = 0.0;  // the longest pair it takes (0: no limit)
+        double prior_ohm = 0.0;  // what it uses when it measures none
+    };
+    std::vector<std::string> notes(bool flew, double takeoff_a, const Lags& lags, double window_s) const {
+        const double fastest_s = lags.fastest_s;
         std::vector<std::string> out;
         char buf[320];
         if (!flew && max_a_ < takeoff_a && min_a_ <= -takeoff_a) {
@@ -80,6 +86,17 @@ public:
                           "give --average-ms %.0f (manifest: average_ms)",
                           dt_s * 1e3, fastest_s * (core::DifferenceResistanceEstimator::kHistory - 1),
                           core::DifferenceResistanceEstimator::kHistory, fastest_s * 1e3, std::ceil(fastest_s * 1e3));
+            out.push_back(buf);
+        }
+        // A log written once a second (ArduCopter 3.0's CURR rows): no pair is close enough,
+        // so R0 is never measured and a resistive pack hides (underpowered.log, README).
+        if (flew && lags.slowest_s > 0.0 && dt_s > lags.slowest_s) {
+            std::snprintf(buf, sizeof buf,
+                          "the samples are %.3g s apart (median): the joint estimator's resistance pairs samples at "
+                          "most %.3g s apart, so it measures few or none and keeps the config's %.3g mOhm: a pack of "
+                          "higher resistance is not seen as one (no high-resistance warning; its short flight is "
+                          "missed or put down to capacity)",
+                          dt_s, lags.slowest_s, lags.prior_ohm * 1e3);
             out.push_back(buf);
         }
         return out;
@@ -154,11 +171,17 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     std::vector<std::string> input_notes = info.notes;
     const bool flew = body["flight"].is_object();
     const core::JointEstimator::Config& jc = options.config.monitor.joint;
-    const double fastest_s = options.config.monitor.estimator == core::EstimatorKind::Joint
-                                 ? std::max(jc.resistance.lag_s, jc.hover_resistance.lag_s) /
-                                       (core::DifferenceResistanceEstimator::kHistory - 1)
-                                 : 0.0;
-    for (const std::string& n : shape.notes(flew, options.config.monitor.flying.min_flying_current_a, fastest_s,
+    InputShape::Lags lags;
+    if (options.config.monitor.estimator == core::EstimatorKind::Joint) {
+        lags.fastest_s = std::max(jc.resistance.lag_s, jc.hover_resistance.lag_s) /
+                         (core::DifferenceResistanceEstimator::kHistory - 1);
+        const auto span_s = [](float lag_s) {
+            return static_cast<double>(core::max_pair_span_us(static_cast<uint64_t>(lag_s * 1.0e6f))) * 1e-6;
+        };
+        lags.slowest_s = std::max(span_s(jc.resistance.lag_s), span_s(jc.hover_resistance.lag_s));
+        lags.prior_ohm = options.config.monitor.battery.internal_resistance_ohm;
+    }
+    for (const std::string& n : shape.notes(flew, options.config.monitor.flying.min_flying_current_a, lags,
                                               static_cast<double>(options.reader.average_us) * 1e-6))
         input_notes.push_back(n);
     j["input"] = {{"path", path}, {"format", to_string(info.format)}, {"cells", info.cell_count},

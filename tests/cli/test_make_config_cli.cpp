@@ -102,5 +102,12 @@ TEST_CASE("battsim make-config reads an ArduPilot log's pack, and replay notes t
     CHECK(c3["battery"]["cells_in_series"] == 3);
     CHECK(c3["battery"]["capacity_ah"].get<double>() == Approx(4.0));
     CHECK(c3["monitor"]["min_flight_voltage_v"].get<double>() == Approx(9.4));
-    CHECK_FALSE(clitest::run_json("replay " + q(under) + " -c " + q(cfg3) + " --json").contains("config_notes"));
+    const json under_made = clitest::run_json("replay " + q(under) + " -c " + q(cfg3) + " --estimator joint --json");
+    CHECK_FALSE(under_made.contains("config_notes"));
+    // Its CURR rows come once a second: the joint estimator never measures the pack's R0, and
+    // says so (the sag at the take-off, 1.33 V for 19.3 A, is ten times the config's R0).
+    CHECK(any_contains(under_made["input"]["notes"], "the samples are 1 s apart (median): the joint estimator's "
+                                                      "resistance pairs samples at most 0.59 s apart"));
+    CHECK(under_made["flight"]["resistance_ohm"]["mean"].get<double>() ==
+          Approx(c3["battery"]["internal_resistance_ohm"].get<double>()).epsilon(1e-4));
 }

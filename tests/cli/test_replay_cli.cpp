@@ -197,6 +197,34 @@ TEST_CASE("replay reads a radio's telemetry log and says what its 0.1 V steps an
     const auto fr = clitest::run_json("replay " + q(dir + "/fast.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
                                       " --estimator reference --json");
     CHECK(fr["input"]["notes"].empty());
+
+    // One sample a second (an old autopilot's text log): too slow for any pair, so R0 stays the
+    // config's; said, with what it hides. sim-4s.json: lags 0.05 and 0.13 s, R0 20 mOhm.
+    std::string slow = "time_s,voltage_v,current_a\n";
+    for (int k = 0; k < 400; ++k) {
+        char row[64];
+        std::snprintf(row, sizeof row, "%d,%.3f,%s\n", k, k < 20 ? 16.5 : 15.6 - 0.004 * k, k < 20 ? "0.2" : (k % 7 ? "20" : "26"));
+        slow += row;
+    }
+    clitest::write_file(dir + "/slow.csv", slow);
+    const auto sj = clitest::run_json("replay " + q(dir + "/slow.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
+                                      " --estimator joint --json");
+    REQUIRE(sj["input"]["notes"].size() == 1);
+    CHECK(sj["input"]["notes"][0] ==
+          "the samples are 1 s apart (median): the joint estimator's resistance pairs samples at most 0.59 s apart, so "
+          "it measures few or none and keeps the config's 20 mOhm: a pack of higher resistance is not seen as one (no "
+          "high-resistance warning; its short flight is missed or put down to capacity)");
+    CHECK(sj["flight"]["resistance_ohm"]["mean"].get<double>() == Approx(0.020).epsilon(1e-4));
+    // With a lag that pairs them (3 x 0.3 + 0.2 = 1.1 s) the note goes and R0 is measured.
+    nlohmann::json cfg = nlohmann::json::parse(clitest::read_file(kSource + "/configs/sim-4s.json"));
+    cfg["joint"]["resistance_lag_s"] = 0.3;
+    clitest::write_file(dir + "/lag.json", cfg.dump(1));
+    const auto sl = clitest::run_json("replay " + q(dir + "/slow.csv") + " -c " + q(dir + "/lag.json") +
+                                      " --estimator joint --json");
+    CHECK(sl["input"]["notes"].empty());
+    CHECK(sl["flight"]["resistance_ohm"]["mean"].get<double>() != Approx(0.020).epsilon(1e-3));
+    CHECK(clitest::run_json("replay " + q(dir + "/slow.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
+                            " --estimator reference --json")["input"]["notes"].empty());
 }
 
 TEST_CASE("score --log-format edgetx flies the suite through a radio's telemetry log", "[cli]") {
