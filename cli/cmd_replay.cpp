@@ -161,7 +161,7 @@ std::function<int()> setup(CLI::App& sub) {
         if (a->json) std::cout << text;
         if (!a->json && a->summary.empty() && a->series.empty() && a->plot.empty() && a->mavlink.empty() && a->tlog.empty())
             print_brief(summary, people);
-        if (!a->json && a->said) print_said(summary["said"], people);
+        if (!a->json && a->said) print_said(summary["said"], summary["flight"], people);
         if (!a->json && summary.contains("charger_check")) print_charger_check(summary["charger_check"], people);
         if (refuse_config) {
             std::cerr << "battsim replay: --config-out: no correction found ("

@@ -223,13 +223,22 @@ std::string fixed(const nlohmann::json& v, int decimals, double scale = 1.0) {
     return host::fixed_text(v, decimals, "n/a", scale);
 }
 
+// When in the flight a time since the take-off falls: in it, or after its landing (a text or
+// a warning can come once the drone is down, and "157.7 s into" a 150.2 s flight misleads).
+std::string when_in_flight(const nlohmann::json& flight_time_s, const nlohmann::json& duration_s) {
+    const double t = flight_time_s.get<double>();
+    if (duration_s.is_number() && t > duration_s.get<double>())
+        return fixed(t - duration_s.get<double>(), 1) + " s after the landing";
+    return fixed(flight_time_s, 1) + " s into the flight";
+}
+
 // What a warning's summary entry says beyond its name and time: when in the flight, the
 // cause, the cell, what was measured, and whether it still held at the end of the log.
-std::string warning_detail(const nlohmann::json& w) {
+std::string warning_detail(const nlohmann::json& w, const nlohmann::json& duration_s) {
     std::string d;
     const auto add = [&d](const std::string& part) { d += (d.empty() ? "" : "; ") + part; };
     if (w.contains("flight_time_s"))
-        add(w["flight_time_s"].is_number() ? fixed(w["flight_time_s"], 1) + " s into the flight" : "before the take-off");
+        add(w["flight_time_s"].is_number() ? when_in_flight(w["flight_time_s"], duration_s) : "before the take-off");
     if (w.contains("cell")) add("cell " + std::to_string(w["cell"].get<int>()));
     if (w.contains("finding")) add(w["finding"].get<std::string>());
     for (const auto& c : w.value("cause", nlohmann::json::array())) {
@@ -269,6 +278,30 @@ std::string warning_spells(const nlohmann::json& w) {
     if (count > shown) d += ", and " + std::to_string(count - shown) + " more";
     return d;
 }
+
+// The flight's lines of the brief: its length, capacity, resistance, model error, and the
+// remaining time at 20 %.
+void print_flight_brief(const nlohmann::json& s, std::ostream& out) {
+    const auto& f = s["flight"];
+    const auto& cap = f["capacity_ah"];
+    out << "  flight " << fixed(f["duration_s"], 1) << " s; capacity ";
+    // The joint estimator's standard error: a flight that draws little of the pack says little.
+    if (cap.contains("final_sigma") && !cap["final_sigma"].is_null()) {
+        out << fixed(cap["final"], 3) << " +/- " << fixed(cap["final_sigma"], 3) << " Ah at the landing (mean "
+            << fixed(cap["mean"], 3) << ", first 20 %: " << fixed(cap["first20_mean"], 3) << ")";
+    } else {
+        out << "mean " << fixed(cap["mean"], 3) << " Ah (first 20 %: " << fixed(cap["first20_mean"], 3) << ", at the landing "
+            << fixed(cap["final"], 3) << ")";
+    }
+    out << "; resistance mean " << fixed(f["resistance_ohm"]["mean"], 2, 1000.0) << " mOhm; model MAE "
+        << fixed(f["voltage_error_v"]["model"]["mean_abs"], 3) << " V";
+    // The joint estimator's own model (its tracking filter, one step ahead) is what it
+    // compares with the measurement; the configured curve's error says how far the config is.
+    if (s["estimator"] == "joint") out << " (the estimator's own: " << fixed(f["voltage_error_v"]["adapted"]["mean_abs"], 3) << " V)";
+    out << "\n";
+    const auto& at20 = f["remaining_time_s"]["at20"];
+    out << "  remaining time at 20 %: " << (at20.is_number() ? fixed(at20, 1) + " s" : "not known yet") << "\n";
+}
 }  // namespace
 
 void print_brief(const nlohmann::json& s, std::ostream& out) {
@@ -293,39 +326,26 @@ void print_brief(const nlohmann::json& s, std::ostream& out) {
     const auto& f = s["flight"];
     if (f.is_null()) {
         out << "  no flight (current never reached the flying threshold)\n";
-        return;
-    }
-    const auto& cap = f["capacity_ah"];
-    out << "  flight " << fixed(f["duration_s"], 1) << " s; capacity ";
-    // The joint estimator's standard error: a flight that draws little of the pack says little.
-    if (cap.contains("final_sigma") && !cap["final_sigma"].is_null()) {
-        out << fixed(cap["final"], 3) << " +/- " << fixed(cap["final_sigma"], 3) << " Ah at the landing (mean "
-            << fixed(cap["mean"], 3) << ", first 20 %: " << fixed(cap["first20_mean"], 3) << ")";
     } else {
-        out << "mean " << fixed(cap["mean"], 3) << " Ah (first 20 %: " << fixed(cap["first20_mean"], 3) << ", at the landing "
-            << fixed(cap["final"], 3) << ")";
+        print_flight_brief(s, out);
     }
-    out << "; resistance mean " << fixed(f["resistance_ohm"]["mean"], 2, 1000.0) << " mOhm; model MAE "
-        << fixed(f["voltage_error_v"]["model"]["mean_abs"], 3) << " V";
-    // The joint estimator's own model (its tracking filter, one step ahead) is what it
-    // compares with the measurement; the configured curve's error says how far the config is.
-    if (s["estimator"] == "joint") out << " (the estimator's own: " << fixed(f["voltage_error_v"]["adapted"]["mean_abs"], 3) << " V)";
-    out << "\n";
-    const auto& at20 = f["remaining_time_s"]["at20"];
-    out << "  remaining time at 20 %: " << (at20.is_number() ? fixed(at20, 1) + " s" : "not known yet") << "\n";
+    // Warnings on the ground count too (a sample gap or a current offset on a bench log).
     out << "  warnings:";
     if (s["warnings"].empty()) out << " none";
+    const nlohmann::json duration_s = f.is_object() ? f["duration_s"] : nlohmann::json();
     for (const auto& w : s["warnings"]) {
-        out << "\n    " << w["name"].get<std::string>() << " at " << fixed(w["first_time_s"], 1) << " s" << warning_detail(w);
+        out << "\n    " << w["name"].get<std::string>() << " at " << fixed(w["first_time_s"], 1) << " s"
+            << warning_detail(w, duration_s);
         out << warning_spells(w);
     }
     out << "\n";
 }
 
-void print_said(const nlohmann::json& said, std::ostream& out) {
+void print_said(const nlohmann::json& said, const nlohmann::json& flight, std::ostream& out) {
     out << "  said (ground station):" << (said.empty() ? " nothing" : "") << "\n";
+    const nlohmann::json duration_s = flight.is_object() ? flight["duration_s"] : nlohmann::json();
     for (const auto& t : said) {
-        const std::string when = t["flight_time_s"].is_number() ? fixed(t["flight_time_s"], 1) + " s into the flight"
+        const std::string when = t["flight_time_s"].is_number() ? when_in_flight(t["flight_time_s"], duration_s)
                                                                : fixed(t["time_s"], 1) + " s, on the ground";
         out << "    " << when << "  " << (t["severity"] == "notice" ? "notice " : "warning") << "  "
             << t["text"].get<std::string>() << "\n";

@@ -79,7 +79,7 @@ void add_named(std::vector<host::NamedPath>& to, const std::string& what, const 
 // Human-readable few lines about a summary.
 void print_brief(const nlohmann::json& summary, std::ostream& out);
 // The summary's `said` (replay --said): each text with its time.
-void print_said(const nlohmann::json& said, std::ostream& out);
+void print_said(const nlohmann::json& said, const nlohmann::json& flight, std::ostream& out);
 // The summary's `charger_check` as one line for people.
 void print_charger_check(const nlohmann::json& check, std::ostream& out);
 

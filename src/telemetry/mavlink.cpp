@@ -51,12 +51,13 @@ void append_resistance(TextBuffer& t, const core::MonitorStatus& status, float r
     t.append_uint(percent_of(status.resistance_ohm, rated_resistance_ohm));
 }
 
-// The verdict's shortfall, % of a healthy pack's flight; false when the flight is not short.
+// The verdict's shortfall, % of a healthy pack's flight; false when the flight is not short
+// by a whole percent. A total of 0 (no flight left from the take-off charge) is 100 %.
 bool shortfall_percent(const core::MonitorStatus& status, uint32_t& percent) {
-    if (!(status.expected_time_s > 0.0f && status.total_time_s > 0.0f && status.total_time_s < status.expected_time_s))
+    if (!(status.expected_time_s > 0.0f && status.total_time_s >= 0.0f && status.total_time_s < status.expected_time_s))
         return false;
     percent = percent_of(status.expected_time_s - status.total_time_s, status.expected_time_s);
-    return true;
+    return percent > 0;
 }
 
 }  // namespace

@@ -194,3 +194,42 @@ TEST_CASE("replay --said: the aged pack's short flight that cleared is withdrawn
     CHECK(said[1]["time_s"].get<double>() >= off_s + 5.0);
     CHECK(said[1]["flight_time_s"].is_number());
 }
+
+TEST_CASE("replay's brief: warnings on the ground and after the landing are said where they came", "[cli][telemetry]") {
+    const std::string dir = clitest::temp_dir();
+    // 0.1 s samples: on the ground, [a 60 s flight at 20 A, 15 s on the ground,] a 3 s gap, more ground.
+    const auto log = [&dir](const std::string& name, bool flight) {
+        std::string text = "time_s,voltage_v,current_a\n";
+        double t = 0.0;
+        const auto add = [&](double seconds, double v, double a) {
+            for (int k = 0; k < static_cast<int>(seconds * 10.0 + 0.5); ++k, t += 0.1) {
+                char row[64];
+                std::snprintf(row, sizeof row, "%.3f,%.3f,%.3f\n", t, v, a);
+                text += row;
+            }
+        };
+        add(20.0, 16.6, 0.3);
+        if (flight) add(60.0, 15.4, 20.0), add(15.0, 16.0, 0.3);
+        t += 3.0;
+        add(10.0, 16.0, 0.3);
+        clitest::write_file(dir + "/" + name, text);
+        return q(dir + "/" + name);
+    };
+    const std::string cfg = " -c " + q(kSource + "/configs/sim-4s.json") + " --estimator joint --said";
+    // No flight at all: the gap is still a warning, and the brief still lists it.
+    clitest::Result r = run("replay " + log("ground.csv", false) + cfg);
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.out, Catch::Contains("no flight (current never reached the flying threshold)\n  warnings:\n    sensor_fault at 23.0 s"));
+    CHECK_THAT(r.out, Catch::Contains("23.0 s, on the ground  warning  battsim: sensor fault: no reading for 3.1 s"));
+    // After the landing: counted from it, not "77 s into" a 60 s flight.
+    r = run("replay " + log("landed.csv", true) + cfg);
+    REQUIRE(r.exit_code == 0);
+    const json j = clitest::run_json("replay " + q(dir + "/landed.csv") + cfg + " --json");
+    const double after_s = j["said"][0]["flight_time_s"].get<double>() - j["flight"]["duration_s"].get<double>();
+    REQUIRE(after_s > 10.0);
+    char when[64];
+    std::snprintf(when, sizeof when, "%.1f s after the landing", after_s);
+    CHECK_THAT(r.out, Catch::Contains(std::string("sensor_fault at 98.0 s (") + when));
+    CHECK_THAT(r.out, Catch::Contains(std::string(when) + "  warning  battsim: sensor fault: no reading for 3.1 s"));
+    CHECK(r.out.find("into the flight") == std::string::npos);
+}

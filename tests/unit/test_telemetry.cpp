@@ -507,6 +507,15 @@ TEST_CASE("Telemetry: the withdrawals' sentences, by hand", "[telemetry]") {
     st.total_time_s = 255.0f;  // 15 % short: under the bar
     telemetry::withdrawal_text(core::kWarnShortFlight, 1.55f, 0.02f, st, text);
     CHECK(std::string(text) == "battsim: short flight cleared, 15% short now");
+    st.total_time_s = 299.0f;  // 0.3 % short: no "0% short now"
+    telemetry::withdrawal_text(core::kWarnShortFlight, 1.55f, 0.02f, st, text);
+    CHECK(std::string(text) == "battsim: short flight cleared, not short now");
+    // The worst a verdict reads, no flight left from the take-off charge: 100 %, not no number.
+    st.total_time_s = 0.0f;
+    st.short_flight_cause = core::JointEstimator::kCauseResistance;
+    st.resistance_ohm = 0.0328f;
+    telemetry::warning_text(core::kWarnShortFlight, 1.55f, 0.02f, st, text);
+    CHECK(std::string(text) == "battsim: flight 100% short, R 164%");
     // The reference estimator's own verdicts (it has no short flight).
     st.capacity_ah = 1.4f;
     st.resistance_ohm = 0.0226f;
