@@ -49,7 +49,20 @@ void add_input_options(CLI::App& sub, InputArgs& a) {
     sub.add_flag("--negative-discharge", a.negative_discharge, "CSV: the log's current is negative while discharging");
     sub.add_option("--average-ms", a.average_ms,
                    "Average the samples over windows this long (ms) before the monitor sees them: for logs sampled "
-                   "faster than the joint estimator's resistance lags reach (blackbox logs)");
+                   "faster than the joint estimator's resistance lags reach (blackbox logs)")
+        // Checked as given: 0 stands for "not given" inside, and must not pass silently as that.
+        ->check(CLI::Validator(
+            [](std::string& text) -> std::string {
+                double ms = 0.0;
+                if (!host::parse_finite_number(text, &ms)) return "expected a number of milliseconds, found " + text;
+                try {
+                    host::average_window_ms(ms);
+                } catch (const std::invalid_argument& e) {
+                    return e.what();
+                }
+                return std::string();
+            },
+            "MS"));
 }
 
 void add_model_job_options(CLI::App& sub, ModelJobArgs& a, const std::string& report, const std::string& plot_help) {

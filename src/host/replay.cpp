@@ -39,6 +39,7 @@ public:
             ++voltages_;
         }
         if (have_ && s.time_us > last_us_) intervals_s_.push_back(static_cast<double>(s.time_us - last_us_) * 1e-6);
+        if (!have_) first_us_ = s.time_us;
         last_us_ = s.time_us;
         have_ = true;
         if (std::isfinite(s.current_a)) {
@@ -74,12 +75,24 @@ public:
                           dt_s);
             out.push_back(buf);
         }
+        // The other way round: seconds read as milliseconds squeeze a flight into a fraction
+        // of a second, too short for any take-off (a CMU flight as time_ms: 200 s in 0.2 s).
+        const double span_s = static_cast<double>(last_us_ - first_us_) * 1e-6;
+        const bool seconds_as_ms = dt_s > 0.0 && dt_s < kFastestIntervalS && span_s < kShortestSpanS && !flew &&
+                                   intervals_s_.size() >= static_cast<size_t>(kCoarseMinSamples);
+        if (seconds_as_ms) {
+            std::snprintf(buf, sizeof buf,
+                          "the samples are %.3g ms apart (median) and the log spans %.3g s: if the time column "
+                          "counts seconds, give --time-unit s (or --time-col with a column in seconds)",
+                          dt_s * 1e3, span_s);
+            out.push_back(buf);
+        }
         if (coarse_ && varied_ && voltages_ >= kCoarseMinSamples) {
             out.push_back("the pack voltage moves in 0.1 V steps, as a radio's telemetry carries it: the capacity, "
                           "resistance and short-flight warnings read from it are rougher than from the monitor's own "
                           "sensors (README, \"Radio telemetry logs\")");
         }
-        if (dt_s > 0.0 && dt_s < fastest_s) {
+        if (dt_s > 0.0 && dt_s < fastest_s && !seconds_as_ms) {
             std::snprintf(buf, sizeof buf,
                           "the samples are %.3g ms apart (median): the joint estimator's resistance compares samples "
                           "up to %.3g s apart among its last %d, so below %.3g ms it is measured late or never; "
@@ -104,12 +117,14 @@ public:
 
 private:
     static constexpr double kSlowestIntervalS = 10.0;
+    static constexpr double kFastestIntervalS = 1e-3;  // a flight controller's blackbox at most
+    static constexpr double kShortestSpanS = 10.0;
     static constexpr long kCoarseMinSamples = 20;
     bool coarse_ = true, varied_ = false;
     float first_v_ = 0.0f;
     long voltages_ = 0;
     std::vector<double> intervals_s_;
-    uint64_t last_us_ = 0;
+    uint64_t first_us_ = 0, last_us_ = 0;
     bool have_ = false;
     double min_a_ = INFINITY, max_a_ = -INFINITY;
 };

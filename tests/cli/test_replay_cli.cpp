@@ -148,6 +148,18 @@ TEST_CASE("replay notes a current of the other sign and a time column in millise
     CHECK(m[0] == "the samples are 67 s apart (median): if the time column counts milliseconds, give --time-unit ms (or "
                   "--time-col with a column in seconds)");
     CHECK(notes("ok.csv", "").empty());
+    // The other way round: seconds read as milliseconds squeeze the 20 s into 0.02 s, and no
+    // take-off fits; said instead of the resistance lags' advice to average.
+    std::string sec = ok;
+    sec.replace(0, sec.find('\n'), "time_ms,voltage_v,current_a");
+    clitest::write_file(dir + "/sec.csv", sec);
+    for (const std::string estimator : {"reference", "joint"}) {
+        const auto sm = notes("sec.csv", " --estimator " + estimator);
+        REQUIRE(sm.size() == 1);
+        CHECK(sm[0] == "the samples are 0.067 ms apart (median) and the log spans 0.02 s: if the time column counts "
+                       "seconds, give --time-unit s (or --time-col with a column in seconds)");
+    }
+    CHECK(notes("sec.csv", " --time-unit s").empty());
 }
 
 TEST_CASE("replay reads a radio's telemetry log and says what its 0.1 V steps and a fast log cost", "[cli]") {
@@ -193,6 +205,10 @@ TEST_CASE("replay reads a radio's telemetry log and says what its 0.1 V steps an
     CHECK(fa["input"]["notes"][0] == "samples averaged over 9 ms windows: 20000 read into 4000");
     CHECK(fa["samples"]["total"] == 4000);
     CHECK(run("replay " + q(dir + "/fast.csv") + " --average-ms -1").exit_code == 2);
+    // 0 is no window either (it had passed silently as "no averaging").
+    const auto zero = run("replay " + q(dir + "/fast.csv") + " --average-ms 0");
+    CHECK(zero.exit_code == 2);
+    CHECK_THAT(zero.err, Catch::Contains("--average-ms: expected an averaging window of 0.001 to 60000 ms, found 0"));
     // The reference estimator's resistance has no such lag: no note.
     const auto fr = clitest::run_json("replay " + q(dir + "/fast.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
                                       " --estimator reference --json");

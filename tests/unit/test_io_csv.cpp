@@ -507,6 +507,12 @@ TEST_CASE("EdgeTX radio log: wall-clock time across midnight, VFAS before RxBt, 
     // Crossfire / ExpressLRS: the pack is RxBt.
     const std::string q = t.write("crsf.csv", "Date,Time,RxBt(V),Curr(A)\n2026-05-01,10:00:00.000,25.2,1.5\n");
     CHECK(read_all(q, ReaderOptions())[0].voltage_v == 25.2f);
+    // No row with telemetry at all: said so, not only "no data rows".
+    const std::string none = t.write("none.csv", "Date,Time,RxBt(V),Curr(A)\n2026-05-01,10:00:00.100,0,0\n"
+                                                 "2026-05-01,10:00:00.300,0.0,\n");
+    CHECK(read_error(none) == none + ": no data rows after the header on line 1: all 2 rows are without battery "
+                                     "telemetry (0 V, or an empty voltage or current; the first on line 2), as a radio "
+                                     "logs before the receiver sends the pack's readings");
 }
 
 TEST_CASE("EdgeTX radio log: bad dates and times name the field", "[io]") {

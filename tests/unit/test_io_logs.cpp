@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <string>
 #include <utility>
@@ -978,4 +979,92 @@ TEST_CASE("ULog: appended data after a cut-off message", "[io-logs]") {
     REQUIRE(r.samples.size() == 2);
     CHECK(r.samples[1].time_us == 1200000);
     CHECK(any_note(r, "appended"));
+}
+
+TEST_CASE("One corrupt time stamp in a real log costs its own row, not the rest of the log", "[io-logs][data]") {
+    LogTempDir d;
+    const auto bytes = [](const std::string& path) {
+        std::ifstream in(path, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    };
+    const auto write = [](const std::string& path, const std::string& content) {
+        std::ofstream(path, std::ios::binary) << content;
+    };
+    // log171.bin: one bit of one CURR row's TimeMS flipped, 16,777 s ahead. Before, the 1,383
+    // rows after it all "went back" and the replay read a 16,808 s flight.
+    const std::string bin = data_path("/ardupilot/log171.bin");
+    std::string b = bytes(bin);
+    REQUIRE(b.size() > 1268717u);
+    b[1268717] = static_cast<char>(b[1268717] ^ 1);
+    write(d.path("flip.bin"), b);
+    const auto clean = read_all(Kind::DfBinary, bin);
+    const auto flipped = read_all(Kind::DfBinary, d.path("flip.bin"));
+    CHECK(flipped.samples.size() + 1 == clean.samples.size());
+    CHECK(non_decreasing(flipped.samples));
+    CHECK(seconds(flipped.samples.back()) == seconds(clean.samples.back()));
+    CHECK(any_note(flipped, "byte 1268711: CURR time 16891.816000 s jumps 16777.317 s ahead of the previous row"));
+    CHECK(any_note(flipped, "a corrupt time stamp; 1 row dropped"));
+
+    // test.ulg: one battery_status timestamp 1000 s ahead; and one at 2^64 - 1 us, which no
+    // uint64 of microseconds holds (it had come out as time 0).
+    const std::string ulg = data_path("/px4/test.ulg");
+    const auto ulog_clean = read_all(Kind::Ulog, ulg);
+    for (const uint64_t bad : {uint64_t{0}, ~uint64_t{0}}) {
+        std::string u = bytes(ulg);
+        REQUIRE(u.size() > 217638u);
+        uint64_t t = 0;
+        std::memcpy(&t, &u[217630], 8);  // the shared data is little-endian, and so is this host
+        t = bad == 0 ? t + 1000000000u : bad;
+        std::memcpy(&u[217630], &t, 8);
+        write(d.path("bad.ulg"), u);
+        const auto r = read_all(Kind::Ulog, d.path("bad.ulg"));
+        INFO(bad);
+        CHECK(r.samples.size() + 1 == ulog_clean.samples.size());
+        CHECK(non_decreasing(r.samples));
+        CHECK(any_note(r, bad == 0 ? "a corrupt time stamp; 1 sample dropped" : "is not a time a log can hold"));
+    }
+
+    // robert_lefebvre_octo_PM.log: one digit of one GPS time (its CURR rows take the latest
+    // GPS time). The clock had stuck at the bad time: 5,038 s instead of 174 s.
+    const std::string txt = data_path("/ardupilot/robert_lefebvre_octo_PM.log");
+    std::string t = bytes(txt);
+    const size_t at = t.find("594458200");
+    REQUIRE(at != std::string::npos);
+    t[at + 2] = '9';  // 599458200: 5,000 s ahead
+    write(d.path("gps.log"), t);
+    const auto gps_clean = read_all(Kind::DfText, txt);
+    const auto gps = read_all(Kind::DfText, d.path("gps.log"));
+    REQUIRE(gps.samples.size() == gps_clean.samples.size());
+    CHECK(seconds(gps.samples.back()) == seconds(gps_clean.samples.back()));
+}
+
+TEST_CASE("ULog: a message size that lied costs the bytes to the next sync message, said", "[io-logs][data]") {
+    LogTempDir d;
+    const std::string ulg = data_path("/px4/test.ulg");
+    std::ifstream in(ulg, std::ios::binary);
+    const std::string clean((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const auto with_size = [&](size_t at, uint16_t size) {
+        std::string u = clean;
+        REQUIRE(u.size() > at + 2);
+        u[at] = static_cast<char>(size & 0xFF);
+        u[at + 1] = static_cast<char>(size >> 8);
+        const std::string path = d.path("lied.ulg");
+        std::ofstream(path, std::ios::binary) << u;
+        return path;
+    };
+    // A data message of 47 bytes said to be 2: the next header falls inside its payload. Before,
+    // the reader never found its place again and kept 4 of the 46 samples.
+    REQUIRE(clean[105246] == 'D');
+    const auto r = read_all(Kind::Ulog, with_size(105244, 2));
+    CHECK(r.samples.size() == 44);
+    CHECK(non_decreasing(r.samples));
+    CHECK(any_note(r, "byte 105249: a message header of type ':', which no ULog message has: the log is corrupt "
+                      "before it (a message size that lied); skipped 13967 bytes to the next sync message at byte "
+                      "119216"));
+    // Early in the log the lost bytes held the subscription: the error says the log is corrupt.
+    REQUIRE(clean[56534] == 'Q');
+    CHECK(error_of(Kind::Ulog, with_size(56532, 2)) ==
+          d.path("lied.ulg") + ": no battery_status data (multi_id 0) in this ULog: the topic is not logged (or not "
+                               "where it can be read: the log is corrupt at byte 56537, and 28232 bytes were skipped "
+                               "to find its messages again)");
 }

@@ -297,9 +297,11 @@ protected:
                 throw InputError(info_.path, cut_line_, 0,
                                  "no complete data rows: the only data line is cut off (no newline at the end)");
             }
-            throw InputError(info_.path, 0, 0, lines_.line_number() == 0 ? "file is empty" : no_data_message);
+            throw InputError(info_.path, 0, 0, lines_.line_number() == 0 ? "file is empty" : no_data_message + no_rows_detail());
         }
     }
+    // Why the rows there are gave no sample (appended to "no data rows..."); "" if none were skipped.
+    virtual std::string no_rows_detail() const { return ""; }
 
     // Next line that is not blank; false at the end of the file.
     bool next_nonblank(std::string_view& line) {
@@ -937,6 +939,13 @@ private:
             out.has_temperature = true;
         }
         return Row::Kept;
+    }
+
+    std::string no_rows_detail() const override {
+        if (skipped_rows_ == 0) return "";
+        return ": all " + std::to_string(skipped_rows_) + (skipped_rows_ == 1 ? " row is" : " rows are") +
+               " without battery telemetry (0 V, or an empty voltage or current; the first on line " +
+               std::to_string(first_skipped_line_) + "), as a radio logs before the receiver sends the pack's readings";
     }
 
     void finish_notes() override {

@@ -50,6 +50,7 @@
 // message keeps everything before it (noted).
 #include "host/io/dataflash_reader.h"
 #include "host/io/dataflash_ulog_util.h"
+#include "host/io/time_order.h"
 
 #include <algorithm>
 #include <array>
@@ -59,6 +60,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -756,12 +758,19 @@ struct Clocks {
     double first_boot_us = 0, first_gps_us = 0;
     double gps_last_raw = -1, gps_wrap = 0;
 
+    // A clock's new reading: messages of several types a few ms out of order keep the clock
+    // where it was, but a step back of a second or more is taken, so that the clock returns
+    // from a corrupt time stamp (which TimeOrder then drops) instead of sticking at it.
+    static double latest(double clock_us, double reading_us) {
+        return reading_us < clock_us && clock_us - reading_us < 1.0e6 ? clock_us : reading_us;
+    }
+
     void update(const DfFormat& f, const FieldReader& r) {
         double v;
         if (f.boot_time >= 0 && r.number(f.boot_time, v) && std::isfinite(v) && v >= 0) {
             v *= f.boot_time_to_us;
             if (!boot_seen) first_boot_us = v;
-            boot_us = boot_seen ? std::max(boot_us, v) : v;
+            boot_us = boot_seen ? latest(boot_us, v) : v;
             boot_seen = true;
         }
         if (f.gps_week_ms >= 0 && r.number(f.gps_week_ms, v) && std::isfinite(v) && v > 0 && v < kGpsWeekMs) {
@@ -769,7 +778,7 @@ struct Clocks {
             gps_last_raw = v;
             double t = (v + gps_wrap) * 1000.0;
             if (!gps_seen) first_gps_us = t;
-            gps_us = gps_seen ? std::max(gps_us, t) : t;
+            gps_us = gps_seen ? latest(gps_us, t) : t;
             gps_seen = true;
         }
     }
@@ -973,31 +982,36 @@ public:
             info_.has_temperature = plan_.use_temp;
         }
         src_ = open_source(notes_);
+        order_.emplace(plan_.battery + " time", "row", [this](const char* kind, const std::string& text) { drop(kind, text); });
     }
 
     bool next(core::Sample& out) override {
+        if (order_->pop(out)) return true;
         if (done_) return false;
         const DfFormat* f;
         const FieldReader* r;
         std::string where;
         long line;
+        core::Sample sample;
+        double t_us;
         while (src_->next(f, r, where, line)) {
-            if (step(*f, *r, where, line, out)) {
-                ++emitted_;
-                return true;
+            if (step(*f, *r, where, line, sample, t_us)) {
+                order_->offer(sample, t_us, where);
+                if (order_->pop(out)) return true;
             }
         }
+        order_->finish();
         done_ = true;
         if (beyond_cells_ > 0)
             notes_.add("cells", "BCL reports more than " + std::to_string(core::kMaxCells) + " cells in " +
                                     std::to_string(beyond_cells_) + " rows; cells beyond " +
                                     std::to_string(core::kMaxCells) + " are dropped");
         notes_.finish();
-        if (emitted_ == 0)
+        if (order_->accepted() == 0)
             throw InputError(path_, 0, 0, "no usable " + plan_.battery + " rows: all " + std::to_string(rows_) +
                                               " were dropped" +
                                               (first_drop_.empty() ? std::string() : " (first: " + first_drop_ + ")"));
-        return false;
+        return order_->pop(out);
     }
 
     const SourceInfo& info() const override { return info_; }
@@ -1035,7 +1049,9 @@ private:
         notes_.add(kind, text);
     }
 
-    bool step(const DfFormat& f, const FieldReader& r, const std::string& where, long line, core::Sample& out) {
+    // A battery row read into `out`, its time (µs, not yet checked for order) into `t`.
+    bool step(const DfFormat& f, const FieldReader& r, const std::string& where, long line, core::Sample& out,
+              double& t) {
         (void)line;
         clocks_.update(f, r);
         if (f.role == Role::Parameter && f.decodable) {
@@ -1057,7 +1073,6 @@ private:
         if (!read_instance(f, r, inst) || inst != 0) return false;
         ++rows_;
         // Time first: a row dropped below still occupies its slot in an inferred spacing.
-        double t;
         if (f.boot_time >= 0) {
             if (!r.number(f.boot_time, t) || !std::isfinite(t)) {
                 drop("unreadable", where + ": " + f.name + "." + f.labels[static_cast<size_t>(f.boot_time)] +
@@ -1100,14 +1115,7 @@ private:
                                   " A is not a plausible current (finite, |I| <= 10000 A); row dropped");
             return false;
         }
-        if (t < 0 || (emitted_ > 0 && t < last_t_)) {
-            drop("backwards", where + ": " + f.name + " time " + fixed(t / 1e6, 6) + " s goes back before the "
-                                  "previous sample (" + fixed(last_t_ / 1e6, 6) + " s); row dropped");
-            return false;
-        }
-        last_t_ = t;
         out = core::Sample();
-        out.time_us = static_cast<uint64_t>(std::llround(t));
         out.voltage_v = static_cast<float>(volt);
         out.current_a = static_cast<float>(curr);
         out.cell_count = static_cast<uint8_t>(cell_count_);
@@ -1133,8 +1141,7 @@ private:
     long beyond_cells_ = 0;
     long untimed_ = 0;
     long rows_ = 0;
-    long emitted_ = 0;
-    double last_t_ = 0;
+    std::optional<TimeOrder> order_;  // made once the plan names the battery message
     bool done_ = false;
     std::string first_drop_;
 };

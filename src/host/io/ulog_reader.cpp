@@ -44,6 +44,7 @@
 #include <vector>
 
 #include "host/io/dataflash_ulog_util.h"
+#include "host/io/time_order.h"
 
 namespace battsim {
 namespace host {
@@ -173,6 +174,9 @@ public:
     }
 
     bool saw_subscription() const { return subscribed_ever_; }
+    // Bytes skipped to find the framing again after corrupt headers, and where the first was.
+    uint64_t corrupt_bytes() const { return corrupt_bytes_; }
+    uint64_t first_corrupt() const { return first_corrupt_; }
 
     bool next(BatteryRecord& rec) {
         for (;;) {
@@ -246,10 +250,53 @@ public:
                 case 'P': parameter(payload, size, off); break;
                 case 'I': case 'M': case 'Q': case 'L': case 'C': case 'S': break;
                 default:
-                    notes_.add("unknown-type", "byte " + std::to_string(off) + ": unknown message type " +
-                                                   quoted(std::string(1, type)) + " (" + std::to_string(size) +
-                                                   " bytes) skipped");
+                    if (type >= 'A' && type <= 'Z') {
+                        // A message type of a newer ULog: the spec has readers skip it by its size.
+                        notes_.add("unknown-type", "byte " + std::to_string(off) + ": unknown message type " +
+                                                       quoted(std::string(1, type)) + " (" + std::to_string(size) +
+                                                       " bytes) skipped");
+                        break;
+                    }
+                    pending_ = 0;
+                    resync(off, type);
             }
+        }
+    }
+
+    // A header whose type is no letter is not a message: the framing is lost, most likely to a
+    // size field that lied, which sends every later header into the middle of a payload. The
+    // spec's sync messages (8 magic bytes) are there to find it again; the bytes between are
+    // skipped, and said.
+    void resync(uint64_t off, char type) {
+        static constexpr uint8_t kSync[11] = {8, 0, 'S', 0x2F, 0x73, 0x13, 0x20, 0x25, 0x0C, 0xBB, 0x12};
+        const std::string what = "byte " + std::to_string(off) + ": a message header of type '" + printable(type) +
+                                 "', which no ULog message has: the log is corrupt before it (a message size that "
+                                 "lied); ";
+        if (corrupt_bytes_ == 0) first_corrupt_ = off;
+        in_.consume(1);
+        for (;;) {
+            // Not past the next appended-data offset: a message starts there for sure.
+            size_t avail = in_.ensure(ByteStream::kWindow);
+            const bool capped = !appended_.empty() && appended_.front() - in_.offset() < avail;
+            if (capped) avail = static_cast<size_t>(appended_.front() - in_.offset());
+            const uint8_t* p = in_.data();
+            const uint8_t* hit = std::search(p, p + avail, kSync, kSync + sizeof kSync);
+            if (hit != p + avail || capped) {
+                in_.consume(static_cast<size_t>(hit - p));
+                corrupt_bytes_ += in_.offset() - off;
+                notes_.add("corrupt", what + "skipped " + std::to_string(in_.offset() - off) + " bytes to the next " +
+                                          (hit != p + avail ? "sync message" : "appended data") + " at byte " +
+                                          std::to_string(in_.offset()) + "; samples in them are lost");
+                return;
+            }
+            if (avail < sizeof kSync) {
+                in_.consume(avail);
+                corrupt_bytes_ += in_.offset() - off;
+                notes_.add("corrupt", what + "no sync message follows, so the remaining " +
+                                          std::to_string(in_.offset() - off) + " bytes are not read");
+                return;
+            }
+            in_.consume(avail - (sizeof kSync - 1));
         }
     }
 
@@ -562,6 +609,7 @@ private:
     size_t definition_bytes_ = 0;
     bool subscribed_ = false;
     bool subscribed_ever_ = false;
+    uint64_t corrupt_bytes_ = 0, first_corrupt_ = 0;
     uint16_t battery_id_ = 0;
     BatteryLayout layout_;
     std::vector<uint8_t> padded_;
@@ -598,21 +646,24 @@ public:
     }
 
     bool next(core::Sample& out) override {
+        if (order_.pop(out)) return true;
         if (done_) return false;
         BatteryRecord r;
+        core::Sample sample;
         while (stream_->next(r)) {
-            if (emit(r, out)) {
-                ++emitted_;
-                return true;
+            if (emit(r, sample)) {
+                order_.offer(sample, r.timestamp, "byte " + std::to_string(r.offset));
+                if (order_.pop(out)) return true;
             }
         }
+        order_.finish();
         done_ = true;
         stream_->finish();
         notes_.finish();
-        if (emitted_ == 0)
+        if (order_.accepted() == 0)
             throw InputError(path_, 0, 0, "no usable battery_status samples: all " + std::to_string(rows_) +
                                               " were dropped" + (first_drop_.empty() ? "" : " (first: " + first_drop_ + ")"));
-        return false;
+        return order_.pop(out);
     }
 
     const SourceInfo& info() const override { return info_; }
@@ -640,12 +691,21 @@ private:
                 if (same) ++equal_cells;
             }
         }
-        if (rows == 0)
+        if (rows == 0) {
+            // Corrupt headers skipped may have held the subscription or the data: say so.
+            const std::string corrupt =
+                s.corrupt_bytes() == 0 ? std::string()
+                                       : " (or not where it can be read: the log is corrupt at byte " +
+                                             std::to_string(s.first_corrupt()) + ", and " +
+                                             std::to_string(s.corrupt_bytes()) +
+                                             " bytes were skipped to find its messages again)";
             throw InputError(path_, 0, 0,
-                             s.saw_subscription()
-                                 ? "no battery_status data (multi_id 0) in this ULog: the topic is subscribed but "
-                                   "never logged"
-                                 : "no battery_status data (multi_id 0) in this ULog: the topic is not logged");
+                             (s.saw_subscription()
+                                  ? "no battery_status data (multi_id 0) in this ULog: the topic is subscribed but "
+                                    "never logged"
+                                  : "no battery_status data (multi_id 0) in this ULog: the topic is not logged") +
+                                 corrupt);
+        }
         // PX4 fills every cell with pack / count when it cannot measure cells: such cells
         // say nothing of any cell, and their sum, rounded apart from the pack's, read as a
         // sensor fault. They are left out, so the monitor sees the pack alone.
@@ -683,15 +743,7 @@ private:
                                   " A is not a plausible current; sample dropped");
             return false;
         }
-        if (emitted_ > 0 && r.timestamp < last_t_) {
-            drop("backwards", where + ": battery_status timestamp " + fixed(r.timestamp / 1e6, 6) +
-                                  " s goes back before the previous sample (" + fixed(last_t_ / 1e6, 6) +
-                                  " s); sample dropped");
-            return false;
-        }
-        last_t_ = r.timestamp;
         out = core::Sample();
-        out.time_us = static_cast<uint64_t>(r.timestamp);
         out.voltage_v = static_cast<float>(r.voltage);
         out.current_a = static_cast<float>(current);
         int beyond = 0;
@@ -713,8 +765,7 @@ private:
     std::unique_ptr<UlogStream> stream_;
     bool synthetic_cells_ = false;  // every cell equal in every sample: PX4's pack / count
     long rows_ = 0;
-    long emitted_ = 0;
-    double last_t_ = 0;
+    TimeOrder order_{"battery_status timestamp", "sample", [this](const char* kind, const std::string& text) { drop(kind, text); }};
     bool done_ = false;
     std::string first_drop_;
 };

@@ -1,0 +1,81 @@
+#include "host/io/time_order.h"
+
+#include <cmath>
+#include <cstdint>
+
+#include "host/io/dataflash_ulog_util.h"
+
+namespace battsim {
+namespace host {
+
+using logio::fixed;
+
+void TimeOrder::offer(core::Sample sample, double time_us, const std::string& where) {
+    if (!std::isfinite(time_us) || time_us < 0.0 || time_us >= kMaxTimeUs) {
+        drop_("bad-time", where + ": " + what_ + " " + fixed(time_us / 1e6, 6) +
+                              " s is not a time a log can hold (0 to 9.2e12 s); " + noun_ + " dropped");
+        return;
+    }
+    Row row{sample, time_us, where};
+    row.sample.time_us = static_cast<uint64_t>(std::llround(time_us));
+    if (!held_.empty()) {
+        if (time_us >= held_.back().time_us) {
+            held_.push_back(std::move(row));
+            if (held_.size() > kMaxHeld) release_held();  // the log went on: a gap
+            return;
+        }
+        if (time_us >= last_us_ && time_us < held_.front().time_us) {
+            // Back before the jump, at or after the last sample before it: the jump was a
+            // corrupt time stamp, and the rows that carried it go.
+            const Row& first = held_.front();
+            drop_("glitch", first.where + ": " + what_ + " " + fixed(first.time_us / 1e6, 6) + " s jumps " +
+                                fixed((first.time_us - last_us_) / 1e6, 3) + " s ahead of the previous " + noun_ +
+                                " (" + fixed(last_us_ / 1e6, 6) + " s), and " + where + " is back at " +
+                                fixed(time_us / 1e6, 6) + " s: a corrupt time stamp; " + std::to_string(held_.size()) +
+                                " " + noun_ + (held_.size() == 1 ? "" : "s") + " dropped");
+            held_.clear();
+            accept(std::move(row));
+            return;
+        }
+        // Back within the held rows, or before the last sample: this one is out of order.
+        const double previous_us = time_us < last_us_ ? last_us_ : held_.back().time_us;
+        drop_("backwards", where + ": " + what_ + " " + fixed(time_us / 1e6, 6) + " s goes back before the previous " +
+                               noun_ + " (" + fixed(previous_us / 1e6, 6) + " s); " + noun_ + " dropped");
+        return;
+    }
+    if (accepted_ > 0 && time_us < last_us_) {
+        drop_("backwards", where + ": " + what_ + " " + fixed(time_us / 1e6, 6) + " s goes back before the previous " +
+                               noun_ + " (" + fixed(last_us_ / 1e6, 6) + " s); " + noun_ + " dropped");
+        return;
+    }
+    if (accepted_ > 0 && time_us - last_us_ > kJumpUs) {
+        held_.push_back(std::move(row));
+        return;
+    }
+    accept(std::move(row));
+}
+
+void TimeOrder::accept(Row row) {
+    last_us_ = row.time_us;
+    ready_.push_back(row.sample);
+    ++accepted_;
+}
+
+void TimeOrder::release_held() {
+    while (!held_.empty()) {
+        accept(std::move(held_.front()));
+        held_.pop_front();
+    }
+}
+
+void TimeOrder::finish() { release_held(); }
+
+bool TimeOrder::pop(core::Sample& out) {
+    if (ready_.empty()) return false;
+    out = ready_.front();
+    ready_.pop_front();
+    return true;
+}
+
+}  // namespace host
+}  // namespace battsim
