@@ -113,6 +113,16 @@ int run(const BatchArgs& a) {
             outputs.push_back({"--out's " + it.stem + ".json", (fs::path(a.out_dir) / (it.stem + ".json")).string()});
     }
     if (int rc = check_outputs("battsim batch", inputs, outputs)) return rc;
+    // A fleet takes minutes: an output that cannot be written is said before, not after.
+    for (const auto& [what, path] : {std::pair<const char*, const std::string&>{"-o/--output", a.output},
+                                     {"--packs", a.packs},
+                                     {"--monitors", a.monitors}}) {
+        const std::string why = host::unwritable_reason(path);
+        if (!why.empty()) {
+            std::cerr << me << what << ": cannot write " << path << ": " << why << "\n";
+            return kExitOutputError;
+        }
+    }
 
     // What each config makes unreliable, once per config: the table only counts notes, and a
     // fleet replayed with the joint estimator and no OCV table reads plausible nonsense.
@@ -149,14 +159,20 @@ int run(const BatchArgs& a) {
     for (const nlohmann::json& r : table["rows"])
         if (r["status"] != "ok") std::cerr << me << "failed: " << host::failed_row_text(r) << "\n";
     for (const std::string& u : result.unwritten) std::cerr << me << u << "\n";
-    try {
-        host::write_file_atomic(a.output, host::render_table(table, format));
-        if (!a.packs.empty()) host::write_file_atomic(a.packs, host::render_packs(table, format));
-        if (!a.monitors.empty()) host::write_file_atomic(a.monitors, host::render_monitors(table, format));
-    } catch (const std::runtime_error& e) {
-        std::cerr << me << e.what() << "\n";
-        return kExitOutputError;
-    }
+    // Each output on its own: one that fails (a full disk) does not take the others with it.
+    bool unwritten = false;
+    const auto write = [&](const std::string& path, const std::function<std::string()>& render) {
+        if (path.empty()) return;
+        try {
+            host::write_file_atomic(path, render());
+        } catch (const std::runtime_error& e) {
+            std::cerr << me << e.what() << "\n";
+            unwritten = true;
+        }
+    };
+    write(a.output, [&] { return host::render_table(table, format); });
+    write(a.packs, [&] { return host::render_packs(table, format); });
+    write(a.monitors, [&] { return host::render_monitors(table, format); });
 
     bool regressed = false;
     if (!a.compare.empty()) {
@@ -168,7 +184,7 @@ int run(const BatchArgs& a) {
         regressed = !c.ok();
     }
     if (failed > 0) std::cerr << me << failed << " of " << items.size() << " logs failed\n";
-    if (!result.unwritten.empty()) return kExitOutputError;
+    if (!result.unwritten.empty() || unwritten) return kExitOutputError;
     return failed > 0 || regressed ? kExitFailure : kExitOk;
 }
 

@@ -88,6 +88,27 @@ TEST_CASE("batch: a bad log becomes an error row, the rest are replayed and kept
     auto ok = run("batch " + q(dir + "/g*.csv") + " -c " + q(kConfig) + " --format csv");
     CHECK(ok.exit_code == 0);
     CHECK(ok.out.rfind("index,test,log,pack,monitor,config,estimator,status,", 0) == 0);
+
+    // A log that fails on a rerun leaves no summary of the earlier run behind to be taken for this one's.
+    clitest::write_file(dir + "/g2.csv", "627,16.57,4.14,4.14,4.14,4.16,47.99,0.39,\n628,oops,4.1,4.1,4.1,4.1,1,1,\n");
+    CHECK(run("batch " + q(dir + "/g*.csv") + " -c " + q(kConfig) + " --out " + q(out)).exit_code == 1);
+    CHECK(exists(out + "/g1.json"));
+    CHECK_FALSE(exists(out + "/g2.json"));
+}
+
+TEST_CASE("batch: an output that cannot be written is said before the run; one that fails spares the others",
+          "[cli][batch]") {
+    const std::string dir = fleet_dir(2, false);
+    auto r = run("batch " + q(dir) + " -c " + q(kConfig) + " -o " + q(dir + "/none/x.md") + " --packs " + q(dir + "/p.md"));
+    CHECK(r.exit_code == 5);
+    CHECK_THAT(r.err, Catch::Contains("battsim batch: -o/--output: cannot write " + dir + "/none/x.md: the directory " +
+                                      dir + "/none does not exist"));
+    CHECK_FALSE(exists(dir + "/p.md"));
+    // Known only when written (a full disk): the others are still written.
+    r = run("batch " + q(dir) + " -c " + q(kConfig) + " -o /dev/full --packs " + q(dir + "/p.md"));
+    CHECK(r.exit_code == 5);
+    CHECK_THAT(r.err, Catch::Contains("/dev/full: write failed"));
+    CHECK(exists(dir + "/p.md"));
 }
 
 TEST_CASE("batch: output is byte-identical for any --jobs", "[cli][batch]") {
@@ -194,7 +215,13 @@ TEST_CASE("batch: manifest and option errors are clear and exit non-zero", "[cli
     CHECK(r.exit_code == 3);
     CHECK(r.err == "battsim batch: " + dir + "/m.csv:2:3: expected 2 fields as in the header, found 3\n");
     clitest::write_file(dir + "/c.json", "{\"schema\": \"battsim.manifest\", \"logs\": [{\"path\": \"g1.csv\", \"config\": \"nope.json\"}]}");
+    // A manifest's config that cannot be read fails its logs' rows (the rest would still run).
     r = run("batch --manifest " + q(dir + "/c.json"));
+    CHECK(r.exit_code == 1);
+    CHECK(r.err.find("battsim batch: failed: " + dir + "/g1.csv: config: " + dir + "/nope.json: cannot open config file") !=
+          std::string::npos);
+    // The command line's is one mistake for the whole run.
+    r = run("batch " + q(dir + "/g1.csv") + " -c " + q(dir + "/nope.json"));
     CHECK(r.exit_code == 4);
     CHECK(r.err.find(dir + "/nope.json: cannot open config file") != std::string::npos);
     r = run("batch --manifest " + q(dir + "/none.json"));

@@ -11,6 +11,7 @@
 
 #include "host/config_json.h"
 #include "host/io/atomic_file.h"
+#include "host/io/json_text.h"
 #include "host/report/charger_check.h"
 
 namespace battsim {
@@ -96,6 +97,7 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
     }
 
     std::map<std::string, LoadedConfig> configs;  // each config file read once
+    std::map<std::string, std::string> bad_configs;  // and each that failed, with why
     std::vector<BatchItem> items;
     items.reserve(planned.size());
     for (Planned& p : planned) {
@@ -112,9 +114,25 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
         item.replay.reader = p.settings.reader_options();
         item.config_path = p.settings.config ? *p.settings.config : std::string();
         if (p.settings.config) {
-            auto it = configs.find(*p.settings.config);
-            if (it == configs.end()) it = configs.emplace(*p.settings.config, load_config_file(*p.settings.config)).first;
-            item.replay.config = it->second;
+            const std::string& path = *p.settings.config;
+            auto it = configs.find(path);
+            if (it == configs.end() && !bad_configs.count(path)) {
+                try {
+                    it = configs.emplace(path, load_config_file(path)).first;
+                } catch (const ConfigError& e) {
+                    // The command line's config is one mistake for the whole run; a manifest's
+                    // is its logs' rows' failure, and the rest of the fleet still runs.
+                    if (request.command_line.config) throw;
+                    bad_configs.emplace(path, std::string("config: ") + e.what());
+                }
+            }
+            if (it != configs.end()) {
+                item.replay.config = it->second;
+            } else {
+                item.replay.config = default_config();
+                item.replay.config.name = path;  // the row names the config it could not read
+                if (item.error.empty()) item.error = bad_configs[path];
+            }
         } else {
             item.replay.config = default_config();
         }
@@ -143,6 +161,23 @@ std::string inputs_digest(const std::vector<BatchItem>& items) {
         mix(to_string(it.replay.config.monitor.estimator));
         if (it.charged_mah > 0) mix("charged " + std::to_string(it.charged_mah));  // lists without it keep their digest
         if (!it.monitor.empty()) mix("monitor " + it.monitor);                       // likewise
+        // What the log was read and replayed with: a shard rerun after a config was edited
+        // under the same name (replay --config-out writes a gain into it), or with another
+        // --average-ms, gives other numbers and must not merge with the rest.
+        mix(json_text(config_to_json(it.replay.config), -1));
+        const ReaderOptions& r = it.replay.reader;
+        const ColumnMapping& c = r.columns;
+        char numbers[160];
+        std::snprintf(numbers, sizeof numbers, "%d %d %.17g %.17g %d %llu", static_cast<int>(r.format),
+                      static_cast<int>(r.current_source), c.time_scale_to_s, c.current_scale_to_a,
+                      c.current_negative_is_discharge ? 1 : 0, static_cast<unsigned long long>(r.average_us));
+        mix(numbers);
+        mix(c.time);
+        mix(c.voltage);
+        mix(c.current);
+        mix(c.temperature);
+        mix(std::to_string(c.cells.size()));
+        for (const std::string& cell : c.cells) mix(cell);
     }
     char buf[17];
     std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
@@ -305,7 +340,11 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
                     row = make_error_row(item, e.what());
                     summary = json();
                 }
-                if (!summary.is_null() && !options.out_dir.empty()) {
+                if (summary.is_null() && !options.out_dir.empty()) {
+                    // An earlier run's summary of this log would read as this run's.
+                    std::error_code ec;
+                    fs::remove(fs::path(options.out_dir) / (item.stem + ".json"), ec);
+                } else if (!options.out_dir.empty()) {
                     // Written now, not at the end: a crash later loses nothing done so far.
                     try {
                         write_file_atomic((fs::path(options.out_dir) / (item.stem + ".json")).string(),

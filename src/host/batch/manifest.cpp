@@ -196,9 +196,20 @@ public:
 
     LogSettings settings(const json& obj, const std::string& where, bool entry, const std::string& log_base,
                          std::string* log_path) const {
-        std::set<std::string> allowed = {"test",   "pack",           "monitor", "config",    "estimator",
+        std::set<std::string> allowed = {"pack",   "monitor",        "config",  "estimator",
                                          "format", "current_source", "columns", "average_ms"};
-        if (entry) allowed.insert({"path", "charged_mah"});  // a charger's count belongs to one log
+        // A test label and a charger's count belong to one log: in the defaults they would
+        // label every log alike.
+        if (entry) allowed.insert({"path", "test", "charged_mah"});
+        for (const char* one : {"test", "charged_mah"}) {
+            if (!entry && obj.is_object() && obj.contains(one)) {
+                const auto lc = loc_.key_location(where + "." + one);
+                throw InputError(path_, lc.first, lc.second,
+                                 where + "." + one + ": \"" + one +
+                                     "\" belongs to one log: give it in that log's entry (in the defaults it would "
+                                     "apply to every log alike)");
+            }
+        }
         check_keys(obj, where, allowed);
         LogSettings s;
         const std::string dir = manifest_dir(path_);

@@ -84,6 +84,28 @@ void check_output_paths(const std::vector<NamedPath>& inputs, const std::vector<
     }
 }
 
+std::string unwritable_reason(const std::string& path) {
+    if (path.empty() || path == "-") return "";
+    std::string resolved;
+    try {
+        resolved = resolve_output_path(path);
+    } catch (const std::runtime_error& e) {
+        return e.what();
+    }
+    struct stat st {};
+    if (::stat(resolved.c_str(), &st) == 0) {
+        if (S_ISDIR(st.st_mode)) return resolved + " is a directory";
+        if (!S_ISREG(st.st_mode)) return "";  // written straight: /dev/null, a FIFO
+    }
+    const fs::path parent = fs::path(resolved).parent_path();
+    const std::string dir = parent.empty() ? "." : parent.string();
+    if (::stat(dir.c_str(), &st) != 0) return "the directory " + dir + " does not exist";
+    if (!S_ISDIR(st.st_mode)) return dir + " is not a directory";
+    // The temporary beside the file is created there, then renamed over it.
+    if (::access(dir.c_str(), W_OK | X_OK) != 0) return "no permission to write in " + dir;
+    return "";
+}
+
 bool same_output_file(const std::string& a, const std::string& b) {
     const std::string ka = file_key(a);
     return !ka.empty() && ka == file_key(b);

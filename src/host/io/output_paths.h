@@ -35,6 +35,11 @@ void check_output_paths(const std::vector<NamedPath>& inputs, const std::vector<
 // device such as /dev/null, which any number of writers may share.
 bool names_standard_output(const std::string& path);
 
+// Why a file cannot be written at `path` ("the directory /x does not exist", "no permission
+// to write in /x"), "" when it can (or it is "-", a device, a FIFO). For commands whose run is
+// long, checked before it, so a typo in -o does not throw the run away.
+std::string unwritable_reason(const std::string& path);
+
 // True when `a` and `b` name the same regular file, or the same file to be created.
 bool same_output_file(const std::string& a, const std::string& b);
 
