@@ -90,16 +90,25 @@ std::function<int()> setup(CLI::App& sub) {
             for (const auto& note : ocv.notes) std::cerr << "battsim discharge: note: " << note << "\n";
             summary["ocv_table"] = host::discharge::ocv_table_to_json(ocv);
         }
+        // The start config first: a discharge it cannot be read off (no zones) fails before
+        // any output is written, not after the table and the summary.
+        std::string config_text;
+        if (!a->config_out.empty()) {
+            try {
+                const host::LoadedConfig out =
+                    host::discharge::start_config_from_discharge(result, config, with_ocv ? &ocv : nullptr);
+                config_text = host::json_text(host::config_to_json(out), 2) + "\n";
+            } catch (const std::invalid_argument& e) {
+                std::cerr << "battsim discharge: " << e.what() << "\n";
+                return kExitInputError;
+            }
+        }
         try {
             if (!a->table.empty()) host::write_file_atomic(a->table, host::discharge::table_csv(result));
             if (!a->curve.empty()) host::write_file_atomic(a->curve, host::discharge::curve_csv(result));
             if (!a->summary.empty()) host::write_file_atomic(a->summary, host::json_text(summary, 2) + "\n");
             if (!a->plot.empty()) host::discharge::plot_discharge(result, a->plot);
-            if (!a->config_out.empty()) {
-                const host::LoadedConfig out =
-                    host::discharge::start_config_from_discharge(result, config, with_ocv ? &ocv : nullptr);
-                host::write_file_atomic(a->config_out, host::json_text(host::config_to_json(out), 2) + "\n");
-            }
+            if (!a->config_out.empty()) host::write_file_atomic(a->config_out, config_text);
         } catch (const std::invalid_argument& e) {
             std::cerr << "battsim discharge: " << e.what() << "\n";
             return kExitInputError;

@@ -157,6 +157,19 @@ TEST_CASE("Samsung 30Q C/10 discharge", "[discharge][data]") {
     CHECK(r.zones.nominal_end_ah > 2.0);
     // The table falls monotonically in voltage, so the consumed charge only grows.
     for (size_t i = 1; i < r.table.size(); ++i) CHECK(r.table[i].consumed_mah >= r.table[i - 1].consumed_mah - 1.0);
+
+    // Cut at row 21000 (3.62 V, 1.75 of 2.97 Ah): no knee, so no zones, and no start config
+    // read off it (its last point had passed for the knee, the part for the whole).
+    std::ifstream in(std::string(BATTSIM_DATA_DIR) + "/samsung-30q/Q30_S001_C10.csv");
+    std::string part, line;
+    for (int k = 0; k < 21000 && std::getline(in, line); ++k) part += line + "\n";
+    const std::string cut = testsupport::scratch_dir("discharge") + "/part.csv";
+    std::ofstream(cut) << part;
+    const DischargeResult p = process_discharge(cut, o);
+    CHECK(p.capacity_mah == Approx(1751).margin(2));
+    CHECK_FALSE(p.zones.found);
+    CHECK_THAT(p.zones.note, Catch::StartsWith("no knee at the end of the curve (it never falls 2.5 times faster than "
+                                               "over its middle; it ends at 3.6"));
 }
 
 TEST_CASE("battsim discharge writes its outputs and exits with the documented codes", "[discharge][cli][data]") {

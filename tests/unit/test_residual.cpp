@@ -86,6 +86,28 @@ TEST_CASE("Nothing is invented when the residual is noise", "[residual]") {
     CHECK(r.structure_after.histogram_counts.size() == 15);
 }
 
+TEST_CASE("A candidate with more parameters than a short log has samples is not applicable, not an abort",
+          "[residual]") {
+    // 2.5 s at 10 Hz: the shape correction's many parameters exceed the fitting samples. It
+    // had aborted the whole run (exit 2) after the config and parameter stages were done.
+    synth::Options o;
+    o.rest_s = 1.0;
+    o.flight_s = 1.5;
+    o.after_s = 0.0;
+    o.noise_v = 0.004;
+    const ResidualReport r = run(o, "short");
+    REQUIRE_FALSE(r.stages.empty());
+    bool seen = false;
+    for (const CandidateScore& c : r.stages.back().candidates) {
+        if (c.name != "soc_shape") continue;
+        seen = true;
+        CHECK_FALSE(c.applicable);
+        CHECK_THAT(c.note, Catch::Contains("parameters: too few"));
+        CHECK(c.note.find("--params") == std::string::npos);  // fit's option, not residual's
+    }
+    CHECK(seen);
+}
+
 TEST_CASE("battsim residual names the undeclared effect on the command line", "[residual][cli]") {
     synth::Options o;
     o.rc_resistance_ohm = 0.012;

@@ -65,13 +65,25 @@ void locate_zones(DischargeResult& r) {
     while (i_exp + 1 < c.size() && g_nom - c[i_exp].gradient_v_per_ah > 0.05 * excess_max) ++i_exp;
     // The nominal zone ends at the knee: past half the capacity, the first point where the
     // curve falls 2.5 times faster than over the middle.
-    size_t i_nom = c.size() - 1;
+    size_t i_nom = c.size();
     for (size_t i = i_exp; i < c.size(); ++i) {
         if (c[i].consumed_mah * 1e-3 < 0.5 * q_total) continue;
         if (c[i].gradient_v_per_ah < 2.5 * g_nom) {
             i_nom = i;
             break;
         }
+    }
+    // No knee: the log stops before the cell's end (its last point had stood in for the
+    // knee, and the capacity, the zones and the OCV table's empty end were read off a part
+    // discharge without a word).
+    if (i_nom == c.size()) {
+        char buf[200];
+        std::snprintf(buf, sizeof buf,
+                      "no knee at the end of the curve (it never falls 2.5 times faster than over its middle; it "
+                      "ends at %.3f V): does the log stop before the end of the discharge?",
+                      c.back().voltage_v);
+        z.note = buf;
+        return;
     }
     if (i_exp == 0 || i_exp >= i_nom) {
         z.note = "the exponential zone runs into the end of the nominal zone";

@@ -181,7 +181,13 @@ Eigen::MatrixXd covariance(const LmResult& res) {
     Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(n, n);
     std::vector<int> free;
     for (int j = 0; j < n; ++j) {
-        if (!res.at_bound[j] && res.jacobian.col(j).squaredNorm() > 0) free.push_back(j);
+        if (res.at_bound[j]) continue;
+        if (res.jacobian.col(j).squaredNorm() > 0) {
+            free.push_back(j);
+        } else {
+            // A parameter with no effect on the residuals is not known at all (it had read ± 0).
+            cov(j, j) = std::numeric_limits<double>::infinity();
+        }
     }
     const int nf = static_cast<int>(free.size());
     if (nf == 0 || m <= nf) {

@@ -42,25 +42,33 @@ NaturalParams natural_from_params(const core::TremblayParams& p) {
     return n;
 }
 
+namespace {
+// The curve current kappa stands for, q_exp (1/kappa − 1), within the config's limits: full =
+// E0 − R·i + A and exponential = full − A must stay ≥ 0.1 V, and the curve current ≤ 10 kA.
+double capped_curve_current_a(const NaturalParams& n, double q_exp) {
+    const double kappa = std::clamp(n.kappa, 1e-9, 1.0);
+    double i_max = 1e4;
+    if (n.r_ohm > 0) i_max = std::min(i_max, (n.e0_v - 0.1) / n.r_ohm);
+    return std::clamp(q_exp * (1.0 / kappa - 1.0), 0.0, std::max(i_max, 0.0));
+}
+}  // namespace
+
 double k_of(const NaturalParams& n) {
-    // The same guards as params_from_natural(), so K matches the config written.
+    // The same guards as params_from_natural(), so K matches the config written: below the
+    // kappa the curve current's cap allows, a smaller kappa changes nothing (a fit to a
+    // flight had reported K 174 times below the config's).
     const double q = std::max(n.q_ah, 1e-3);
     const double q_exp = std::clamp(3.0 / std::max(n.b_per_ah, 1e-9), 1e-6, 0.999 * q);
     const double k_max = n.a_v * std::exp(-3.0) * (q - q_exp) / (q * q_exp);
-    return std::clamp(n.kappa, 1e-9, 1.0) * k_max;
+    const double kappa = q_exp / (q_exp + capped_curve_current_a(n, q_exp));
+    return kappa * k_max;
 }
 
 core::TremblayParams params_from_natural(const NaturalParams& n, const core::TremblayParams& keep) {
     core::TremblayParams p = keep;
     const double q = std::max(n.q_ah, 1e-3);
     const double q_exp = std::clamp(3.0 / std::max(n.b_per_ah, 1e-9), 1e-6, 0.999 * q);
-    const double kappa = std::clamp(n.kappa, 1e-9, 1.0);
-    double i = q_exp * (1.0 / kappa - 1.0);
-    // full = E0 − R·i + A and exponential = full − A must stay ≥ 0.1 V, and the config caps
-    // the curve current at 10 kA.
-    double i_max = 1e4;
-    if (n.r_ohm > 0) i_max = std::min(i_max, (n.e0_v - 0.1) / n.r_ohm);
-    i = std::clamp(i, 0.0, std::max(i_max, 0.0));
+    const double i = capped_curve_current_a(n, q_exp);
     p.capacity_ah = static_cast<float>(q);
     p.exponential_capacity_ah = static_cast<float>(q_exp);
     p.internal_resistance_ohm = static_cast<float>(std::max(n.r_ohm, 0.0));

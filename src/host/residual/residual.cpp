@@ -594,16 +594,31 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
             }
             std::vector<std::string> params = current.params;
             params.insert(params.end(), added.begin(), added.end());
-            // The new effect alone first (few, well-conditioned parameters), then everything.
-            State fitted = refit(traces, refit(traces, trial, added, &split.fit, o), params, &split.fit, o);
-            Eval ev = evaluate_state(traces, fitted, o.initial, split, o.window);
-            if (ev.fit_mse > current_eval.fit_mse) {
-                // The data-driven start led the fit astray; the effect switched (almost) off
-                // reproduces the current model, so a fit from there can only improve on it.
-                State neutral = trial;
-                neutralise(name, neutral);
-                fitted = refit(traces, refit(traces, neutral, added, &split.fit, o), params, &split.fit, o);
+            State fitted;
+            Eval ev;
+            try {
+                // The new effect alone first (few, well-conditioned parameters), then everything.
+                fitted = refit(traces, refit(traces, trial, added, &split.fit, o), params, &split.fit, o);
                 ev = evaluate_state(traces, fitted, o.initial, split, o.window);
+                if (ev.fit_mse > current_eval.fit_mse) {
+                    // The data-driven start led the fit astray; the effect switched (almost) off
+                    // reproduces the current model, so a fit from there can only improve on it.
+                    State neutral = trial;
+                    neutralise(name, neutral);
+                    fitted = refit(traces, refit(traces, neutral, added, &split.fit, o), params, &split.fit, o);
+                    ev = evaluate_state(traces, fitted, o.initial, split, o.window);
+                }
+            } catch (const std::invalid_argument& e) {
+                // More parameters than the log's fitting samples: this effect cannot be judged
+                // on it, which is a finding about the candidate, not a failure of the run.
+                c.applicable = false;
+                c.note = e.what();
+                // fit's advice names its own --params, which residual does not have.
+                const std::string advice = " (a longer log, or fewer parameters with --params)";
+                if (c.note.size() > advice.size() && c.note.compare(c.note.size() - advice.size(), advice.size(), advice) == 0)
+                    c.note.erase(c.note.size() - advice.size());
+                scores.push_back(c);
+                continue;
             }
             compare(current_eval, ev, c);
             c.values = effect_values(fitted.specs[0], added);
