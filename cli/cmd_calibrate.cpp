@@ -63,6 +63,7 @@ std::function<int()> setup(CLI::App& sub) {
         const std::vector<host::NamedPath> outputs{printed_output("--json", a->json), text_output("-o/--output", a->output, true)};
         if (int rc = check_outputs(command, inputs, outputs)) return rc;
         if (int rc = run_job(command, [&] { c = host::calibrate_slow_share(a->logs, opt, a->options); })) return rc;
+        for (const std::string& note : c.notes) std::cerr << command << ": note: " << note << "\n";
         if (c.logs.empty()) {
             std::cerr << command << ": no log has a rest after a flight to read the capacity from (" << a->logs.size()
                       << " given)\n";

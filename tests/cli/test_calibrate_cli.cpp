@@ -60,6 +60,21 @@ TEST_CASE("calibrate keeps the share of a pack the health filter already fits", 
     CHECK(j["changed"] == false);
     CHECK(j["chosen_slow_share"].get<double>() == Approx(0.2));
     CHECK(j["candidates"][0]["mean_abs_error"].get<double>() < 0.05);
+    CHECK(j["notes"].empty());
+}
+
+TEST_CASE("calibrate says when no share explains the rests", "[cli][data]") {
+    // The dissertation's reference config has no OCV table: on its flight 30 the capacities
+    // miss the rests by far more than any polarisation share makes up (76 % at best, at the
+    // edge of the shares tried), and adopting the best share says so.
+    const std::string log = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/30.csv";
+    const auto r = run("calibrate " + q(log) + " -c " + q(kSource + "/configs/reference-modified.json") + " --json");
+    REQUIRE(r.exit_code == 0);
+    const auto j = nlohmann::json::parse(r.out);
+    REQUIRE(j["notes"].size() == 1);
+    CHECK_THAT(j["notes"][0].get<std::string>(),
+               Catch::Contains("0.6 (the edge of the shares tried), still misses the rests' capacities by 76.3 %"));
+    CHECK_THAT(r.err, Catch::Contains("battsim calibrate: note: the best share"));
 }
 
 TEST_CASE("calibrate fails clearly without a rest, on a bad log and for the reference estimator", "[cli]") {

@@ -248,6 +248,9 @@ TEST_CASE("CSV manifest: header, comments, quoting and errors with line and fiel
     CHECK(*load_manifest(t.write("c.csv", "path,charged_mah\na.csv,1043.5\n")).logs[0].settings.charged_mah == 1043.5);
     CHECK(*load_manifest(t.write("d.csv", "path,monitor\na.csv,quad 7\n")).logs[0].settings.monitor == "quad 7");
     CHECK(*load_manifest(t.write("e.csv", "path,average_ms\na.csv,8\n")).logs[0].settings.average_ms == 8.0);
+    // A JSON manifest named neither .json nor .csv, with an editor's byte-order mark: still JSON.
+    CHECK(load_manifest(t.write("f.txt", "\xEF\xBB\xBF{\"schema\": \"battsim.manifest\", \"logs\": [{\"path\": \"a.csv\"}]}"))
+              .logs.size() == 1);
     CHECK(err("path,average_ms\na.csv,fast\n") == p + ":2:2: average_ms: expected a number of ms, found \"fast\"");
     CHECK(err("path,pack\na.csv\n") == p + ":2:2: expected 2 fields as in the header, found 1");
     CHECK(err("path,current_unit\na.csv,amps\n") == p + ":2:2: current_unit: unknown current unit \"amps\"; expected A or mA");
@@ -699,6 +702,11 @@ TEST_CASE("merge rebuilds the single run's table and refuses incomplete or forei
     broken["rows"][0].erase("warnings");
     const std::string p3 = t.write("z.json", broken.dump());
     CHECK(input_error([&] { read_table_file(p3); }) == p3 + ": rows[0]: expected the key \"warnings\"");
+    json huge = shards[0];
+    huge["inputs"]["count"] = 18446744073709551615ull;
+    const std::string p4 = t.write("h.json", huge.dump());
+    CHECK(input_error([&] { read_table_file(p4); }) ==
+          p4 + ": \"inputs\".\"count\" 18446744073709551615 is more logs than a batch table holds (at most 100000000)");
 }
 
 TEST_CASE("golden comparison: changed fields listed, paths and versions ignored", "[batch]") {

@@ -510,7 +510,9 @@ Manifest load_manifest(const std::string& path) {
     const std::string ext = fs::path(path).extension().string();
     if (ext == ".json") return parse_manifest_json(text, path);
     if (ext == ".csv") return parse_manifest_csv(text, path);
-    const size_t first = text.find_first_not_of(" \t\r\n");
+    // Sniffed past a UTF-8 byte-order mark (an editor's), which had sent a JSON manifest to the CSV reader.
+    const size_t bom = text.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;
+    const size_t first = text.find_first_not_of(" \t\r\n", bom);
     if (first != std::string::npos && text[first] == '{') return parse_manifest_json(text, path);
     return parse_manifest_csv(text, path);
 }

@@ -617,6 +617,12 @@ json read_table_file(const std::string& path) {
         if (!t.contains("rows") || !t["rows"].is_array()) fail("expected a \"rows\" array");
         if (!t.contains("shard") || !(t["shard"].is_null() || t["shard"].is_object())) fail("expected \"shard\": null or {\"index\", \"count\"}");
         const size_t count = t["inputs"]["count"].get<size_t>();
+        // merge allocates a slot per input: a corrupt count of 2^64 − 1 had ended in an
+        // allocation error naming no file.
+        constexpr size_t kMaxInputs = 100000000;
+        if (count > kMaxInputs)
+            fail("\"inputs\".\"count\" " + std::to_string(count) + " is more logs than a batch table holds (at most " +
+                 std::to_string(kMaxInputs) + ")");
         for (size_t i = 0; i < t["rows"].size(); ++i) {
             const json& r = t["rows"][i];
             const std::string where = "rows[" + std::to_string(i) + "]";

@@ -733,8 +733,9 @@ nlohmann::json estimate_json(const ParamEstimate& e) {
 }  // namespace
 
 nlohmann::json error_stats_to_json(const ErrorStats& s) {
-    return {{"n", s.n}, {"mean_v", round_sig(s.mean_v, 5)}, {"mae_v", round_sig(s.mae_v, 5)},
-            {"rmse_v", round_sig(s.rmse_v, 5)}, {"max_abs_v", round_sig(s.max_abs_v, 5)}};
+    // No samples (a lab log has no flight): no error, rather than an error of 0 V.
+    const auto v = [&s](double x) { return s.n > 0 ? nlohmann::json(round_sig(x, 5)) : nlohmann::json(nullptr); };
+    return {{"n", s.n}, {"mean_v", v(s.mean_v)}, {"mae_v", v(s.mae_v)}, {"rmse_v", v(s.rmse_v)}, {"max_abs_v", v(s.max_abs_v)}};
 }
 
 nlohmann::json fit_result_to_json(const FitResult& r, const FitOptions& o) {

@@ -223,8 +223,11 @@ void print_fit_brief(const nlohmann::json& r, std::ostream& out) {
     }
     for (const auto& l : r["test"]) {
         out << "  test " << l["label"].get<std::string>() << ": MAE all " << l["start_monitor"]["all"]["mae_v"] << " -> "
-            << l["monitor"]["all"]["mae_v"] << " V, flight " << l["start_monitor"]["flight"]["mae_v"] << " -> "
-            << l["monitor"]["flight"]["mae_v"] << " V\n";
+            << l["monitor"]["all"]["mae_v"] << " V";
+        // A test log without a flight (a lab discharge) has no flight error, not one of 0 V.
+        if (l["start_monitor"]["flight"]["n"].get<size_t>() > 0)
+            out << ", flight " << l["start_monitor"]["flight"]["mae_v"] << " -> " << l["monitor"]["flight"]["mae_v"] << " V";
+        out << "\n";
     }
 }
 

@@ -1,6 +1,7 @@
 #include "host/fit/shape_calibration.h"
 
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "host/report/summary.h"
@@ -83,6 +84,22 @@ ShapeCalibration calibrate_slow_share(const std::vector<std::string>& logs, cons
     const ShapeCandidate* best = &out.candidates[choose_candidate(out.candidates, options.tolerance)];
     out.chosen_share = best->slow_share;
     out.changed = std::fabs(out.chosen_share - out.configured_share) > 1e-6;
+    if (best->mean_abs_error > options.tolerance) {
+        double lo = best->slow_share, hi = best->slow_share;
+        for (const ShapeCandidate& k : out.candidates) {
+            lo = std::min(lo, k.slow_share);
+            hi = std::max(hi, k.slow_share);
+        }
+        const bool edge = best->slow_share == lo || best->slow_share == hi;
+        char buf[400];
+        std::snprintf(buf, sizeof buf,
+                      "the best share, %.3g%s, still misses the rests' capacities by %.1f %% (mean; tolerance %.1f %%): "
+                      "the polarisation shape alone does not explain the gap; check the config's OCV table "
+                      "(battsim fit-ocv), capacity and current sensor before trusting it",
+                      best->slow_share, edge ? " (the edge of the shares tried)" : "", 100.0 * best->mean_abs_error,
+                      100.0 * options.tolerance);
+        out.notes.push_back(buf);
+    }
     return out;
 }
 
@@ -106,7 +123,8 @@ nlohmann::json to_json(const ShapeCalibration& c) {
             {"logs", c.logs},
             {"rest_capacity_ah", rest},
             {"logs_without_rest", c.logs_without_rest},
-            {"candidates", cands}};
+            {"candidates", cands},
+            {"notes", c.notes}};
 }
 
 }  // namespace host

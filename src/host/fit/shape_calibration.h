@@ -38,6 +38,9 @@ struct ShapeCalibration {
     std::vector<double> rest_ah;            // their capacity from the rests (shape-independent)
     std::vector<std::string> logs_without_rest;
     std::vector<ShapeCandidate> candidates; // the configured share first
+    // When even the chosen share misses the rests by more than the tolerance: the shape is
+    // not what keeps the in-flight capacity from the rests', and that is said.
+    std::vector<std::string> notes;
 };
 
 // Replays each log with the joint estimator, whatever `base.config` selects. Throws
