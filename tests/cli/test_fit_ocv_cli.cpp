@@ -2,6 +2,8 @@
 // its own state of charge, gives a table that explains flights it never saw better than the
 // config's estimated curve; the written config reads back and replays; bad input fails clearly.
 #include <catch2/catch.hpp>
+
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "cli_util.h"
@@ -94,6 +96,29 @@ TEST_CASE("fit-ocv reads a fleet manifest and holds out every other log", "[cli]
     const auto broken = run("fit-ocv -m " + q(dir + "/broken.json"));
     CHECK(broken.exit_code == 3);
     CHECK(broken.err.find("no-such-flight.csv") != std::string::npos);
+}
+
+TEST_CASE("fit-ocv says where its table is extrapolation and when a resistance comes out negative", "[cli][data]") {
+    // The first 1,500 rows (the ground before take-off) of three dissertation flights: they
+    // never leave the top of the curve, yet the fit moved the table 85 mV lower down.
+    const std::string dir = clitest::temp_dir();
+    std::string logs;
+    for (const char* n : {"29", "30", "32"}) {
+        std::ifstream in(kData + "/predictive-bms/flights/" + n + ".csv");
+        std::string text, line;
+        for (int k = 0; k < 1500 && std::getline(in, line); ++k) text += line + "\n";
+        clitest::write_file(dir + "/idle" + n + ".csv", text);
+        logs += " " + q(dir + "/idle" + n + ".csv");
+    }
+    const auto j = clitest::run_json("fit-ocv" + logs + " -c " + q(kSource + "/configs/sim-4s.json") + " --json");
+    bool extrapolated = false, negative = false;
+    for (const auto& n : j["notes"]) {
+        const std::string t = n.get<std::string>();
+        extrapolated = extrapolated || t.find("at state-of-charge points no sample reached (0.45, ") != std::string::npos;
+        negative = negative || t.find("a fitted pack resistance is negative (") != std::string::npos;
+    }
+    CHECK(extrapolated);
+    CHECK(negative);
 }
 
 TEST_CASE("fit-ocv reports bad input and bad options with their exit codes", "[cli]") {

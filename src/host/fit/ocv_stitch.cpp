@@ -520,6 +520,30 @@ void add_notes(OcvStitch& s, const std::vector<Flight>& flights) {
     if (s.test_rms_v > 0.0 && s.test_rms_v >= s.test_rms_before_v)
         s.notes.push_back("on the test flights the table is no better than the config's curve (" + mv(s.test_rms_v) +
                           " against " + mv(s.test_rms_before_v) + " per cell)");
+    // Where no sample reached, the table follows the correction's slope from where they did,
+    // and nothing checks it (ground-only logs had moved it 85 mV at SOC 0.85).
+    double moved_v = 0.0;
+    std::string where;
+    const size_t k = s.table_v.size();
+    for (size_t j = 0; j < k && j < s.support.size() && j < s.prior_v.size(); ++j) {
+        const double d = std::fabs(s.table_v[j] - s.prior_v[j]);
+        if (s.support[j] > 0.5 || d < 0.01) continue;
+        moved_v = std::max(moved_v, d);
+        char soc[16];
+        std::snprintf(soc, sizeof soc, "%.2f", k > 1 ? static_cast<double>(j) / static_cast<double>(k - 1) : 0.0);
+        where += (where.empty() ? "" : ", ") + std::string(soc);
+    }
+    if (moved_v > 0.0)
+        s.notes.push_back("the table moved by up to " + mv(moved_v) + " per cell at state-of-charge points no sample reached (" +
+                          where + "): that is the fit's extrapolation, not a measurement; keep the config's curve there "
+                          "or fly those charges");
+    if (s.fast_ohm < 0.0 || s.slow_ohm < 0.0 || s.resistance_ohm < 0.0)
+    {
+        auto mohm = [](double r) { return std::to_string(static_cast<int>(std::lround(r * 1000.0))) + " mOhm"; };
+        s.notes.push_back("a fitted pack resistance is negative (ohmic " + mohm(s.resistance_ohm) + ", fast " +
+                          mohm(s.fast_ohm) + ", slow " + mohm(s.slow_ohm) +
+                          "): no pack has one; the flights hold too few load changes to fit them");
+    }
     if (s.soc_min < -0.02)
         s.notes.push_back("the flights span " + std::to_string(static_cast<int>(std::lround((s.soc_max - s.soc_min) * 100.0))) +
                           " % of the config's capacity: the packs hold more than it says, or the starts are misplaced");
