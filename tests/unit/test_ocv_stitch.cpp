@@ -95,6 +95,7 @@ TEST_CASE("OCV stitch: partial flights recover the plant's rest curve", "[fit][s
     const LoadedConfig out = fit::with_stitched_table(config, s);
     REQUIRE(out.monitor.joint.ocv.points == 21);
     CHECK(out.monitor.joint.ocv.cell_voltage_v[20] == Approx(s.table_v[20]).margin(1e-6));
+    for (const auto& n : s.notes) UNSCOPED_INFO(n);
     CHECK(s.notes.empty());  // a fleet that stitches: nothing to warn of
     const nlohmann::json j = fit::to_json(s);
     CHECK(j["schema"] == "battsim.ocv_stitch");

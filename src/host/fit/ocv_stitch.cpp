@@ -525,7 +525,8 @@ void add_notes(OcvStitch& s, const std::vector<Flight>& flights) {
     double moved_v = 0.0;
     std::string where;
     const size_t k = s.table_v.size();
-    for (size_t j = 0; j < k && j < s.support.size() && j < s.prior_v.size(); ++j) {
+    // The empty end (j = 0) is left out: no flight reaches it, and its own prior pins it.
+    for (size_t j = 1; j < k && j < s.support.size() && j < s.prior_v.size(); ++j) {
         const double d = std::fabs(s.table_v[j] - s.prior_v[j]);
         if (s.support[j] > 0.5 || d < 0.01) continue;
         moved_v = std::max(moved_v, d);
