@@ -338,7 +338,7 @@ void print_brief(const nlohmann::json& s, std::ostream& out) {
     }
     const auto& f = s["flight"];
     if (f.is_null()) {
-        out << "  no flight (current never reached the flying threshold)\n";
+        out << "  no flight (the current never stayed above the flying threshold long enough for a take-off)\n";
     } else {
         print_flight_brief(s, out);
     }

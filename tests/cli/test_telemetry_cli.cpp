@@ -219,7 +219,7 @@ TEST_CASE("replay's brief: warnings on the ground and after the landing are said
     // No flight at all: the gap is still a warning, and the brief still lists it.
     clitest::Result r = run("replay " + log("ground.csv", false) + cfg);
     REQUIRE(r.exit_code == 0);
-    CHECK_THAT(r.out, Catch::Contains("no flight (current never reached the flying threshold)\n  warnings:\n    sensor_fault at 23.0 s"));
+    CHECK_THAT(r.out, Catch::Contains("no flight (the current never stayed above the flying threshold long enough for a take-off)\n  warnings:\n    sensor_fault at 23.0 s"));
     CHECK_THAT(r.out, Catch::Contains("23.0 s, on the ground  warning  battsim: sensor fault: no reading for 3.1 s"));
     // After the landing: counted from it, not "77 s into" a 60 s flight.
     r = run("replay " + log("landed.csv", true) + cfg);
