@@ -9,6 +9,7 @@
 #include "host/config_json.h"
 #include "host/config_keys.h"
 #include "host/io/atomic_file.h"
+#include "core/sample.h"
 #include "host/pack_config.h"
 
 namespace battsim {
@@ -58,8 +59,9 @@ int run(const MakeConfigArgs& a) {
     if (!a.from_log.empty()) {
         host::ReaderOptions options;
         options.format = host::parse_log_format(a.format);
-        log = host::read_log_pack(a.from_log, options);
+        log = host::read_log_pack(a.from_log, options, a.cells);
         for (const std::string& why : log.ignored) std::cerr << me << ": note: ignored " << why << "\n";
+        for (const std::string& note : log.notes) std::cerr << me << ": note: " << note << "\n";
     }
     // The command line first, then the log; each value says where it came from.
     auto pick = [&r](double given, const char* given_text, double logged, const std::string& logged_from, double* out) {
@@ -85,6 +87,11 @@ int run(const MakeConfigArgs& a) {
     pick(a.cutoff_delay_s, "cutoff delay given", log.cutoff_delay_s, "cutoff delay from " + log.cutoff_delay_from,
          &r.cutoff_delay_s);
     const std::string where = a.from_log.empty() ? "" : " (the log does not say)";
+    if (r.cells <= 0 && log.declared_cells_beyond > 0) {
+        std::cerr << me << ": the log's pack has " << log.declared_cells_beyond << " cells in series; battsim handles at most "
+                  << core::kMaxCells << "\n";
+        return kExitUsage;
+    }
     if (r.cells <= 0) {
         std::cerr << me << ": how many cells in series? give --cells" << where << "\n";
         return kExitUsage;

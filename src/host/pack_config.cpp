@@ -158,12 +158,18 @@ json pack_config_json(const PackRating& r) {
     return j;
 }
 
-LogPack log_pack(const SourceInfo& info, double resting_voltage_v) {
+LogPack log_pack(const SourceInfo& info, double resting_voltage_v, int cells_given) {
     LogPack p;
     double v = NAN;
     std::string from;
     // PX4 says how many cells; ArduPilot does not, and a log's cell columns do.
-    if (first_positive(info, {"BAT1_N_CELLS", "BAT_N_CELLS"}, &v, &from) && v <= core::kMaxCells) {
+    const bool declared = first_positive(info, {"BAT1_N_CELLS", "BAT_N_CELLS"}, &v, &from);
+    if (declared && v > core::kMaxCells) {
+        // Not guessed from the voltage instead: a 14S pack at rest reads as 12 cells at 4.2 V.
+        p.declared_cells_beyond = static_cast<int>(v);
+        p.ignored.push_back(from + ": more cells than battsim handles (" +
+                            std::to_string(core::kMaxCells) + ")");
+    } else if (declared) {
         p.cells = static_cast<int>(v);
         p.cells_from = "the log's " + from;
         p.cells_declared = true;
@@ -179,25 +185,52 @@ LogPack log_pack(const SourceInfo& info, double resting_voltage_v) {
         p.capacity_ah = v / 1000.0;
         p.capacity_from = "the log's " + from + " mAh";
     }
+    // The values per cell are judged with the count the config will have: the user's, when
+    // given, else the log's (they had been judged with the log's and then lost, or scaled
+    // by it, under another --cells).
+    const int n = cells_given > 0 ? cells_given : p.cells;
     // ArduPilot's low-voltage failsafe is the voltage the pilot flies to: the remaining
     // time's target. (PX4's BAT1_V_EMPTY is a load-compensated empty cell, not a cutoff.)
     if (first_positive(info, {"BATT_LOW_VOLT", "FS_BATT_VOLTAGE", "LOW_VOLT"}, &v, &from)) {
-        if (p.cells > 0 && v / p.cells >= kCutoffMinV && v / p.cells <= kCutoffMaxV) {
+        if (n > 0 && v / n >= kCutoffMinV && v / n <= kCutoffMaxV) {
             p.cutoff_voltage_v = v;
-            p.cutoff_from = "the log's " + from + " V";
-        } else if (p.cells > 0) {
-            p.ignored.push_back(from + " V: " + number_text(v / p.cells, "%.2f V") + " per cell is no cutoff (" +
-                                number_text(kCutoffMinV, "%.1f") + "-" + number_text(kCutoffMaxV, "%.1f") +
-                                " V); the default 3.325 V per cell is used");
+            p.cutoff_from = "the log's " + from + " V (" + number_text(v / n, "%.2f V") + " per cell)";
+            // A failsafe switched off is a level nobody flies to (ArduCopter 3.x FS_BATT_ENABLE,
+            // later BATT_FS_LOW_ACT; 0 = no action): said, since it sets the remaining time.
+            double enabled = NAN;
+            std::string switch_name;
+            for (const char* name : {"FS_BATT_ENABLE", "BATT_FS_LOW_ACT"}) {
+                const double e = log_parameter(info, name);
+                if (std::isfinite(e)) {
+                    enabled = e;
+                    switch_name = name;
+                    break;
+                }
+            }
+            if (enabled == 0.0)
+                p.notes.push_back("the log's battery failsafe takes no action (" + switch_name + " 0): its " + from +
+                                  " V only raised a warning, and the pilot may fly below it; it is the cutoff all the "
+                                  "same (give --cutoff-v to set another)");
+        } else if (n > 0) {
+            p.ignored.push_back(from + " V: " + number_text(v / n, "%.2f V") + " per cell (" +
+                                std::to_string(n) + " cells) is no cutoff (" + number_text(kCutoffMinV, "%.1f") + "-" +
+                                number_text(kCutoffMaxV, "%.1f") + " V); the default 3.325 V per cell is used");
+        } else {
+            p.ignored.push_back(from + " V: with no cell count it cannot be judged per cell; "
+                                "the default 3.325 V per cell is used");
         }
     }
     if (first_positive(info, {"BATT_LOW_TIMER"}, &v, &from) && v <= 600.0) {
         p.cutoff_delay_s = v;  // the failsafe acts once the voltage has stayed low this long
         p.cutoff_delay_from = "the log's " + from + " s";
     }
-    if (first_positive(info, {"BAT1_R_INTERNAL", "BAT_R_INTERNAL"}, &v, &from) && p.cells > 0) {
-        p.resistance_ohm = v * p.cells;  // PX4's is per cell
-        p.resistance_from = "the log's " + from + " ohm per cell";
+    if (first_positive(info, {"BAT1_R_INTERNAL", "BAT_R_INTERNAL"}, &v, &from)) {
+        if (n > 0) {
+            p.resistance_ohm = v * n;  // PX4's is per cell
+            p.resistance_from = "the log's " + from + " ohm per cell";
+        } else {
+            p.ignored.push_back(from + " ohm per cell: with no cell count no pack resistance");
+        }
     }
     return p;
 }
@@ -213,7 +246,7 @@ void FirstRest::add(const core::Sample& s) {
         voltage_v_ = s.voltage_v;
 }
 
-LogPack read_log_pack(const std::string& path, const ReaderOptions& options) {
+LogPack read_log_pack(const std::string& path, const ReaderOptions& options, int cells_given) {
     std::unique_ptr<SampleReader> reader = open_reader(path, options);
     core::Sample sample;
     FirstRest rest(1.0);
@@ -223,7 +256,7 @@ LogPack read_log_pack(const std::string& path, const ReaderOptions& options) {
         any = true;
     }
     if (!any) throw InputError(path, 0, 0, "the log holds no samples");
-    return log_pack(reader->info(), rest.voltage_v());
+    return log_pack(reader->info(), rest.voltage_v(), cells_given);
 }
 
 }  // namespace host

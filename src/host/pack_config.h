@@ -47,9 +47,13 @@ struct LogPack {
     double cutoff_delay_s = NAN;
     std::string cutoff_delay_from;
     std::vector<std::string> ignored;  // parameters present but not taken, and why
+    std::vector<std::string> notes;    // taken, with a caveat
+    int declared_cells_beyond = 0;     // a declared count above core::kMaxCells (then cells = 0)
 };
 // `resting_voltage_v`: the log's first pack voltage while at rest (NaN = not at rest).
-LogPack log_pack(const SourceInfo& info, double resting_voltage_v);
+// `cells_given` > 0: the count the values per cell (cutoff, PX4's resistance) are judged and
+// converted with, when the user says the log's is wrong.
+LogPack log_pack(const SourceInfo& info, double resting_voltage_v, int cells_given = 0);
 
 // The first pack voltage at rest (|current| at most `max_current_a`) in the log's first
 // 10 s: a log may open with the motors armed, and a pack rests before a flight, not after.
@@ -67,7 +71,7 @@ private:
 };
 // Reads the whole log (its parameters may come anywhere) and gives log_pack() of it; the
 // first sample counts as at rest below 1 A. Throws InputError like open_reader().
-LogPack read_log_pack(const std::string& path, const ReaderOptions& options);
+LogPack read_log_pack(const std::string& path, const ReaderOptions& options, int cells_given = 0);
 
 // The one cell count whose per-cell voltage lies where a charged or part-charged lithium
 // cell rests (3.45-4.35 V); 0 when none or more than one does.

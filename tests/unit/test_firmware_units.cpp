@@ -292,3 +292,23 @@ TEST_CASE("The OLED's warning row names a sensor fault by its cause, in a pilot'
     status.sensor_fault_cause = core::kFaultCurrentOffset;
     CHECK(warning_row() == "SHORT CAP RES CELL6 O");
 }
+
+TEST_CASE("The OLED's cell row keeps all four cells when a tap reads nonsense", "[firmware]") {
+    fw::host::MockClock clock;
+    fw::host::TextDisplay display(clock);
+    core::Sample sample;
+    sample.voltage_v = 16.4f;
+    sample.cell_count = 4;
+    const float cells[4] = {4.2f, 32.76f, -12.6f, 4.19f};
+    for (int c = 0; c < 4; ++c) sample.cell_voltage_v[c] = cells[c];
+    core::MonitorStatus status;
+    fw::MonitorPage page;
+    page.sample = &sample;
+    page.status = &status;
+    fw::draw_monitor_page(display, page);
+    // Row 5 (index 4): before, the wide values pushed the fourth cell off the 21 columns.
+    const std::string f = display.frame();
+    size_t start = 0;
+    for (int row = 0; row < 4; ++row) start = f.find('\n', start) + 1;
+    CHECK(f.substr(start, f.find('\n', start) - start) == "4.20 ---- ---- 4.19  ");  // padded to 21
+}

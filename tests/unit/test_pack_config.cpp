@@ -123,6 +123,34 @@ TEST_CASE("What an autopilot log says about its pack", "[pack_config]") {
         CHECK(std::isnan(q.capacity_ah));
         CHECK(std::isnan(q.resistance_ohm));
     }
+    SECTION("values per cell judged with the count the config will have; a failsafe that does nothing said") {
+        // No cell count in the log (loaded at the start): with --cells 4 the cutoff and PX4's
+        // resistance still count (they had been dropped without a word).
+        const SourceInfo both = with_parameters({{"LOW_VOLT", 10.5}, {"BAT1_R_INTERNAL", 0.005}});
+        const LogPack none = log_pack(both, NAN);
+        CHECK(std::isnan(none.cutoff_voltage_v));
+        CHECK(std::isnan(none.resistance_ohm));
+        REQUIRE(none.ignored.size() == 2);
+        CHECK(none.ignored[0] == "LOW_VOLT 10.5 V: with no cell count it cannot be judged per cell; the default 3.325 V "
+                                 "per cell is used");
+        const LogPack given = log_pack(both, NAN, 4);
+        CHECK(given.cutoff_voltage_v == Approx(10.5));
+        CHECK(given.cutoff_from == "the log's LOW_VOLT 10.5 V (2.62 V per cell)");
+        CHECK(given.resistance_ohm == Approx(0.020));  // 4 x 5 mOhm, not the log's count's
+        // Judged with the given count: 14 V over 6 cells is no cutoff, and the note says 6.
+        const LogPack six = log_pack(with_parameters({{"FS_BATT_VOLTAGE", 14.0}}), 16.54, 6);
+        REQUIRE(six.ignored.size() == 1);
+        CHECK(six.ignored[0] == "FS_BATT_VOLTAGE 14 V: 2.33 V per cell (6 cells) is no cutoff (2.5-3.9 V); the default "
+                                "3.325 V per cell is used");
+        const LogPack off = log_pack(with_parameters({{"FS_BATT_ENABLE", 0}, {"LOW_VOLT", 10.5}}), 14.99);
+        CHECK(off.cutoff_voltage_v == Approx(10.5));
+        REQUIRE(off.notes.size() == 1);
+        CHECK(off.notes[0].find("takes no action (FS_BATT_ENABLE 0)") != std::string::npos);
+        // More cells than battsim handles: not guessed from the voltage instead.
+        const LogPack many = log_pack(with_parameters({{"BAT1_N_CELLS", 14}}), 58.0);
+        CHECK(many.cells == 0);
+        CHECK(many.declared_cells_beyond == 14);
+    }
     SECTION("a log's cell columns count before its voltage") {
         SourceInfo info;
         info.cell_count = 4;

@@ -57,7 +57,15 @@ void draw_monitor_page(Display& d, const MonitorPage& page) {
 
     r.clear();
     for (int c = 0; c < x.cell_count && c < 4; ++c) {
-        r.appendf(c == 0 ? "%.2f" : " %.2f", static_cast<double>(x.cell_voltage_v[c]));
+        // Four columns each, so four cells always fit the 21: a reading out of 0-9.99 V (a
+        // loose tap) had widened its value and pushed the fourth cell off the row unseen.
+        const float v = x.cell_voltage_v[c];
+        if (c > 0) r.append(" ");
+        if (v >= 0.0f && v <= 9.99f) {
+            r.appendf("%.2f", static_cast<double>(v));
+        } else {
+            r.append("----");
+        }
     }
     if (x.cell_count == 0) r.append("no cell taps");
     d.text(0, 4, r.c_str());
