@@ -145,7 +145,16 @@ std::vector<std::string> export_firmware_config(const std::string& json_path, co
     }
     if (!estimator.empty()) source += " with --estimator " + estimator;
     write_file_atomic(out_path, firmware_config_header(config, source));
-    return config_notes(config.monitor);
+    std::vector<std::string> notes = config_notes(config.monitor);
+    // The reference hardware has three INA3221 taps: the firmware reads 2 to 4 cells and, for
+    // any other count, none (it runs on the pack alone). Said, since battsim replays a log's
+    // cells for any count up to 12 and the two would otherwise seem to do the same.
+    const int n = config.monitor.cells_in_series;
+    if (n < 2 || n > 4)
+        notes.push_back("cells_in_series " + std::to_string(n) +
+                        ": the reference hardware's three cell taps read 2 to 4 cells, so the firmware measures no cell "
+                        "with this config (no weak-cell check; the pack's estimates are unaffected)");
+    return notes;
 }
 
 }  // namespace host

@@ -115,6 +115,12 @@ TEST_CASE("replay notes what the config makes unreliable: no OCV table for the j
     CHECK(e.exit_code == 0);
     CHECK_THAT(e.err, Catch::Contains("battsim export-config: note: the joint estimator has no OCV table"));
     CHECK(std::filesystem::exists(dir + "/h.h"));
+    CHECK(e.err.find("cell taps") == std::string::npos);  // 4S: the taps read every cell
+    // A 6S pack: the reference hardware's three taps read none of its cells, and that is said.
+    auto e6 = run("export-config --firmware " + q(kSource + "/configs/generic-6s.json") + " -o " + q(dir + "/h6.h"));
+    CHECK(e6.exit_code == 0);
+    CHECK_THAT(e6.err, Catch::Contains("battsim export-config: note: cells_in_series 6: the reference hardware's three "
+                                       "cell taps read 2 to 4 cells, so the firmware measures no cell with this config"));
 }
 
 TEST_CASE("replay notes a current of the other sign and a time column in milliseconds", "[cli]") {
