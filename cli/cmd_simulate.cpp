@@ -1,5 +1,6 @@
 // battsim simulate SCENARIO...: fly scenarios through the truth plant and the sensor
 // layer; write each log (in a format the readers take) and its truth JSON.
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -20,7 +21,7 @@ struct SimulateArgs {
     std::string out_dir;
     std::string format;
     std::string seed;  // empty: the scenario's own
-    double cutoff = 0;
+    double cutoff = NAN;  // NaN = not given (0 had passed as "not given" unseen)
 };
 
 std::string default_truth_path(const std::string& log) {
@@ -50,7 +51,7 @@ std::function<int()> setup(CLI::App& sub) {
             std::cerr << "battsim simulate: --truth goes with -o/--output\n";
             return kExitUsage;
         }
-        if (a->cutoff != 0 && !(a->cutoff >= 2.0 && a->cutoff <= 4.5)) {
+        if (!std::isnan(a->cutoff) && !(a->cutoff >= 2.0 && a->cutoff <= 4.5)) {
             std::cerr << "battsim simulate: --cutoff-v-per-cell: expected a voltage in [2, 4.5]\n";
             return kExitUsage;
         }
@@ -115,7 +116,7 @@ std::function<int()> setup(CLI::App& sub) {
                 }
                 s.log_format = a->format;
             }
-            if (a->cutoff != 0) s.cutoff_v_per_cell = a->cutoff;
+            if (!std::isnan(a->cutoff)) s.cutoff_v_per_cell = a->cutoff;
             host::sim::SimulationResult r;
             try {
                 r = host::sim::simulate(s);
@@ -132,6 +133,10 @@ std::function<int()> setup(CLI::App& sub) {
                 return kExitOutputError;
             }
             const host::sim::Truth& t = r.truth;
+            if (t.sensor_stats.current_clipped > 0)
+                std::cerr << "battsim simulate: note: " << s.name << ": the current sensor clipped " << t.sensor_stats.current_clipped
+                          << " of " << t.sensor_stats.reads << " reads at its +-81.92 mV shunt range: the log's current is wrong there "
+                          << "(the truth's current_clipped_reads)\n";
             std::cout << s.name << ": " << t.rows << " rows -> " << log << "; flight " << t.landing_s - t.takeoff_s
                       << " s of " << t.total_flight_time_s << " s to cutoff (healthy pack " << t.healthy_total_flight_time_s
                       << " s)" << (t.landed_by_cutoff ? ", cut short by the cutoff" : "") << "\n";

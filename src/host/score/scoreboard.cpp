@@ -429,10 +429,25 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& suite, const std::
                 } else {
                     path = options.logs_dir + "/" + simr.scenario.name + ".csv";
                 }
-                const std::vector<core::Sample> samples = read_samples(path, simr);
+                std::vector<core::Sample> samples;
+                try {
+                    samples = read_samples(path, simr);
+                } catch (const InputError& e) {
+                    if (remove) std::remove(path.c_str());
+                    // The temporary log is gone by the time this is read: name the scenario.
+                    throw InputError(scenarios[i].source_path, 0, 0,
+                                     "scenario " + simr.scenario.name + ": its simulated log cannot be read back" +
+                                         (e.line() > 0 ? " (line " + std::to_string(e.line()) + ")" : std::string()) +
+                                         ": " + e.message());
+                }
                 if (remove) std::remove(path.c_str());
                 result.flights[i] = score_flight(simr, samples, columns);
                 result.flights[i].copy = copy_of[i];
+                if (simr.truth.sensor_stats.current_clipped > 0)
+                    result.flights[i].notes.push_back("the simulated current sensor clipped " +
+                                                      std::to_string(simr.truth.sensor_stats.current_clipped) + " of " +
+                                                      std::to_string(simr.truth.sensor_stats.reads) +
+                                                      " reads at its shunt range: the log's current is wrong there");
                 if (!options.logs_dir.empty()) {
                     std::ifstream in(path, std::ios::binary);
                     std::stringstream buf;

@@ -96,7 +96,7 @@ double pow23(double x) { return x > 0.0 ? det_exp(det_log(x) * (2.0 / 3.0)) : 0.
 void read_pack(Reader& r, PackSpec& p) {
     r.integer("cells", p.cells, 1, kMaxCells);
     r.number("capacity_ah", p.capacity_ah, 0.01, 1000.0);
-    r.number("r0_ohm", p.r0_ohm, 0.0, 10.0);
+    r.number("r0_ohm", p.r0_ohm, 1e-5, 10.0);  // a pack without resistance divides the score's errors by 0
     r.number("r1_ohm", p.r1_ohm, 0.0, 10.0);
     r.number("r2_ohm", p.r2_ohm, 0.0, 10.0);
     r.number("tau1_s", p.tau1_s, 0.01, 1e5);
@@ -396,6 +396,22 @@ Scenario scenario_from_json(const json& j, const std::string& origin, const std:
         s.cutoff_v_per_cell = v;
     }
     resolve_defaults(s);
+    // The reference sensors' ranges: the INA226 bus reads up to 40.96 V and each INA3221 tap
+    // up to 32.76 V; beyond, every reading clips and the log is wrong without a word.
+    constexpr double kFullCellV = 4.2, kMaxBusV = 40.96, kMaxTapV = 32.76;
+    if (s.pack.cells * kFullCellV > kMaxBusV || (s.pack.cells - 1) * kFullCellV > kMaxTapV)
+        throw ScenarioError(origin, "$.pack.cells",
+                            std::to_string(s.pack.cells) + " cells read up to " + std::to_string(s.pack.cells * kFullCellV) +
+                                " V, beyond the reference sensors' 40.96 V bus and 32.76 V taps: they would clip; at most 8 cells");
+    // The pack's temperature is stepped forward explicitly: a step longer than half its
+    // thermal time constant (heat capacity / conductance) oscillates and runs away.
+    const double g = std::max(s.pack.conductance_ground_w_per_k, s.pack.conductance_flight_w_per_k);
+    if (s.step_s * g > 0.5 * s.pack.heat_capacity_j_per_k)
+        throw ScenarioError(origin, "$.pack.heat_capacity_j_per_k",
+                            "the pack's thermal time constant (heat capacity " + std::to_string(s.pack.heat_capacity_j_per_k) +
+                                " J/K over conductance " + std::to_string(g) + " W/K) is under twice the step of " +
+                                std::to_string(s.step_s) + " s: the temperature would run away; raise the heat capacity or "
+                                "lower the conductance or the step");
     return s;
 }
 

@@ -96,6 +96,7 @@ void SensorChain::finish_ina226() {
     const double shunt = acc226_.shunt / acc226_.weight + noise_rng_.normal(0.0, p_.shunt_noise_mv);
     bus_count_ = quantise(bus, kBusLsbV, 0, 32767);            // bus register: 0..40.96 V
     shunt_count_ = quantise(shunt, kShuntLsbMv, -32768, 32767);  // ±81.92 mV
+    if (shunt_count_ <= -32768 || shunt_count_ >= 32767) ++stats_.current_clipped;
     have226_ = true;
     acc226_ = Accumulator{};
 }

@@ -117,6 +117,7 @@ struct SensorStats {
     long late_reads = 0;
     double loose_open_s = 0;  // time the loose tap spent open
     long loose_episodes = 0;
+    long current_clipped = 0;  // reads with the shunt register at its end (about ±215 A): the log is wrong there
 };
 
 class SensorChain {

@@ -275,7 +275,13 @@ SimulationResult simulate(const Scenario& scenario, const SimulateOptions& optio
         p.remaining_energy_wh = energy_at_cutoff - p.energy_wh;
     }
     tr.healthy_total_flight_time_s = total_flight_time(s, make_plant_params(s, true));
-    if (tr.healthy_total_flight_time_s < 0.0) tr.healthy_total_flight_time_s = tr.total_flight_time_s;
+    // A healthy twin still flying at the end of the continuation flies longer than any number
+    // we have: standing in the degraded pack's own time had made a 3.4 x shorter flight "not short".
+    if (tr.healthy_total_flight_time_s < 0.0)
+        throw ScenarioError(s.source_path + ": the healthy twin pack did not reach its cutoff within " +
+                            std::to_string(s.max_continuation_s) +
+                            " s after the planned landing, so the flight's shortfall is not known; raise "
+                            "truth.max_continuation_s or profile.mean_power_w");
 
     // Pack facts and what a good monitor may rightly warn about.
     const PlantParams& pp = tr.plant;
@@ -295,7 +301,7 @@ SimulationResult simulate(const Scenario& scenario, const SimulateOptions& optio
     for (int c = 0; c < nominal.cells; ++c) nominal.cell[c].r0_ohm = s.pack.r0_ohm;
     ref.configure(nominal, 1.0, 25.0);
     tr.nominal_pack_r0_reference_ohm = ref.pack_r0_reference_ohm();
-    {
+    if (pp.cells >= 2) {  // a single cell has no others to differ from
         double worst = 0.0;
         for (int c = 0; c < pp.cells; ++c) {
             std::vector<double> q, r;
@@ -421,7 +427,8 @@ json truth_to_json(const SimulationResult& r) {
                    {"sd_stalls", t.sensor_stats.stalls},
                    {"late_reads", t.sensor_stats.late_reads},
                    {"loose_lead_episodes", t.sensor_stats.loose_episodes},
-                   {"loose_lead_open_s", round_fixed(t.sensor_stats.loose_open_s, 3)}};
+                   {"loose_lead_open_s", round_fixed(t.sensor_stats.loose_open_s, 3)},
+                   {"current_clipped_reads", t.sensor_stats.current_clipped}};
     std::vector<double> time, current, voltage, power, temp, soc, res, rem_t, rem_e;
     json rem_time = json::array(), rem_energy = json::array();
     for (const TruthPoint& p : t.series) {

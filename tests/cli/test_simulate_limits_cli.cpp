@@ -1,0 +1,78 @@
+// battsim simulate and score at the edges of what a scenario may say: one cell, more cells
+// than the reference sensors read, a pack without resistance, a thermal step that would run
+// away, a healthy twin that outlasts the continuation, a cutoff of 0, a log that cannot be
+// read back. Each either runs or is refused naming the scenario and the key.
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+
+#include "cli_util.h"
+
+using clitest::q;
+using clitest::run;
+
+namespace {
+const std::string kSource = BATTSIM_SOURCE_DIR;
+
+// A hover scenario in `dir` for `cells` cells (with a made config for them) and `extra` keys.
+std::string scenario(const std::string& dir, const std::string& name, int cells, nlohmann::json extra = nlohmann::json::object(),
+                     const std::string& config_dir = "") {
+    const std::string cfg = (config_dir.empty() ? dir : config_dir) + "/" + name + "-config.json";
+    const auto made = run("make-config --cells " + std::to_string(cells) + " --capacity-mah 1550 -o " + q(cfg));
+    INFO(made.err);
+    REQUIRE(made.exit_code == 0);
+    nlohmann::json s = {{"schema", "battsim.scenario"}, {"version", 1}, {"name", name}, {"seed", 7},
+                        {"monitor_config", cfg},
+                        {"pack", {{"cells", cells}, {"capacity_ah", 1.55}}},
+                        {"profile", {{"kind", "hover"}, {"idle_before_s", 20}, {"flight_s", 120}, {"idle_after_s", 10}}}};
+    s.merge_patch(extra);
+    const std::string path = dir + "/" + name + ".json";
+    clitest::write_file(path, s.dump(2));
+    return path;
+}
+}  // namespace
+
+TEST_CASE("simulate: one cell flies; more than the sensors read, no resistance and a runaway step are refused", "[cli][sim]") {
+    const std::string dir = clitest::temp_dir();
+    // One cell: no other cells to differ from (it had crashed on an empty median).
+    const auto one = run("simulate " + q(scenario(dir, "one", 1)) + " -o " + q(dir + "/one.csv"));
+    INFO(one.err);
+    CHECK(one.exit_code == 0);
+    const auto truth = nlohmann::json::parse(clitest::read_file(dir + "/one.truth.json"));
+    CHECK(truth["sensor"]["current_clipped_reads"] == 0);
+
+    const auto refused = [&](const std::string& path, const std::string& says) {
+        const auto r = run("simulate " + q(path) + " -o " + q(dir + "/x.csv"));
+        INFO(r.err);
+        CHECK(r.exit_code == 4);
+        CHECK_THAT(r.err, Catch::Contains(says));
+    };
+    // Nine cells read 37.8 V, within the bus, but the eighth tap reads 33.6 V: it would clip.
+    refused(scenario(dir, "nine", 9), "$.pack.cells: 9 cells read up to 37.8");
+    refused(scenario(dir, "nine", 9), "at most 8 cells");
+    refused(scenario(dir, "r0", 4, {{"pack", {{"r0_ohm", 0}}}}), "$.pack.r0_ohm: expected a number in [");
+    refused(scenario(dir, "hot", 4, {{"pack", {{"heat_capacity_j_per_k", 0.002}}}}),
+            "$.pack.heat_capacity_j_per_k: the pack's thermal time constant");
+    // A hover at 12 W on a pack of 30 % capacity: the healthy twin flies far past the hour of
+    // continuation, so how short this flight is cannot be known (it had been counted "not short").
+    refused(scenario(dir, "twin", 4, {{"pack", {{"capacity_factor", 0.3}}}, {"profile", {{"mean_power_w", 12}}}}),
+            "the healthy twin pack did not reach its cutoff");
+    // A cutoff of 0 V per cell is no cutoff (it had passed as "not given").
+    const auto zero = run("simulate " + q(scenario(dir, "z", 4)) + " -o " + q(dir + "/z.csv") + " --cutoff-v-per-cell 0");
+    CHECK(zero.exit_code == 2);
+    CHECK_THAT(zero.err, Catch::Contains("--cutoff-v-per-cell: expected a voltage in [2, 4.5]"));
+}
+
+TEST_CASE("score names the scenario whose simulated log cannot be read back", "[cli][sim]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string suite = dir + "/suite";
+    std::filesystem::create_directory(suite);
+    // The sensor's first read after the whole flight: an empty log.
+    scenario(suite, "late", 4, {{"sensor", {{"first_read_ms", 600000}}}}, dir);  // its config beside, not in, the suite
+    const auto r = run("score " + q(suite));
+    CHECK(r.exit_code != 0);
+    CHECK_THAT(r.err, Catch::Contains("scenario late: its simulated log cannot be read back"));
+    CHECK(r.err.find("/battsim-score-") == std::string::npos);
+}
