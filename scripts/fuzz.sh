@@ -1,16 +1,20 @@
 #!/bin/sh
 # Builds the libFuzzer harnesses with clang (ASan+UBSan) and runs each for a bounded time,
 # seeded with the shared real logs and the committed regression inputs. A crash fails the
-# run and leaves the input in build-fuzz/crashes/: add it to tests/fuzz/regressions/.
+# run and leaves the input in <build>/crashes/: add it to tests/fuzz/regressions/.
 set -eu
 root=$(cd "$(dirname "$0")/.." && pwd)
-build="$root/build-fuzz"
+# BATTSIM_FUZZ_BUILD: a clang build configured with BATTSIM_FUZZ=ON to reuse (test.sh's
+# sanitizer build); by default a build of its own.
+build="${BATTSIM_FUZZ_BUILD:-$root/build-fuzz}"
 seconds=${FUZZ_SECONDS:-60}
 data=${BATTSIM_DATA_DIR:-$root/../shared/data}
 
 # As in scripts/test.sh: an explicit BATTSIM_DATA_DIR wins over a cached one.
 set -- ${BATTSIM_DATA_DIR:+"-DBATTSIM_DATA_DIR=$BATTSIM_DATA_DIR"}
-CC=clang CXX=clang++ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBATTSIM_FUZZ=ON "$@" >/dev/null
+if [ -z "${BATTSIM_FUZZ_BUILD:-}" ]; then
+  CC=clang CXX=clang++ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBATTSIM_FUZZ=ON "$@" >/dev/null
+fi
 cmake --build "$build" -j"$(nproc)" --target fuzz_reader fuzz_monitor fuzz_documents
 
 corpus="$build/corpus"
