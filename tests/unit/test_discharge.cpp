@@ -195,6 +195,15 @@ TEST_CASE("battsim discharge writes its outputs and exits with the documented co
     CHECK(WEXITSTATUS(std::system((bin + " discharge " + log + " --plot x.pdf > /dev/null 2>&1").c_str())) == 2);
     // Without --negative-discharge the current is negative: an input error that says so.
     CHECK(WEXITSTATUS(std::system((bin + " discharge " + log + " --min-voltage 2.5 --max-voltage 4.2 > /dev/null 2>&1").c_str())) == 3);
+    // A drive cycle has no zones to read a start config off: refused before any output is
+    // written (the summary had been written first).
+    const std::string pana = std::string(BATTSIM_DATA_DIR) + "/panasonic-18650pf/us06_n10c.csv";
+    const std::string cfg = std::string(BATTSIM_SOURCE_DIR) + "/configs/fitted/start/panasonic-18650pf-1s.json";
+    const std::string cmd2 = bin + " discharge " + pana + " -c " + cfg + " --negative-discharge --summary " + dir +
+                             "-s.json --config-out " + dir + "-c.json > /dev/null 2>&1";
+    CHECK(WEXITSTATUS(std::system(cmd2.c_str())) == 3);
+    CHECK_FALSE(std::ifstream(dir + "-s.json").good());
+    CHECK_FALSE(std::ifstream(dir + "-c.json").good());
 }
 
 TEST_CASE("OCV table from a discharge: by hand", "[discharge][ocv]") {

@@ -111,6 +111,45 @@ TEST_CASE("Natural parameters and the config's curve points round-trip", "[fit]"
     }
 }
 
+TEST_CASE("K follows the curve current the config can hold, and a parameter with no effect has no sigma", "[fit]") {
+    // Flight 34's fit: kappa at its 1e-6 bound, but the curve current E0·kappa stands for is
+    // capped where the exponential voltage reaches 0.1 V; the written config, and so the
+    // model, has a larger kappa. K had been read off the uncapped one, 174 times too small.
+    NaturalParams n;
+    n.e0_v = 15.095;
+    n.r_ohm = 0.0424;
+    n.a_v = 8.66;
+    n.b_per_ah = 48.7;
+    n.q_ah = 1.139;
+    n.kappa = 1e-6;
+    const core::TremblayParams p = params_from_natural(n, core::TremblayParams{});
+    CHECK(p.exponential_voltage_v == Approx(0.1).margin(1e-4));  // the cap binds
+    core::TremblayModel m;
+    m.configure(p);
+    CHECK(k_of(n) == Approx(m.k_v()).epsilon(1e-3));
+    NaturalParams smaller = n;
+    smaller.kappa = 1e-5;  // below the cap as well: the same model, the same K
+    CHECK(k_of(smaller) == Approx(k_of(n)).epsilon(1e-9));
+
+    // In the covariance, a parameter whose Jacobian column is zero is not known at all.
+    LmResult r;
+    r.x = Eigen::Vector2d(1.0, 1.0);
+    r.residuals = Eigen::VectorXd::Constant(10, 0.1);
+    r.jacobian = Eigen::MatrixXd::Zero(10, 2);
+    for (int i = 0; i < 10; ++i) r.jacobian(i, 0) = static_cast<double>(i);
+    r.at_bound = {false, false};
+    const Eigen::MatrixXd cov = covariance(r);
+    CHECK(std::isfinite(cov(0, 0)));
+    CHECK(cov(0, 0) > 0.0);
+    CHECK(std::isinf(cov(1, 1)));  // it had read 0: "± 0.0"
+
+    // Errors over no samples (a lab log has no flight) are none, not 0 V.
+    const nlohmann::json none = error_stats_to_json(ErrorStats{});
+    CHECK(none["n"] == 0);
+    CHECK(none["mae_v"].is_null());
+    CHECK(none["rmse_v"].is_null());
+}
+
 TEST_CASE("Levenberg-Marquardt: linear regression and its covariance", "[fit]") {
     // y = 2 + 3x + noise: the solution and s²(XᵀX)⁻¹ are known in closed form.
     std::mt19937 gen(7);
