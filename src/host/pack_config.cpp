@@ -195,8 +195,8 @@ LogPack log_pack(const SourceInfo& info, double resting_voltage_v, int cells_giv
         if (n > 0 && v / n >= kCutoffMinV && v / n <= kCutoffMaxV) {
             p.cutoff_voltage_v = v;
             p.cutoff_from = "the log's " + from + " V (" + number_text(v / n, "%.2f V") + " per cell)";
-            // A failsafe switched off is a level nobody flies to (ArduCopter 3.x FS_BATT_ENABLE,
-            // later BATT_FS_LOW_ACT; 0 = no action): said, since it sets the remaining time.
+            // A failsafe that takes no action (ArduCopter 3.x FS_BATT_ENABLE, later BATT_FS_LOW_ACT;
+            // 0 = warn only) does not end the flight there; said, since the level sets the remaining time.
             double enabled = NAN;
             std::string switch_name;
             for (const char* name : {"FS_BATT_ENABLE", "BATT_FS_LOW_ACT"}) {

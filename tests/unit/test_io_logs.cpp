@@ -1023,6 +1023,20 @@ TEST_CASE("One corrupt time stamp in a real log costs its own row, not the rest 
         CHECK(non_decreasing(r.samples));
         CHECK(any_note(r, bad == 0 ? "a corrupt time stamp; 1 sample dropped" : "is not a time a log can hold"));
     }
+    // ... and the first battery_status 1000 s ahead: before, the other 45 samples all "went back".
+    {
+        std::string u = bytes(ulg);
+        uint64_t t = 0;
+        std::memcpy(&t, &u[83777], 8);
+        REQUIRE(t == 3268356u);
+        t += 1000000000u;
+        std::memcpy(&u[83777], &t, 8);
+        write(d.path("first.ulg"), u);
+        const auto r = read_all(Kind::Ulog, d.path("first.ulg"));
+        CHECK(r.samples.size() + 1 == ulog_clean.samples.size());
+        CHECK(r.samples.front().time_us == ulog_clean.samples[1].time_us);
+        CHECK(any_note(r, "is the log's first, 999.990 s ahead of the samples after it"));
+    }
 
     // robert_lefebvre_octo_PM.log: one digit of one GPS time (its CURR rows take the latest
     // GPS time). The clock had stuck at the bad time: 5,038 s instead of 174 s.

@@ -74,6 +74,31 @@ TEST_CASE("TimeOrder: one corrupt time stamp far ahead is dropped, not every row
     CHECK_THAT(w.notes[1], Catch::EndsWith("2 rows dropped"));
 }
 
+TEST_CASE("TimeOrder: a corrupt stamp on the log's first row costs that row, not the log", "[io-logs][time-order]") {
+    // Before, the first row was taken as it came, and every row after it went back.
+    std::vector<int> kept;
+    const Run r = order({16891.8, 114.5, 114.6, 114.7}, &kept);
+    CHECK(kept == std::vector<int>{1, 2, 3});
+    REQUIRE(r.notes.size() == 1);
+    CHECK(r.notes[0] ==
+          "glitch: row 0: CURR time 16891.800000 s is the log's first, 16777.300 s ahead of the rows after it, and "
+          "row 1 is back at 114.500000 s: a corrupt time stamp; 1 row dropped");
+    // ... and the rows that carried it with it; good first rows and then a jump are judged as ever.
+    kept.clear();
+    const Run run = order({5010.0, 5010.0, 13.0, 14.0}, &kept);
+    CHECK(kept == std::vector<int>{2, 3});
+    REQUIRE(run.notes.size() == 1);
+    CHECK_THAT(run.notes[0], Catch::EndsWith("a corrupt time stamp; 2 rows dropped"));
+    // A small step back after the first row is that row's own fault, as anywhere else.
+    kept.clear();
+    const Run s = order({10.0, 9.9, 10.1}, &kept);
+    CHECK(kept == std::vector<int>{0, 2});
+    REQUIRE(s.notes.size() == 1);
+    CHECK(s.notes[0] == "backwards: row 1: CURR time 9.900000 s goes back before the previous row (10.000000 s); row dropped");
+    // A log of one row keeps it.
+    CHECK(order({3.0}).times_s == std::vector<double>{3.0});
+}
+
 TEST_CASE("TimeOrder: a real gap is kept: the log goes on from it", "[io-logs][time-order]") {
     // Logging stopped for 100 s: held, then released as the log goes on (no row lost, no note).
     std::vector<double> t{0.0, 0.1, 100.2};

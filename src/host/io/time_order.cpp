@@ -18,41 +18,55 @@ void TimeOrder::offer(core::Sample sample, double time_us, const std::string& wh
     }
     Row row{sample, time_us, where};
     row.sample.time_us = static_cast<uint64_t>(std::llround(time_us));
+    if (accepted_ == 0 && held_.empty()) {
+        // The first row is held too: a corrupt first stamp would otherwise make every row after it go back.
+        held_.push_back(std::move(row));
+        return;
+    }
+    if (!held_.empty() && accepted_ == 0 && time_us - held_.back().time_us > kJumpUs)
+        release_held();  // the log's first rows were good: this row is a jump of its own
     if (!held_.empty()) {
         if (time_us >= held_.back().time_us) {
             held_.push_back(std::move(row));
             if (held_.size() > kMaxHeld) release_held();  // the log went on: a gap
             return;
         }
-        if (time_us >= last_us_ && time_us < held_.front().time_us) {
-            // Back before the jump, at or after the last sample before it: the jump was a
-            // corrupt time stamp, and the rows that carried it go.
-            const Row& first = held_.front();
-            drop_("glitch", first.where + ": " + what_ + " " + fixed(first.time_us / 1e6, 6) + " s jumps " +
-                                fixed((first.time_us - last_us_) / 1e6, 3) + " s ahead of the previous " + noun_ +
-                                " (" + fixed(last_us_ / 1e6, 6) + " s), and " + where + " is back at " +
-                                fixed(time_us / 1e6, 6) + " s: a corrupt time stamp; " + std::to_string(held_.size()) +
-                                " " + noun_ + (held_.size() == 1 ? "" : "s") + " dropped");
+        const Row& first = held_.front();
+        const bool undoes_jump = accepted_ > 0 ? time_us >= last_us_ && time_us < first.time_us
+                                               : first.time_us - time_us > kJumpUs;
+        if (undoes_jump) {
+            // Back before the jump (at or after the last sample before it), or far back before the
+            // log's first row: the jump was a corrupt time stamp, and the rows that carried it go.
+            const std::string jump = accepted_ > 0 ? " jumps " + fixed((first.time_us - last_us_) / 1e6, 3) +
+                                                         " s ahead of the previous " + noun_ + " (" +
+                                                         fixed(last_us_ / 1e6, 6) + " s)"
+                                                   : " is the log's first, " + fixed((first.time_us - time_us) / 1e6, 3) +
+                                                         " s ahead of the " + noun_ + "s after it";
+            drop_("glitch", first.where + ": " + what_ + " " + fixed(first.time_us / 1e6, 6) + " s" + jump + ", and " +
+                                where + " is back at " + fixed(time_us / 1e6, 6) + " s: a corrupt time stamp; " +
+                                std::to_string(held_.size()) + " " + noun_ + (held_.size() == 1 ? "" : "s") + " dropped");
             held_.clear();
             accept(std::move(row));
             return;
         }
         // Back within the held rows, or before the last sample: this one is out of order.
-        const double previous_us = time_us < last_us_ ? last_us_ : held_.back().time_us;
-        drop_("backwards", where + ": " + what_ + " " + fixed(time_us / 1e6, 6) + " s goes back before the previous " +
-                               noun_ + " (" + fixed(previous_us / 1e6, 6) + " s); " + noun_ + " dropped");
+        drop_backwards(time_us, accepted_ > 0 && time_us < last_us_ ? last_us_ : held_.back().time_us, where);
         return;
     }
-    if (accepted_ > 0 && time_us < last_us_) {
-        drop_("backwards", where + ": " + what_ + " " + fixed(time_us / 1e6, 6) + " s goes back before the previous " +
-                               noun_ + " (" + fixed(last_us_ / 1e6, 6) + " s); " + noun_ + " dropped");
+    if (time_us < last_us_) {
+        drop_backwards(time_us, last_us_, where);
         return;
     }
-    if (accepted_ > 0 && time_us - last_us_ > kJumpUs) {
+    if (time_us - last_us_ > kJumpUs) {
         held_.push_back(std::move(row));
         return;
     }
     accept(std::move(row));
+}
+
+void TimeOrder::drop_backwards(double time_us, double previous_us, const std::string& where) {
+    drop_("backwards", where + ": " + what_ + " " + fixed(time_us / 1e6, 6) + " s goes back before the previous " +
+                           noun_ + " (" + fixed(previous_us / 1e6, 6) + " s); " + noun_ + " dropped");
 }
 
 void TimeOrder::accept(Row row) {

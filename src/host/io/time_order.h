@@ -6,7 +6,8 @@
 // rows and reported a 16,808 s flight. So a jump forward by more than kJumpUs is held, with
 // the rows that follow it (at most kMaxHeld), until the log shows which it was: rows back
 // before the jump make it a corrupt time stamp, and the held rows are dropped; a log that
-// goes on from the jump's time makes it a gap, and they are kept.
+// goes on from the jump's time makes it a gap, and they are kept. The log's first row is held
+// the same way: rows far back before it make its stamp the corrupt one.
 #pragma once
 
 #include <cstddef>
@@ -54,6 +55,7 @@ private:
     };
     void accept(Row row);
     void release_held();
+    void drop_backwards(double time_us, double previous_us, const std::string& where);
 
     std::string what_, noun_;
     Drop drop_;
