@@ -71,7 +71,11 @@ std::function<int()> setup(CLI::App& sub) {
         });
         if (rc != kExitOk) return rc;
         return finish_report(me, j, a->common.report, a->common.json,
-                             [&](std::ostream& out) { host::residual::print_report(report, out); }, people_out(outputs));
+                             [&](std::ostream& out) {
+                                 host::residual::print_report(report, out);
+                                 if (j.contains("plot_note")) out << "plot: " << j["plot_note"].get<std::string>() << "\n";
+                             },
+                             people_out(outputs));
     };
 }
 

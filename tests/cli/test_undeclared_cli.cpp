@@ -120,3 +120,18 @@ TEST_CASE("A ground path in cell 1's reading, undeclared: named as a bad cell; d
     clitest::write_file(undeclared_path, config.dump(1));
     CHECK(named_cell(replay(undeclared_path)) == 1);
 }
+
+TEST_CASE("battsim residual --plot shows every log it traced, up to four", "[cli][residual][data]") {
+    // It had drawn the first log alone: the docs' four-temperature example showed 25 °C only.
+    const std::string dir = clitest::temp_dir(), svg = dir + "/two.svg";
+    const std::string flights = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/";
+    const json r = clitest::run_json("residual " + clitest::q(flights + "30.csv") + " " + clitest::q(flights + "32.csv") +
+                                     " -c " + clitest::q(kSource + "/configs/reference-modified.json") +
+                                     " --candidates rc_polarisation --max-effects 1 --json --plot " + clitest::q(svg));
+    CHECK(r["plot"] == svg);
+    CHECK_FALSE(r.contains("plot_note"));
+    const std::string text = clitest::read_file(svg);
+    for (const char* title : {"30: measured voltage", "32: measured voltage", "30: residual", "32: residual"})
+        CHECK(text.find(title) != std::string::npos);
+    CHECK(text.find("battsim residual: 2 logs") != std::string::npos);
+}

@@ -112,3 +112,80 @@ TEST_CASE("plot_replay from memory and from the replay's series CSV", "[plot][da
     for (const std::string& f : {series, png1, png2}) std::remove(f.c_str());
     CHECK_THROWS_AS(plot::read_replay_series_csv(log), InputError);  // a flight log is not a series
 }
+
+namespace {
+// A replay series of n samples at 0.1 s: 16 V measured, the fixed model running off to
+// -230 V (a model past its pole), 1.5 Ah, 20 mΩ.
+plot::ReplaySeries runaway_series(size_t n) {
+    plot::ReplaySeries s;
+    for (size_t k = 0; k < n; ++k) {
+        s.time_s.push_back(0.1 * k);
+        s.voltage_v.push_back(16.0 - 0.001 * k);
+        s.current_a.push_back(20.0);
+        s.filtered_a.push_back(20.0);
+        s.model_v.push_back(16.0 - 0.25 * k);
+        s.adapted_v.push_back(16.0);
+        s.capacity_ah.push_back(1.5);
+        s.resistance_ohm.push_back(0.02);
+        s.remaining_s.push_back(100.0);
+        s.total_s.push_back(200.0);
+        s.flying.push_back(true);
+    }
+    return s;
+}
+}  // namespace
+
+TEST_CASE("plot_replay: the voltage axis follows the measurement, one sample is drawn as missing", "[plot]") {
+    const std::string svg = temp("runaway.svg");
+    // A model run into its pole had set the voltage axis to -240..+20 V, the pack a flat line.
+    plot::plot_replay(runaway_series(1000), "runaway", svg);
+    const std::string text = testsupport::read_file(svg);
+    CHECK(text.find(">-200<") == std::string::npos);
+    CHECK(text.find(">-100<") == std::string::npos);
+    // One sample draws no line: its legend says so, and every panel has a time axis around it.
+    plot::plot_replay(runaway_series(1), "one", svg);
+    const std::string one = testsupport::read_file(svg);
+    CHECK(one.find(">measured (no values)<") != std::string::npos);
+    CHECK(one.find(">capacity (no values)<") != std::string::npos);
+    std::remove(svg.c_str());
+}
+
+TEST_CASE("render: a title that is not UTF-8 still makes valid SVG; a device takes the plot", "[plot]") {
+    const std::string svg = temp("latin1.svg");
+    plot::render({sine_panel()}, "flight \xe9t\xe9.csv", svg);  // a Latin-1 log name
+    const std::string text = testsupport::read_file(svg);
+    CHECK(text.find("flight \xef\xbf\xbdt\xef\xbf\xbd.csv") != std::string::npos);
+    CHECK(text.find("\xe9t") == std::string::npos);
+    std::remove(svg.c_str());
+    // A link to /dev/null is written straight; it has no size to check ("gnuplot failed").
+    const std::string link = temp("null.png");
+    std::remove(link.c_str());
+    std::filesystem::create_symlink("/dev/null", link);
+    CHECK_NOTHROW(plot::render({sine_panel()}, "t", link));
+    std::remove(link.c_str());
+}
+
+TEST_CASE("plot_model_fit: 8 panels at most, the test logs among them, the rest counted", "[plot]") {
+    std::vector<plot::ModelTraceSeries> logs;
+    for (int k = 0; k < 13; ++k) {
+        plot::ModelTraceSeries l;
+        l.label = (k < 10 ? "fitted" : "held") + std::to_string(k);
+        l.role = k < 10 ? "fit" : "test";
+        for (int i = 0; i < 50; ++i) {
+            l.time_s.push_back(i);
+            l.measured_v.push_back(16.0 - 0.01 * i);
+            l.model_v.push_back(16.0 - 0.011 * i);
+        }
+        logs.push_back(l);
+    }
+    const std::string svg = temp("fit13.svg");
+    // Before, the first 8 fitted logs filled the plot and the test logs, added last, never showed.
+    CHECK(plot::plot_model_fit(logs, "t", svg) == 5);
+    const std::string text = testsupport::read_file(svg);
+    for (const char* shown : {"fitted0 (fit)", "fitted4 (fit)", "held10 (test)", "held12 (test)"})
+        CHECK(text.find(shown) != std::string::npos);
+    CHECK(text.find("fitted5 (fit)") == std::string::npos);
+    logs.resize(3);
+    CHECK(plot::plot_model_fit(logs, "t", svg) == 0);
+    std::remove(svg.c_str());
+}

@@ -626,10 +626,23 @@ TEST_CASE("Joint estimator: one low sample in the air is no landing; a held one 
     CHECK(e.status().flying);
     e.update(t_us += 67000, 15.6f, 0.3f, 0.067f, true);  // 1.005 s
     CHECK_FALSE(e.status().flying);
-    // A new take-off after it starts a new flight: its mean power is its own.
-    for (int k = 0; k < 30; ++k) e.update(t_us += 67000, 15.0f, 30.0f, 0.067f, true);
+    // A new take-off after it starts a new flight: its mean power is its own. Until this
+    // flight's first round of solves is in, the last flight's remaining time and energy carry
+    // on (they had been zeroed: 0 s left, a critical beep, for 1-2 s after every re-take-off).
+    const float before_s = e.status().remaining_time_s, before_wh = e.status().remaining_energy_wh;
+    REQUIRE(before_s > 60.0f);
+    REQUIRE(before_wh > 5.0f);
+    float lowest_s = before_s, lowest_wh = before_wh;
+    for (int k = 0; k < 30; ++k) {
+        e.update(t_us += 67000, 15.0f, 30.0f, 0.067f, true);
+        REQUIRE(e.status().time_valid);
+        lowest_s = std::fmin(lowest_s, e.status().remaining_time_s);
+        lowest_wh = std::fmin(lowest_wh, e.status().remaining_energy_wh);
+    }
     CHECK(e.status().flying);
     CHECK(e.status().mean_power_w == Approx(450.0f).epsilon(1e-3));
+    CHECK(lowest_s > 0.5f * before_s);
+    CHECK(lowest_wh > 0.5f * before_wh);
 }
 
 TEST_CASE("Capacity EKF: predict adds the given state-of-charge variance", "[joint]") {

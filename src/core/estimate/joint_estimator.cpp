@@ -115,9 +115,12 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     const bool airborne = flying && (above || (was_flying_ && below_takeoff_s_ <= config_.landed_hold_s + 1.0e-4f));
     flying = flying && above;
     if (airborne && !was_flying_) {
-        // A take-off: the flight's accumulators start again.
-        flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = solve_started_s_ = 0.0f;
-        end_s_ = health_end_s_ = total_wh_ = 0.0f;
+        // A take-off: the flight's accumulators start again. What the last flight's solves left
+        // carries on from the new flight's start: zeroed, it had published 0 s left (a critical
+        // beep) until the next round was in.
+        end_s_ = status_.remaining_time_s;
+        total_wh_ = status_.remaining_energy_wh;
+        flying_s_ = flying_energy_j_ = charge_since_takeoff_ah_ = solve_started_s_ = health_end_s_ = 0.0f;
         short_count_ = 0;
         // ground_s_ still holds the time on the ground that ended here (cleared below).
         // Each filter keeps its own, so a disabled one's stand-in (health → tracking,

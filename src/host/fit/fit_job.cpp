@@ -188,25 +188,31 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
                      0.0f, sim);
             series.push_back(plot::model_series(tests[t], sim.model_v, "test"));
         }
-        plot::plot_model_fit(series, "battsim fit: measured and fitted model voltage", job.plot_path);
+        const size_t left_out = plot::plot_model_fit(series, "battsim fit: measured and fitted model voltage", job.plot_path);
         report["plot"] = job.plot_path;
+        if (left_out > 0)
+            report["plot_note"] = std::to_string(left_out) + " of the " + std::to_string(series.size()) +
+                                  " logs are not in the plot (8 panels at most, up to 4 of them test logs)";
     }
     return report;
 }
 
 void print_fit_brief(const nlohmann::json& r, std::ostream& out) {
+    // No standard error (a parameter the data cannot move): a dash, not "null".
+    const auto sigma = [](const nlohmann::json& s) { return s.is_null() ? std::string("–") : s.dump(); };
     out << "fit: RMSE " << r["rmse_v"] << " V, MAE " << r["mae_v"] << " V over " << r["points"] << " points ("
         << r["solver"]["iterations"] << " iterations, " << r["solver"]["stop"].get<std::string>() << ")\n";
     for (const auto& p : r["parameters"]) {
         out << "  " << p["name"].get<std::string>();
         if (p.contains("log")) out << "[" << p["log"].get<std::string>() << "]";
-        out << " = " << p["value"] << " " << p["unit"].get<std::string>() << " ± " << p["sigma"] << " (AR(1)-corrected ± "
-            << p["sigma_ar1"] << ")" << (p.contains("at_bound") ? " at bound" : "") << "\n";
+        out << " = " << p["value"] << " " << p["unit"].get<std::string>() << " ± " << sigma(p["sigma"])
+            << " (AR(1)-corrected ± " << sigma(p["sigma_ar1"]) << ")" << (p.contains("at_bound") ? " at bound" : "")
+            << "\n";
     }
     for (const auto& p : r["derived"]) {
         out << "  " << p["name"].get<std::string>();
         if (p.contains("log")) out << "[" << p["log"].get<std::string>() << "]";
-        out << " = " << p["value"] << " " << p["unit"].get<std::string>() << " ± " << p["sigma"] << "\n";
+        out << " = " << p["value"] << " " << p["unit"].get<std::string>() << " ± " << sigma(p["sigma"]) << "\n";
     }
     const bool zero = r["options"]["initial"] == "zero";
     out << (zero ? "  per log, the start config -> the fitted model (logs start full):\n"
@@ -217,8 +223,11 @@ void print_fit_brief(const nlohmann::json& r, std::ostream& out) {
         const auto& b = r["start_monitor"][i];
         const auto& a = zero ? l["fit"] : l["monitor"];
         out << "  " << l["label"].get<std::string>() << ": MAE all " << b["all"]["mae_v"] << " -> " << a["all"]["mae_v"] << " V";
-        if (b["flight"]["n"].get<size_t>() > 0) out << ", flight " << b["flight"]["mae_v"] << " -> " << a["flight"]["mae_v"] << " V";
         if (!zero) out << " (" << l["fit"]["all"]["mae_v"] << " V)";
+        if (b["flight"]["n"].get<size_t>() > 0) {
+            out << ", flight " << b["flight"]["mae_v"] << " -> " << a["flight"]["mae_v"] << " V";
+            if (!zero) out << " (" << l["fit"]["flight"]["mae_v"] << " V)";
+        }
         out << "\n";
     }
     for (const auto& l : r["test"]) {
@@ -229,6 +238,7 @@ void print_fit_brief(const nlohmann::json& r, std::ostream& out) {
             out << ", flight " << l["start_monitor"]["flight"]["mae_v"] << " -> " << l["monitor"]["flight"]["mae_v"] << " V";
         out << "\n";
     }
+    if (r.contains("plot_note")) out << "  plot: " << r["plot_note"].get<std::string>() << "\n";
 }
 
 }  // namespace fit

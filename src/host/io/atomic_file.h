@@ -27,6 +27,7 @@ public:
     void write(const char* data, size_t size);
     void commit();  // flush, fsync, rename; throws std::runtime_error on failure
     const std::string& path() const { return path_; }
+    bool direct() const { return direct_; }  // written straight (a device, a FIFO, "-")
 
 private:
     std::string path_;

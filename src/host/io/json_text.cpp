@@ -154,6 +154,10 @@ std::string json_text(const nlohmann::json& j, int indent) {
     return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
+std::string valid_utf8(const std::string& text) {
+    return nlohmann::json::parse(json_text(nlohmann::json(text))).get<std::string>();
+}
+
 std::string json_brief(const nlohmann::json& j) {
     if (j.is_array()) return "an array of " + std::to_string(j.size()) + (j.size() == 1 ? " value" : " values");
     if (j.is_object()) return "an object of " + std::to_string(j.size()) + (j.size() == 1 ? " member" : " members");

@@ -105,6 +105,9 @@ bool parse_json_text(const std::string& text, nlohmann::json& out, JsonSyntaxErr
 // Latin-1 file name from an old camera or a Windows share) are replaced with U+FFFD instead
 // of throwing: a summary must not be lost for the name of its log.
 std::string json_text(const nlohmann::json& j, int indent = -1);
+// `text` with what is not UTF-8 replaced the same way (for a plot's title, which gnuplot
+// writes into an SVG as UTF-8).
+std::string valid_utf8(const std::string& text);
 // A bad value as an error message quotes it: scalars as their text (cut at 60 characters),
 // arrays and objects by their size only, so a value nested 100,000 deep is neither printed
 // whole nor walked recursively (which overflowed the stack).

@@ -15,6 +15,7 @@
 
 #include "host/io/atomic_file.h"
 #include "host/io/csv_reader.h"
+#include "host/io/json_text.h"
 #include "host/io/line_reader.h"
 
 namespace battsim {
@@ -32,10 +33,11 @@ bool ends_with(const std::string& s, const char* suffix) {
     return true;
 }
 
-// gnuplot single-quoted string: a quote is written twice.
+// gnuplot single-quoted string: a quote is written twice. What is not UTF-8 (a Latin-1 log
+// name) is replaced, or the SVG is not well-formed XML.
 std::string quoted(const std::string& s) {
     std::string q = "'";
-    for (char c : s) {
+    for (char c : valid_utf8(s)) {
         if (c == '\'') q += "''";
         else if (c == '\n' || c == '\r') q += ' ';
         else q += c;
@@ -76,10 +78,13 @@ std::string read_all(const std::string& path) {
 }  // namespace
 
 bool Series::has_points() const {
-    for (size_t i = 0; i < x.size() && i < y.size(); ++i) {
-        if (std::isfinite(x[i]) && std::isfinite(y[i])) return true;
+    // A line needs two points to be drawn: one alone would be an empty line with a legend.
+    const size_t needed = style.compare(0, 5, "lines") == 0 || style == "steps" ? 2 : 1;
+    size_t n = 0;
+    for (size_t i = 0; i < x.size() && i < y.size() && n < needed; ++i) {
+        if (std::isfinite(x[i]) && std::isfinite(y[i])) ++n;
     }
-    return false;
+    return n >= needed;
 }
 
 bool Panel::y2_used() const {
@@ -218,7 +223,11 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
         double x_min = p.x_min, x_max = p.x_max, y_min = p.y_min, y_max = p.y_max;
         if (!p.has_points()) {  // gnuplot cannot autoscale an axis without data: a unit frame
             if (!(y_max > y_min)) y_min = 0, y_max = 1;
-            if (!(x_max > x_min)) x_min = 0, x_max = 1;
+            if (!(x_max > x_min) && !(std::isfinite(x_min) && x_min == x_max)) x_min = 0, x_max = 1;
+        }
+        if (std::isfinite(x_min) && x_min == x_max) {  // one instant: a second either side
+            x_min -= 1.0;
+            x_max += 1.0;
         }
         script += range_command("y", y_min, y_max);
         script += range_command("y2", p.y2_min, p.y2_max);
@@ -267,7 +276,8 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
     const std::string messages = read_all(err_path);
     err_file.reset();
     std::ifstream check(temp, std::ios::binary | std::ios::ate);
-    const bool ok = check && check.tellg() > 0 && messages.find("rror") == std::string::npos &&
+    // A device written straight (/dev/null) has no size to show for what it took.
+    const bool ok = check && (out->direct() || check.tellg() > 0) && messages.find("rror") == std::string::npos &&
                     messages.find(kDone) != std::string::npos;
     check.close();
     if (!ok) throw std::runtime_error("plot: gnuplot failed to write " + path + (messages.empty() ? "" : ": " + messages));
@@ -378,20 +388,21 @@ namespace {
 // The range of a panel axis's data with a margin, so no line runs along the frame.
 // `trim` > 0 leaves that share of the values out at each end, so that a few spikes do
 // not squash what is typical.
-std::pair<double, double> padded_range(const Panel& p, bool y2, double trim = 0.0) {
-    std::vector<double> values;
-    for (const Series& s : p.series) {
-        if (s.y2 != y2) continue;
-        for (double v : s.y) {
-            if (std::isfinite(v)) values.push_back(v);
-        }
-    }
+std::pair<double, double> padded_range(std::vector<double> values, double trim = 0.0) {
+    values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
     if (values.empty()) return {NAN, NAN};
     std::sort(values.begin(), values.end());
     const size_t cut = static_cast<size_t>(trim * static_cast<double>(values.size() - 1));
     const double lo = values[cut], hi = values[values.size() - 1 - cut];
     const double pad = hi > lo ? 0.06 * (hi - lo) : std::max(0.05 * std::fabs(hi), 0.01);
     return {lo - pad, hi + pad};
+}
+std::pair<double, double> padded_range(const Panel& p, bool y2, double trim = 0.0) {
+    std::vector<double> values;
+    for (const Series& s : p.series) {
+        if (s.y2 == y2) values.insert(values.end(), s.y.begin(), s.y.end());
+    }
+    return padded_range(std::move(values), trim);
 }
 }  // namespace
 
@@ -469,7 +480,10 @@ void plot_replay(const ReplaySeries& s, const std::string& title, const std::str
         p.key_above = true;  // never over the data
         p.x_min = s.time_s.front();
         p.x_max = s.time_s.back();
-        std::tie(p.y_min, p.y_max) = padded_range(p, false, k == deviations ? 0.002 : 0.0);
+        // The voltage axis follows the measurement: a model run into its pole (−230 V) would
+        // flatten the pack's trace into a line.
+        std::tie(p.y_min, p.y_max) =
+            k == 0 ? padded_range(s.voltage_v) : padded_range(p, false, k == deviations ? 0.002 : 0.0);
         std::tie(p.y2_min, p.y2_max) = padded_range(p, true);
         p.vertical_marks = marks;
         if (k > 0) {
@@ -495,11 +509,24 @@ ModelTraceSeries model_series(const fit::Trace& trace, const std::vector<float>&
     return s;
 }
 
-void plot_model_fit(const std::vector<ModelTraceSeries>& logs, const std::string& title, const std::string& path) {
+size_t plot_model_fit(const std::vector<ModelTraceSeries>& logs, const std::string& title, const std::string& path) {
     check_plot_path(path);
+    // At most 8 panels; up to half of them for test logs, which come after the fitted ones and
+    // would otherwise never be shown.
+    constexpr size_t kMaxPanels = 8;
+    size_t tests = 0;
+    for (const ModelTraceSeries& l : logs) tests += l.role == "test";
+    const size_t fitted = logs.size() - tests;
+    const size_t fitted_shown = std::min(fitted, kMaxPanels - std::min(tests, kMaxPanels / 2));
+    const size_t tests_shown = std::min(tests, kMaxPanels - fitted_shown);
+    std::vector<const ModelTraceSeries*> shown;
+    size_t f = 0, t = 0;
+    for (const ModelTraceSeries& l : logs) {
+        if (l.role == "test" ? t++ < tests_shown : f++ < fitted_shown) shown.push_back(&l);
+    }
     std::vector<Panel> panels;
-    for (size_t i = 0; i < logs.size() && i < 8; ++i) {
-        const ModelTraceSeries& l = logs[i];
+    for (const ModelTraceSeries* shown_log : shown) {
+        const ModelTraceSeries& l = *shown_log;
         std::vector<double> residual(l.time_s.size());
         double sum_abs = 0;
         size_t n = 0;
@@ -534,6 +561,7 @@ void plot_model_fit(const std::vector<ModelTraceSeries>& logs, const std::string
         panels.push_back(p);
     }
     render(panels, title, path);
+    return logs.size() - shown.size();
 }
 
 void plot_ocv_stitch(const fit::OcvStitch& s, const std::string& title, const std::string& path) {

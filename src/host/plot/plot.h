@@ -67,8 +67,9 @@ struct ModelTraceSeries {
     std::vector<double> time_s, measured_v, model_v;
 };
 ModelTraceSeries model_series(const fit::Trace& trace, const std::vector<float>& model_v, const std::string& role);
-// One panel per log (at most 8): measured and model voltage, residual on the right axis.
-void plot_model_fit(const std::vector<ModelTraceSeries>& logs, const std::string& title, const std::string& path);
+// One panel per log, at most 8 (up to 4 of them test logs): measured and model voltage,
+// residual on the right axis. Returns how many logs were left out.
+size_t plot_model_fit(const std::vector<ModelTraceSeries>& logs, const std::string& title, const std::string& path);
 
 // --- an OCV table stitched from flights (battsim fit-ocv) --------------------------------------
 // One panel against the state of charge: the config's curve, the fitted table, and each

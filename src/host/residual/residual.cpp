@@ -861,60 +861,69 @@ void print_report(const ResidualReport& r, std::ostream& out) {
     out << r.verdict << "\n";
 }
 
-void plot_residual(const std::vector<Trace>& traces, const ResidualReport& r, const ModelSpec& config_spec, const std::string& path) {
+size_t plot_residual(const std::vector<Trace>& traces, const ResidualReport& r, const ModelSpec& config_spec,
+                     const std::string& path) {
     plot::check_plot_path(path);
     std::vector<plot::Panel> panels;
-    const Trace& t = traces[0];
-    fit::SimResult before, after;
-    fit::simulate(t, config_spec, r.initial == fit::InitialMode::Zero ? fit::InitialMode::Zero : fit::InitialMode::Monitor, 0.0f, before);
-    fit::simulate(t, r.final_specs[0], r.initial, r.final_initial_ah[0], after);
-    plot::Panel v;
-    v.title = t.label + ": measured voltage, the config's model and the final model";
-    v.xlabel = "time (s)";
-    v.ylabel = "voltage (V)";
-    plot::Panel e;
-    e.title = "residual (measured - model)";
-    e.xlabel = "time (s)";
-    e.ylabel = "residual (V)";
-    std::vector<double> time, meas, mb, ma, eb, ea;
-    for (size_t k = 0; k < t.points.size(); ++k) {
-        const fit::TracePoint& p = t.points[k];
-        if (!p.valid) continue;
-        time.push_back(p.time_s);
-        meas.push_back(p.voltage_v);
-        mb.push_back(std::isfinite(before.model_v[k]) ? before.model_v[k] : NAN);
-        ma.push_back(std::isfinite(after.model_v[k]) ? after.model_v[k] : NAN);
-        eb.push_back(p.voltage_v - mb.back());
-        ea.push_back(p.voltage_v - ma.back());
-    }
-    // The axes follow the measurement and the final residual: a config model that runs away
-    // (a pole reached) would otherwise squash everything else flat.
-    {
-        std::vector<double> m, a, b;
-        for (size_t k = 0; k < meas.size(); ++k) {
-            m.push_back(meas[k]);
-            if (std::isfinite(ea[k])) a.push_back(std::fabs(ea[k]));
-            if (std::isfinite(eb[k])) b.push_back(std::fabs(eb[k]));
+    // Two panels per log (voltage, residual), for up to 4 logs, then the pooled ACF and histogram.
+    constexpr size_t kMaxLogs = 4;
+    const size_t shown = std::min(traces.size(), kMaxLogs);
+    double residual_range_v = 0.0;
+    for (size_t ti = 0; ti < shown; ++ti) {
+        const Trace& t = traces[ti];
+        fit::SimResult before, after;
+        fit::simulate(t, config_spec, r.initial == fit::InitialMode::Zero ? fit::InitialMode::Zero : fit::InitialMode::Monitor,
+                      0.0f, before);
+        fit::simulate(t, r.final_specs[ti], r.initial, r.final_initial_ah[ti], after);
+        plot::Panel v;
+        v.title = t.label + ": measured voltage, the config's model and the final model";
+        v.xlabel = "time (s)";
+        v.ylabel = "voltage (V)";
+        plot::Panel e;
+        e.title = t.label + ": residual (measured - model)";
+        e.xlabel = "time (s)";
+        e.ylabel = "residual (V)";
+        std::vector<double> time, meas, mb, ma, eb, ea;
+        for (size_t k = 0; k < t.points.size(); ++k) {
+            const fit::TracePoint& p = t.points[k];
+            if (!p.valid) continue;
+            time.push_back(p.time_s);
+            meas.push_back(p.voltage_v);
+            mb.push_back(std::isfinite(before.model_v[k]) ? before.model_v[k] : NAN);
+            ma.push_back(std::isfinite(after.model_v[k]) ? after.model_v[k] : NAN);
+            eb.push_back(p.voltage_v - mb.back());
+            ea.push_back(p.voltage_v - ma.back());
         }
-        std::sort(m.begin(), m.end());
-        std::sort(a.begin(), a.end());
-        std::sort(b.begin(), b.end());
-        const double lo = quantile(m, 0.0), hi = quantile(m, 1.0), pad = 0.1 * std::max(hi - lo, 0.01);
-        v.y_min = lo - pad;
-        v.y_max = hi + pad;
-        const double ra = std::max(quantile(a, 0.99), 1e-3), rb = quantile(b, 0.9);
-        const double r = std::min(std::max(3 * ra, rb), 15 * ra);
-        e.y_min = -r;
-        e.y_max = r;
+        // The axes follow the measurement and the final residual: a config model that runs away
+        // (a pole reached) would otherwise squash everything else flat.
+        {
+            std::vector<double> m, a, b;
+            for (size_t k = 0; k < meas.size(); ++k) {
+                m.push_back(meas[k]);
+                if (std::isfinite(ea[k])) a.push_back(std::fabs(ea[k]));
+                if (std::isfinite(eb[k])) b.push_back(std::fabs(eb[k]));
+            }
+            std::sort(m.begin(), m.end());
+            std::sort(a.begin(), a.end());
+            std::sort(b.begin(), b.end());
+            const double lo = quantile(m, 0.0), hi = quantile(m, 1.0), pad = 0.1 * std::max(hi - lo, 0.01);
+            v.y_min = lo - pad;
+            v.y_max = hi + pad;
+            const double ra = std::max(quantile(a, 0.99), 1e-3), rb = quantile(b, 0.9);
+            const double range_v = std::min(std::max(3 * ra, rb), 15 * ra);
+            e.y_min = -range_v;
+            e.y_max = range_v;
+            residual_range_v = std::max(residual_range_v, range_v);
+        }
+        // Measured last, so it is drawn on top of the models it is compared with.
+        v.series = {plot::line_series("config model", time, mb, "#ff7f0e", false, 1.2),
+                    plot::line_series("final model", time, ma, "#d62728", false, 1.2),
+                    plot::line_series("measured", time, meas, "black", false, 0.8)};
+        e.series = {plot::line_series("before (config)", time, eb, "#ff7f0e", false, 1.0),
+                    plot::line_series("after (final)", time, ea, "#1f77b4", false, 1.0)};
+        panels.push_back(v);
+        panels.push_back(e);
     }
-    // Measured last, so it is drawn on top of the models it is compared with.
-    v.series = {plot::line_series("config model", time, mb, "#ff7f0e", false, 1.2),
-                plot::line_series("final model", time, ma, "#d62728", false, 1.2),
-                plot::line_series("measured", time, meas, "black", false, 0.8)};
-    e.series = {plot::line_series("before (config)", time, eb, "#ff7f0e", false, 1.0),
-                plot::line_series("after (final)", time, ea, "#1f77b4", false, 1.0)};
-    panels.push_back(v);
-    panels.push_back(e);
     plot::Panel acf;
     acf.title = "autocorrelation of the residual (all logs)";
     acf.xlabel = "lag (s)";
@@ -969,10 +978,12 @@ void plot_residual(const std::vector<Trace>& traces, const ResidualReport& r, co
         return x;
     };
     h.series = {hist(r.structure_before, "before", "#ff7f0e"), hist(r.structure_after, "after", "#1f77b4")};
-    h.x_min = e.y_min;  // the residual panel's range, for the same reason
-    h.x_max = e.y_max;
+    h.x_min = -residual_range_v;  // the residual panels' widest range, for the same reason
+    h.x_max = residual_range_v;
     panels.push_back(h);
-    plot::render(panels, "battsim residual: " + t.path, path);
+    plot::render(panels,
+                 "battsim residual: " + (traces.size() == 1 ? traces[0].path : std::to_string(traces.size()) + " logs"), path);
+    return traces.size() - shown;
 }
 
 nlohmann::json run_residual_job(const ResidualJob& job, ResidualReport* out, std::ostream* progress) {
@@ -1000,8 +1011,11 @@ nlohmann::json run_residual_job(const ResidualJob& job, ResidualReport* out, std
         j["config_written"] = job.output_config;
     }
     if (!job.plot_path.empty()) {
-        plot_residual(traces, rep, spec, job.plot_path);
+        const size_t left_out = plot_residual(traces, rep, spec, job.plot_path);
         j["plot"] = job.plot_path;
+        if (left_out > 0)
+            j["plot_note"] = "the plot shows the first " + std::to_string(traces.size() - left_out) + " of the " +
+                             std::to_string(traces.size()) + " logs (the ACF and histogram pool all)";
     }
     if (out) *out = std::move(rep);
     return j;

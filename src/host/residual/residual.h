@@ -105,9 +105,10 @@ Structure residual_structure(const std::vector<fit::Trace>& traces, const std::v
 
 nlohmann::json report_to_json(const ResidualReport& r, const ResidualOptions& o);
 void print_report(const ResidualReport& r, std::ostream& out);
-// Voltage, residual before/after, its autocorrelation and histogram.
-void plot_residual(const std::vector<fit::Trace>& traces, const ResidualReport& r, const fit::ModelSpec& config_spec,
-                   const std::string& path);
+// Voltage and residual before/after for each log (the first 4), the residual's autocorrelation
+// and histogram over all. Returns how many logs have no panels of their own.
+size_t plot_residual(const std::vector<fit::Trace>& traces, const ResidualReport& r, const fit::ModelSpec& config_spec,
+                     const std::string& path);
 
 // `battsim residual` as one call: load the logs, analyse, write the config with the effects
 // found (when asked) and the plot. Returns the report JSON; `out` (optional) gets the report.
