@@ -75,9 +75,10 @@ std::function<int()> setup(CLI::App& sub) {
             return kExitUsage;
         }
         for (const auto& note : result.info.notes) std::cerr << "battsim discharge: note: " << note << "\n";
+        if (!result.ended_early.empty()) std::cerr << "battsim discharge: note: " << result.ended_early << "\n";
         nlohmann::json summary = host::discharge::discharge_to_json(result, true);
         host::discharge::OcvTableRead ocv;
-        const bool with_ocv = a->ocv_points != 0;
+        const bool with_ocv = a->ocv_points != 0 && result.ended_early.empty();  // part of a discharge: no SOC scale
         if (with_ocv) {
             try {
                 ocv = host::discharge::ocv_table_from_discharge(result, config.monitor.cells_in_series,

@@ -57,9 +57,11 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--speed", a->realtime, "With --realtime: speed-up factor (default 1)")->check(number_in(1.0e-3, 1.0e6))->needs(realtime);
     auto* charged = sub.add_option("--charged-mah", a->charged_mah,
                                    "What the charger put back after this log (the pack charged full before it): "
-                                   "checks the current sensor against it (summary `charger_check`)");
+                                   "checks the current sensor against it (summary `charger_check`)")
+                        ->check(number_in(0.0, 1.0e7, true));  // refused before the replay, not after it
     sub.add_option("--charger-tolerance", a->charger_tolerance,
                    "With --charged-mah: a count off by more than this fraction is a sensor fault (default 0.03)")
+        ->check(number_in(0.0, 1.0, true))
         ->needs(charged);
     sub.add_option("--config-out", a->config_out,
                    "Write the config with the current-sensor corrections this replay found here: the gain "

@@ -177,7 +177,8 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("stabilisation_time_s", m.initial.stabilisation_time_s, 0, kBig);
         if (const json* e = r.member("resistance")) {
             ObjectReader rr(*e, r.child("resistance"), origin);
-            rr.number("filter_time_constant_s", m.resistance.filter_time_constant_s, 0, kBig);
+            // Above 0: alpha = dt/(dt + tc) is 0/0 on a repeated time stamp, and NaN stays in the filter.
+            rr.number("filter_time_constant_s", m.resistance.filter_time_constant_s, 0.001, kBig);
             rr.number("max_filter_alpha", m.resistance.max_filter_alpha, 0, 1);
             rr.number("blend_gain", m.resistance.blend_gain, 0, kBig);
             rr.number("initial_resistance_ohm", m.resistance.initial_resistance_ohm, 0, 100);

@@ -83,6 +83,21 @@ TEST_CASE("a config's duplicate key, fractional count or crossed voltages are re
     CHECK_THAT(r.err, Catch::Contains("$.battery.min_voltage_v: must be below max_voltage_v"));
 }
 
+TEST_CASE("a charger count or tolerance that is no positive number is refused before the replay", "[cli]") {
+    // They had been checked after the whole replay, with --series already written.
+    const std::string dir = clitest::temp_dir();
+    const std::string series = dir + "/cm.csv";
+    for (const char* bad : {"--charged-mah 0", "--charged-mah nan", "--charged-mah inf",
+                            "--charged-mah 1500 --charger-tolerance -1", "--charged-mah 1500 --charger-tolerance 0"}) {
+        INFO(bad);
+        const auto r = run("replay " + q(kExample) + " -c " + q(kConfig) + " " + bad + " --series " + q(series));
+        CHECK(r.exit_code == 2);
+        CHECK_THAT(r.err, Catch::Contains(std::string(bad).find("tolerance") != std::string::npos ? "--charger-tolerance"
+                                                                                               : "--charged-mah"));
+        CHECK_FALSE(std::filesystem::exists(series));
+    }
+}
+
 TEST_CASE("a charger count far from the monitor's suggests no gain and writes no config", "[cli]") {
     // 2,000,000 mAh for a 1.55 Ah flight (Ah typed as mAh): the gain it implied was out of
     // the range the config reader accepts, so --config-out had left an unloadable config.

@@ -42,6 +42,36 @@ TEST_CASE("replay --json prints a parseable summary", "[cli]") {
     CHECK(j["flight"]["duration_s"].get<double>() == Approx(149 * 0.067 - 0.469).margin(0.07));
 }
 
+TEST_CASE("replay --series leaves what is not known yet empty: models and SOC before the initial state, R before one",
+          "[cli]") {
+    // They had been written as 0: measured − model read 16.8 V in the first seconds.
+    const std::string dir = clitest::temp_dir(), series = dir + "/s.csv";
+    REQUIRE(run("replay " + q(kSource + "/logs/example-4s.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
+                " --series " + q(series))
+                .exit_code == 0);
+    std::istringstream in(clitest::read_file(series));
+    std::string header, first, line, initialised;
+    std::getline(in, header);
+    std::getline(in, first);
+    while (std::getline(in, line)) {
+        if (line.compare(0, 8, "5.684000") == 0) initialised = line;  // the first sample with the initial state
+    }
+    const auto field = [](const std::string& row, int k) {
+        std::istringstream r(row);
+        std::string f;
+        for (int i = 0; i <= k; ++i) std::getline(r, f, ',');
+        return f;
+    };
+    CHECK(field(header, 4) == "model_voltage_v");
+    CHECK(field(header, 8) == "soc");
+    CHECK(field(header, 10) == "resistance_ohm");
+    for (int k : {4, 5, 8, 10}) CHECK(field(first, k).empty());
+    CHECK(field(first, 9) == "1.55000");  // the capacity is known from the start
+    REQUIRE_FALSE(initialised.empty());
+    CHECK(field(initialised, 4) == "16.8000");
+    CHECK(field(initialised, 8) == "0.99425");
+}
+
 TEST_CASE("replay says how many samples the config's sensor limits kept out, and why", "[cli]") {
     // A 4S log (16.5 V at rest) against limits for a 3S pack: the rest is above
     // max_pack_voltage_v, the loaded 15.9 V is not.
@@ -452,7 +482,7 @@ TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes
     CHECK_THAT(brief.out, Catch::Contains(std::string(" Ah charged ") + ratio));
     const auto bad = run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --charged-mah -5");
     CHECK(bad.exit_code == 2);
-    CHECK_THAT(bad.err, Catch::Contains("--charged-mah: the charged charge must be a positive number of mAh"));
+    CHECK_THAT(bad.err, Catch::Contains("--charged-mah: expected a number in (0, 1e+07], found -5"));
     // Without a charger's count a gain error has nothing to correct it, and no offset was learnt.
     const auto nothing = run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --estimator joint --config-out " + q(dir + "/x.json"));
     CHECK(nothing.exit_code == 1);
@@ -461,7 +491,7 @@ TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes
     // Zero is a count, and a wrong one: refused, not read as "no check".
     const auto zero = run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --charged-mah 0");
     CHECK(zero.exit_code == 2);
-    CHECK_THAT(zero.err, Catch::Contains("positive number of mAh"));
+    CHECK_THAT(zero.err, Catch::Contains("--charged-mah: expected a number in (0,"));
     CHECK(run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --charger-tolerance 0.05").exit_code == 2);
     // A charger's count that includes a deficit the log never saw (the pack not full at the
     // start) gets no verdict, and no config is written from it.

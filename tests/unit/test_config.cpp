@@ -106,6 +106,12 @@ TEST_CASE("Config errors name the key", "[config]") {
     CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("$.joint.health_filter.polarisation_slow_share") &&
                                                            Catch::Contains("out of range"));
 
+    // 0 made the reference resistance filter's alpha 0/0 on a repeated time stamp: NaN for good.
+    j = config_to_json(default_config());
+    j["monitor"]["resistance"]["filter_time_constant_s"] = 0;
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("$.monitor.resistance.filter_time_constant_s") &&
+                                                           Catch::Contains("out of range"));
+
     j = config_to_json(default_config());
     j["schema"] = "other";
     CHECK_THROWS_AS(config_from_json(j, "x.json"), ConfigError);

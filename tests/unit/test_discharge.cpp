@@ -158,8 +158,9 @@ TEST_CASE("Samsung 30Q C/10 discharge", "[discharge][data]") {
     // The table falls monotonically in voltage, so the consumed charge only grows.
     for (size_t i = 1; i < r.table.size(); ++i) CHECK(r.table[i].consumed_mah >= r.table[i - 1].consumed_mah - 1.0);
 
-    // Cut at row 21000 (3.62 V, 1.75 of 2.97 Ah): no knee, so no zones, and no start config
-    // read off it (its last point had passed for the knee, the part for the whole).
+    // Cut at row 21000 (3.62 V, 1.75 of 2.97 Ah): it stops above the minimum, so no zones, and
+    // no start config read off it (its last point had passed for the knee, the part for the
+    // whole); no knee either, which says the same with the minimum lowered to where it stops.
     std::ifstream in(std::string(BATTSIM_DATA_DIR) + "/samsung-30q/Q30_S001_C10.csv");
     std::string part, line;
     for (int k = 0; k < 21000 && std::getline(in, line); ++k) part += line + "\n";
@@ -168,8 +169,24 @@ TEST_CASE("Samsung 30Q C/10 discharge", "[discharge][data]") {
     const DischargeResult p = process_discharge(cut, o);
     CHECK(p.capacity_mah == Approx(1751).margin(2));
     CHECK_FALSE(p.zones.found);
-    CHECK_THAT(p.zones.note, Catch::StartsWith("no knee at the end of the curve (it never falls 2.5 times faster than "
+    CHECK_THAT(p.zones.note, Catch::StartsWith("the log ends at 3.618 V, above the minimum voltage of 2.500 V: the "
+                                               "discharge stopped before its end, and 1751.0 mAh"));
+    CHECK(p.ended_early == p.zones.note);
+    CHECK_THROWS_WITH(ocv_table_from_discharge(p, 1, 0.02, 21), Catch::Contains("the log ends at 3.618 V"));
+    DischargeOptions lowered = o;
+    lowered.min_voltage_v = 3.61;
+    const DischargeResult q = process_discharge(cut, lowered);
+    CHECK(q.ended_early.empty());
+    CHECK_FALSE(q.zones.found);
+    CHECK_THAT(q.zones.note, Catch::StartsWith("no knee at the end of the curve (it never falls 2.5 times faster than "
                                                "over its middle; it ends at 3.6"));
+    // A maximum off the table's step gives no row below the minimum.
+    DischargeOptions off_step = o;
+    off_step.max_voltage_v = 4.205;
+    const DischargeResult full = process_discharge(std::string(BATTSIM_DATA_DIR) + "/samsung-30q/Q30_S001_C10.csv", off_step);
+    REQUIRE_FALSE(full.table.empty());
+    CHECK(full.table.back().voltage_v >= off_step.min_voltage_v);
+    CHECK(full.table.back().voltage_v == Approx(2.505));
 }
 
 TEST_CASE("battsim discharge writes its outputs and exits with the documented codes", "[discharge][cli][data]") {

@@ -22,8 +22,8 @@ namespace {
 
 float cell_value(const float* values, int c) { return c < core::kMaxCells ? values[c] : 0.0f; }
 
-void put(telemetry::TextBuffer& out, const char* fmt, float v) {
-    out.appendf(fmt, static_cast<double>(v));
+void put(telemetry::TextBuffer& out, const char* fmt, float v, bool known = true) {
+    if (known) out.appendf(fmt, static_cast<double>(v));
     out.append_char(',');
 }
 
@@ -38,13 +38,15 @@ void format_series_line(const core::Sample& sample, const core::MonitorStatus& s
     put(out, "%.4f", sample.voltage_v);
     put(out, "%.4f", sample.current_a);
     put(out, "%.4f", s.filtered_current_a);
-    put(out, "%.4f", s.model_voltage_v);
-    put(out, "%.4f", s.adapted_model_voltage_v);
+    // Empty until the monitor has its initial state (models, state of charge) or a resistance:
+    // a 0 V model had read as a 16.8 V error.
+    put(out, "%.4f", s.model_voltage_v, s.initialised);
+    put(out, "%.4f", s.adapted_model_voltage_v, s.initialised);
     put(out, "%.3f", s.consumed_mah);
     put(out, "%.2f", s.consumed_mwh);
-    put(out, "%.5f", s.soc);
+    put(out, "%.5f", s.soc, s.initialised);
     put(out, "%.5f", s.capacity_ah);
-    put(out, "%.6f", s.resistance_ohm);
+    put(out, "%.6f", s.resistance_ohm, s.resistance_ohm > 0.0f);
     put(out, "%.5f", s.usable_capacity_ah);
     if (s.time_valid) {
         put(out, "%.2f", s.remaining_time_s);

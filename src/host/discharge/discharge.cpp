@@ -198,7 +198,9 @@ DischargeResult process_discharge(const std::string& path, const DischargeOption
     // round to the same row are averaged; a row no point rounds to takes the next available
     // row below it (the value the discharge reaches next), and rows past the lowest measured
     // one take that one (the nearest edge).
-    const long rows = std::lround((o.max_voltage_v - o.min_voltage_v) / o.step_v) + 1;
+    // Rows at or above the minimum only (a maximum off the step, 4.205 V, had rounded up to a
+    // row below it).
+    const long rows = static_cast<long>(std::floor((o.max_voltage_v - o.min_voltage_v) / o.step_v + 1e-9)) + 1;
     std::vector<double> sum_mah(rows, 0), sum_mwh(rows, 0);
     std::vector<long> count(rows, 0);
     for (const CurvePoint& p : r.curve) {
@@ -231,6 +233,20 @@ DischargeResult process_discharge(const std::string& path, const DischargeOption
         }
     }
     locate_zones(r);
+    // A log that stops above the minimum voltage holds part of a discharge: its capacity is
+    // what flowed until it stopped, and the zones would be read off the wrong part of the curve
+    // (the first 200 rows of a 3 Ah cell's had made a 0.017 Ah config without a word).
+    const double end_margin_v = 0.02 * (o.max_voltage_v - o.min_voltage_v);
+    if (!done && r.last_voltage_v > o.min_voltage_v + end_margin_v) {
+        char buf[300];
+        std::snprintf(buf, sizeof buf,
+                      "the log ends at %.3f V, above the minimum voltage of %.3f V: the discharge stopped before its "
+                      "end, and %.1f mAh is only what flowed until then (to process the part as it is, give --min-voltage %.2f)",
+                      r.last_voltage_v, o.min_voltage_v, r.capacity_mah, std::floor(r.last_voltage_v * 100.0) / 100.0);
+        r.ended_early = buf;
+        r.zones = Zones{};
+        r.zones.note = buf;
+    }
     return r;
 }
 
@@ -346,6 +362,7 @@ OcvTableRead ocv_table_from_discharge(const DischargeResult& r, int cells, doubl
                                     std::to_string(points));
     if (cells < 1) throw std::invalid_argument("OCV table: cells in series must be at least 1");
     if (!(resistance_ohm >= 0)) throw std::invalid_argument("OCV table: the resistance must be 0 or more");
+    if (!r.ended_early.empty()) throw std::invalid_argument("OCV table: " + r.ended_early);
     const std::vector<CurvePoint>& c = r.curve;
     const double q_total_ah = r.capacity_mah * 1e-3;
     if (c.size() < 2 || !(q_total_ah > 0))

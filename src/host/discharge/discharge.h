@@ -68,6 +68,7 @@ struct DischargeResult {
     double capacity_mah = 0;
     double energy_mwh = 0;
     double first_voltage_v = 0, last_voltage_v = 0;
+    std::string ended_early;  // why the log is part of a discharge (it stops above the minimum), or empty
     std::vector<CurvePoint> curve;  // smoothed and decimated
     std::vector<TableRow> table;    // max → min voltage
     Zones zones;

@@ -359,10 +359,10 @@ ReplaySeries read_replay_series_csv(const std::string& path) {
         s.voltage_v.push_back(get(c_v, false));
         s.current_a.push_back(get(c_i, false));
         s.filtered_a.push_back(get(c_fi, false));
-        s.model_v.push_back(get(c_model, false));
-        s.adapted_v.push_back(get(c_adapted, false));
+        s.model_v.push_back(get(c_model, true));  // empty before the initial state
+        s.adapted_v.push_back(get(c_adapted, true));
         s.capacity_ah.push_back(get(c_cap, false));
-        const double r = get(c_r, false);
+        const double r = get(c_r, true);  // empty before a resistance is known
         s.resistance_ohm.push_back(r > 0 ? r : NAN);
         s.remaining_s.push_back(get(c_rem, true));
         s.total_s.push_back(get(c_tot, true));

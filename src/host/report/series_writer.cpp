@@ -28,22 +28,26 @@ SeriesWriter::SeriesWriter(const std::string& path, int cells)
 void SeriesWriter::add(const core::Sample& sample, const core::MonitorStatus& s) {
     char buf[64];
     line_.clear();
-    auto put = [&](const char* fmt, double v) {
-        std::snprintf(buf, sizeof buf, fmt, v);
-        line_ += buf;
+    auto put = [&](const char* fmt, double v, bool known = true) {
+        if (known) {
+            std::snprintf(buf, sizeof buf, fmt, v);
+            line_ += buf;
+        }
         line_ += ',';
     };
     put("%.6f", sample.time_us * 1e-6);
     put("%.4f", sample.voltage_v);
     put("%.4f", sample.current_a);
     put("%.4f", s.filtered_current_a);
-    put("%.4f", s.model_voltage_v);
-    put("%.4f", s.adapted_model_voltage_v);
+    // Empty until the monitor has its initial state (models, state of charge) or a resistance,
+    // as the firmware writes them: a 0 V model had read as a 16.8 V error.
+    put("%.4f", s.model_voltage_v, s.initialised);
+    put("%.4f", s.adapted_model_voltage_v, s.initialised);
     put("%.3f", s.consumed_mah);
     put("%.2f", s.consumed_mwh);
-    put("%.5f", s.soc);
+    put("%.5f", s.soc, s.initialised);
     put("%.5f", s.capacity_ah);
-    put("%.6f", s.resistance_ohm);
+    put("%.6f", s.resistance_ohm, s.resistance_ohm > 0.0f);
     put("%.5f", s.usable_capacity_ah);
     if (s.time_valid) {
         put("%.2f", s.remaining_time_s);
