@@ -33,7 +33,7 @@ CLI::Validator number_in(double lo, double hi, bool above_lo) {
 }
 
 void add_input_options(CLI::App& sub, InputArgs& a) {
-    sub.add_option("-c,--config", a.config, "Battery and monitor config JSON (default: built-in reference 4S, modified set)");
+    sub.add_option("-c,--config", a.config, "Battery and monitor config JSON (default: built in, the same as configs/reference-modified.json: the dissertation's 1.55 Ah 4S pack and logger)");
     sub.add_option("--format", a.format, "Log format: auto, raw, csv, dataflash-text, dataflash-bin, ulog")
         ->capture_default_str();
     sub.add_option("--current-source", a.current_source, "Raw logs: current from 'current' (logged mA) or 'shunt' (shunt mV through the config's calibration)")
@@ -122,7 +122,7 @@ int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedC
         }
     }
     try {
-        config = a.config.empty() ? host::default_config() : host::load_config_file(a.config);
+        config = a.config.empty() ? host::builtin_config() : host::load_config_file(a.config);
     } catch (const host::ConfigError& e) {
         std::cerr << command << ": config: " << e.what() << "\n";
         return kExitConfigError;

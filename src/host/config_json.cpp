@@ -121,6 +121,20 @@ LoadedConfig default_config() {
     return c;
 }
 
+LoadedConfig builtin_config() {
+    LoadedConfig c = default_config();
+    // What configs/reference-modified.json sets beyond the defaults every file starts from
+    // (a unit test holds the two equal): without them a log with no -c "flew" from an arming
+    // blip two minutes early, and blamed the dissertation logger's cell 1 for its ground lead.
+    c.description = "CNHL Black Series 1500 mAh 4S (dissertation battery 5), parameters hand-tuned by the dissertation "
+                    "author to fit flight 30: nominal-zone capacity 1.5 Ah, exponential zone 0.3 Ah, curve current 7 A, "
+                    "R 0.02 ohm.";
+    c.monitor.flying.takeoff_confirm_s = 0.5f;
+    c.monitor.power_average.initial_value = 316.0f;
+    c.monitor.cell_analysis.first_cell_includes_lead = true;
+    return c;
+}
+
 LoadedConfig config_from_json(const json& j, const std::string& origin) {
     LoadedConfig out = default_config();
     core::MonitorConfig& m = out.monitor;

@@ -25,8 +25,12 @@ struct LoadedConfig {
 LoadedConfig config_from_json(const nlohmann::json& j, const std::string& origin);
 LoadedConfig load_config_file(const std::string& path);
 nlohmann::json config_to_json(const LoadedConfig& config);
-// The defaults (reference 4S pack, hand-modified parameters).
+// The defaults every config file starts from (the reference 4S pack's curve, hand-modified
+// parameters).
 LoadedConfig default_config();
+// The config of a command given no -c: configs/reference-modified.json, the dissertation's own
+// pack and logger (the defaults plus its take-off confirmation, remembered power and first-cell lead).
+LoadedConfig builtin_config();
 
 // What a valid config still does badly, as sentences for the user (empty: nothing): the
 // joint estimator without an OCV table; and, given what a log shows (its cell columns, 0 =

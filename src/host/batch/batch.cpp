@@ -134,7 +134,7 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
                 if (item.error.empty()) item.error = bad_configs[path];
             }
         } else {
-            item.replay.config = default_config();
+            item.replay.config = builtin_config();  // as replay with no -c
         }
         if (p.settings.estimator) item.replay.config.monitor.estimator = *p.settings.estimator;
         items.push_back(std::move(item));
