@@ -34,5 +34,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     } catch (const host::sim::ScenarioError&) {
     } catch (const host::InputError&) {
     }
+    std::remove(path.c_str());  // nothing left in /tmp when the fuzzer stops
     return 0;
 }

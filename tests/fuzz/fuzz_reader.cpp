@@ -30,5 +30,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         while (reader->next(s) && n < 1000000) ++n;
     } catch (const battsim::host::InputError&) {
     }
+    std::remove(path.c_str());  // nothing left in /tmp when the fuzzer stops
     return 0;
 }
