@@ -201,6 +201,7 @@ TEST_CASE("averaging into minute-long windows is not taken for a time column in 
     const auto r = run("replay " + q(kExample) + " -c " + q(kConfig) + " --average-ms 60000");
     CHECK(r.exit_code == 0);
     CHECK_THAT(r.err, !Catch::Contains("--time-unit ms"));
+    CHECK_THAT(r.err, Catch::Contains("samples averaged over 60000 ms windows: 3913 read into"));  // it did average
 }
 
 TEST_CASE("small typos that read on unseen: a weak cell twice, a misspelt --fixed, an upper-case plot name", "[cli]") {
@@ -256,7 +257,13 @@ TEST_CASE("a CSV log with time_s and time_ms is refused until one is chosen (--t
     r = run("batch -m " + q(dir + "/m.csv") + " --no-progress --format json");
     INFO(r.err);
     REQUIRE(r.exit_code == 0);
-    CHECK(nlohmann::json::parse(r.out)["rows"][0]["status"] == "ok");
+    const auto row = nlohmann::json::parse(r.out)["rows"][0];
+    CHECK(row["status"] == "ok");
+    // The manifest's column read, not only accepted: time_s's flight, not time_ms's.
+    const auto by_s = clitest::run_json("replay " + q(log) + " -c " + q(kConfig) + " --time-col time_s --json");
+    REQUIRE(by_s["flight"].is_object());
+    CHECK(row["flight_duration_s"] == by_s["flight"]["duration_s"]);
+    CHECK(row["flight_duration_s"] != s["flight"]["duration_s"]);
 }
 
 TEST_CASE("a log listed twice, in a manifest or on the command line, is refused naming both", "[cli]") {

@@ -301,9 +301,10 @@ struct FourCells {
 
 // A hover: 10 s on the ground at 0.5 A, a take-off to 10 A (± 0.3 A of gusts), samples every
 // 134 ms through 8 mV taps with 4 mV of noise. Cell 4 carries the lead and is not compared.
-// Returns the cell named and when (s after take-off; −1: never).
+// Returns the cell named and when (s after take-off; −1: never); `finding`, if given, gets
+// what it was named for.
 std::pair<int, float> hover(const float resistance_factor[4], float seconds,
-                            const CellAnalyzer::Config& config = CellAnalyzer::Config{}) {
+                            const CellAnalyzer::Config& config = CellAnalyzer::Config{}, int* finding = nullptr) {
     FourCells pack(resistance_factor);
     CellAnalyzer a;
     a.configure(config);
@@ -321,7 +322,10 @@ std::pair<int, float> hover(const float resistance_factor[4], float seconds,
         a.observe(v, 4, i);
         if (!flying) continue;
         a.update(static_cast<uint64_t>(t * 1.0e6f), v, 4, i, ip, charge, pack.cell[0].soc, pack.pack_ocv);
-        if (a.status().flagged_cell >= 0) return {a.status().flagged_cell, t - 10.0f};
+        if (a.status().flagged_cell >= 0) {
+            if (finding) *finding = a.status().finding;
+            return {a.status().flagged_cell, t - 10.0f};
+        }
     }
     return {-1, -1.0f};
 }
@@ -332,7 +336,9 @@ TEST_CASE("Cell check: a hover names a high-resistance cell from its take-off st
     // verdict alone.
     SECTION("cell 2 with 60 % more resistance: named within seconds, as resistance") {
         const float r[4] = {1.0f, 1.6f, 1.0f, 1.0f};
-        const std::pair<int, float> named = hover(r, 120.0f);
+        int finding = -1;
+        const std::pair<int, float> named = hover(r, 120.0f, CellAnalyzer::Config{}, &finding);
+        CHECK(finding == CellAnalyzer::kHighResistance);
         CHECK(named.first == 1);
         CHECK(named.second >= 0.0f);
         CHECK(named.second < 5.0f);
