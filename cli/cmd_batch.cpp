@@ -158,6 +158,14 @@ int run(const BatchArgs& a) {
     const nlohmann::json table = host::make_table(std::move(result.rows), all.size(), digest, shard);
     for (const nlohmann::json& r : table["rows"])
         if (r["status"] != "ok") std::cerr << me << "failed: " << host::failed_row_text(r) << "\n";
+    // A config for another pack than the logs' (a 4S config on a 6S fleet) reads every row
+    // wrong while each says "ok": said, the first few in full.
+    constexpr size_t kLogNotesShown = 5;
+    for (size_t k = 0; k < result.log_notes.size() && k < kLogNotesShown; ++k)
+        std::cerr << me << "note: " << result.log_notes[k] << "\n";
+    if (result.log_notes.size() > kLogNotesShown)
+        std::cerr << me << "note: " << result.log_notes.size() - kLogNotesShown
+                  << " more such notes (each log's summary, --out DIR, has its config_notes)\n";
     for (const std::string& u : result.unwritten) std::cerr << me << u << "\n";
     // Each output on its own: one that fails (a full disk) does not take the others with it.
     bool unwritten = false;

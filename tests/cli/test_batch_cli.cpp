@@ -96,6 +96,25 @@ TEST_CASE("batch: a bad log becomes an error row, the rest are replayed and kept
     CHECK_FALSE(exists(out + "/g2.json"));
 }
 
+TEST_CASE("batch: a config for another pack than the logs' is said, not only counted", "[cli][batch]") {
+    // A 6S flight replayed with the 4S reference config: every row said "ok", and the note
+    // that `replay` prints reached only the table's notes count.
+    const std::string dir = clitest::temp_dir();
+    REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/6s-hover-healthy.json") + " -o " + q(dir + "/six.csv"))
+                .exit_code == 0);
+    const auto r = run("batch " + q(dir + "/six.csv") + " -c " + q(kConfig) + " --no-progress --format json");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK(nlohmann::json::parse(r.out)["rows"][0]["status"] == "ok");
+    CHECK_THAT(r.err, Catch::Contains("battsim batch: note: " + dir + "/six.csv: the pack rests at") &&
+                          Catch::Contains("does the config match this pack?"));
+    // With its own config, no such note.
+    const auto own = run("batch " + q(dir + "/six.csv") + " -c " + q(kSource + "/configs/generic-6s.json") +
+                         " --no-progress --format json");
+    CHECK(own.exit_code == 0);
+    CHECK_THAT(own.err, !Catch::Contains("does the config match"));
+}
+
 TEST_CASE("batch: an output that cannot be written is said before the run; one that fails spares the others",
           "[cli][batch]") {
     const std::string dir = fleet_dir(2, false);

@@ -1,5 +1,6 @@
 #include "host/batch/batch.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <filesystem>
@@ -310,6 +311,7 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
     }
 
     std::vector<std::string> unwritten(n);
+    std::vector<std::vector<std::string>> log_notes(n);
     std::atomic<size_t> next{0};
     std::mutex lock;
     size_t done = 0;
@@ -335,6 +337,15 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
                     // A check that cannot be made fails the row; the replay's summary is kept.
                     row = check_error.empty() ? make_row(item, summary) : make_error_row(item, check_error);
                     samples = check_error.empty() ? row["samples"].get<uint64_t>() : 0;
+                    // The notes the log gave rise to (the config's own are said once per config).
+                    const json notes = summary.value("config_notes", json::array());
+                    const std::vector<std::string> general = config_notes(item.replay.config.monitor);
+                    for (const json& note : notes) {
+                        if (!note.is_string()) continue;
+                        const std::string text = note.get<std::string>();
+                        if (std::find(general.begin(), general.end(), text) == general.end())
+                            log_notes[k].push_back(item.path + ": " + text);
+                    }
                 } catch (const std::exception& e) {
                     // InputError carries file:line:column; anything else is reported as is.
                     row = make_error_row(item, e.what());
@@ -376,6 +387,8 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
     }
     for (std::string& u : unwritten)
         if (!u.empty()) result.unwritten.push_back(std::move(u));
+    for (auto& notes : log_notes)
+        for (std::string& note : notes) result.log_notes.push_back(std::move(note));
     return result;
 }
 

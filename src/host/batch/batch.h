@@ -68,6 +68,9 @@ struct BatchResult {
     // --out summaries that could not be written, in item order ("log: why"); their rows keep
     // the numbers computed.
     std::vector<std::string> unwritten;
+    // What a log's config_notes say of that log beyond what its config alone makes unreliable
+    // (a config for another pack than the log's), "log: note", in item order.
+    std::vector<std::string> log_notes;
 };
 
 // Replays `items` on a pool of `jobs` threads. A log that fails becomes an error row
