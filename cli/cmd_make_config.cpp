@@ -100,7 +100,10 @@ int run(const MakeConfigArgs& a) {
         std::cerr << me << ": what is the rated capacity? give --capacity-mah" << where << "\n";
         return kExitUsage;
     }
-    for (const std::string& s : r.sources) std::cerr << me << ": " << s << "\n";
+    // Where each value came from, when a log gave some (from the command line alone it only
+    // repeated what was typed).
+    for (const std::string& s : r.sources)
+        if (s.find(" given") == std::string::npos) std::cerr << me << ": " << s << "\n";
     nlohmann::json j;
     try {
         j = host::pack_config_json(r);

@@ -87,7 +87,8 @@ json pack_config_json(const PackRating& r) {
     const double n = r.cells;
     if (std::isfinite(r.cutoff_voltage_v) && !(r.cutoff_voltage_v / n >= kCutoffMinV && r.cutoff_voltage_v / n <= kCutoffMaxV))
         throw std::invalid_argument("cutoff: expected " + number_text(kCutoffMinV, "%.1f") + ".." + number_text(kCutoffMaxV, "%.1f") +
-                                    " V per cell, found " + number_text(r.cutoff_voltage_v / n, "%.3f V"));
+                                    " V per cell, found " + number_text(r.cutoff_voltage_v / n, "%.3f V") +
+                                    " (it is the pack's voltage: " + std::to_string(r.cells) + " cells x the per-cell figure)");
     if (std::isfinite(r.cutoff_delay_s) && !(r.cutoff_delay_s >= 0.0 && r.cutoff_delay_s <= 600.0))
         throw std::invalid_argument("cutoff delay: expected 0..600 s, found " + number_text(r.cutoff_delay_s, "%g s"));
 
@@ -120,7 +121,9 @@ json pack_config_json(const PackRating& r) {
         {"curve_current_a", round_to(kCurveCurrentA * k, 1e-3)},
         {"nominal_voltage_v", round_to(kNominalV * n, 1e-4)},
         {"max_voltage_v", round_to(kFullV * n, 1e-4)},
-        {"min_voltage_v", round_to(kMinV * n, 1e-4)},
+        // The curve's floor no higher than the cutoff: a Li-ion pack flown to 2.5 V per cell
+        // (and its bench discharge, which stops at this floor) had been cut at 3.325 V.
+        {"min_voltage_v", round_to(std::min(kMinV * n, cutoff_v), 1e-4)},
     };
     json monitor = {
         {"reaction_time_s", 30},

@@ -152,6 +152,7 @@ TEST_CASE("Samsung 30Q C/10 discharge", "[discharge][data]") {
     CHECK(r.capacity_mah == Approx(2969).margin(2));  // the data README's trapezoid: 2.969 Ah
     CHECK(r.mean_current_a == Approx(0.300).margin(0.001));
     CHECK(r.samples_kept == 35604);  // the last row (2.4995 V) is below the minimum
+    CHECK(r.info.notes.empty());      // one row below it is no discharge going on
     REQUIRE(r.zones.found);
     CHECK(r.zones.exponential_end_ah < 0.3);
     CHECK(r.zones.nominal_end_ah > 2.0);
@@ -180,6 +181,16 @@ TEST_CASE("Samsung 30Q C/10 discharge", "[discharge][data]") {
     CHECK_FALSE(q.zones.found);
     CHECK_THAT(q.zones.note, Catch::StartsWith("no knee at the end of the curve (it never falls 2.5 times faster than "
                                                "over its middle; it ends at 3.6"));
+    // A minimum above where the discharge goes on under load is said (a Li-ion cell read with
+    // a LiPo pack's 3.325 V floor lost its last sixth without a word).
+    DischargeOptions lipo = o;
+    lipo.min_voltage_v = 3.325;
+    const DischargeResult lipo_floor =
+        process_discharge(std::string(BATTSIM_DATA_DIR) + "/samsung-30q/Q30_S001_C10.csv", lipo);
+    REQUIRE(lipo_floor.info.notes.size() == 1);
+    CHECK_THAT(lipo_floor.info.notes[0], Catch::StartsWith("the discharge goes on under load below the minimum voltage of "
+                                                           "3.325 V for 58") &&
+                                             Catch::Contains("down to 2.500 V"));
     // A maximum off the table's step gives no row below the minimum.
     DischargeOptions off_step = o;
     off_step.max_voltage_v = 4.205;

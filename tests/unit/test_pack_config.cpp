@@ -76,13 +76,28 @@ TEST_CASE("make-config: a rating out of range is refused with what was expected"
     r.cells = 4;
     r.capacity_ah = 1.5;
     r.cutoff_voltage_v = 8.0;  // 2.0 V per cell
-    CHECK_THROWS_WITH(pack_config_json(r), Catch::Contains("2.5..3.9 V per cell, found 2.000 V"));
+    CHECK_THROWS_WITH(pack_config_json(r), Catch::Contains("2.5..3.9 V per cell, found 2.000 V") &&
+                                               Catch::Contains("it is the pack's voltage: 4 cells x the per-cell figure"));
     r.cutoff_voltage_v = NAN;
     r.cells = 13;
     CHECK_THROWS_WITH(pack_config_json(r), Catch::Contains("cells: expected 1..12, found 13"));
     r.cells = 4;
     r.capacity_ah = 0.01;
     CHECK_THROWS_WITH(pack_config_json(r), Catch::Contains("found 10 mAh"));
+}
+
+TEST_CASE("make-config: the curve's floor is no higher than a cutoff below it", "[pack_config]") {
+    // A Li-ion cell flown to 2.5 V: the floor had stayed 3.325 V per cell, where a bench
+    // discharge read with the config stopped, its last sixth unread.
+    PackRating r;
+    r.cells = 1;
+    r.capacity_ah = 3.0;
+    r.cutoff_voltage_v = 2.5;
+    const auto j = pack_config_json(r);
+    CHECK(j["battery"]["min_voltage_v"].get<double>() == Approx(2.5));
+    CHECK(j["monitor"]["min_flight_voltage_v"].get<double>() == Approx(2.5));
+    r.cutoff_voltage_v = 3.5;  // above the floor: the floor stays
+    CHECK(pack_config_json(r)["battery"]["min_voltage_v"].get<double>() == Approx(3.325));
 }
 
 TEST_CASE("The cell count from how high a pack rests", "[pack_config]") {

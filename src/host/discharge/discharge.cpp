@@ -115,9 +115,22 @@ DischargeResult process_discharge(const std::string& path, const DischargeOption
     core::Sample s;
     std::vector<Raw> raw;
     bool connected = false, done = false;
+    // The discharge going on under load below the minimum: cut off there without a word, a
+    // Li-ion cell read with a 3.325 V LiPo minimum lost its last sixth.
+    double below_s = 0.0, below_low_v = INFINITY, below_last_s = NAN;
     while (reader->next(s)) {
         ++r.samples_read;
-        if (done) continue;  // read to the end so the reader checks the whole file
+        if (done) {  // read to the end so the reader checks the whole file
+            const double t_s = s.time_us * 1e-6;
+            if (std::isfinite(s.voltage_v) && s.voltage_v <= o.min_voltage_v && s.current_a > 0.1f) {
+                if (std::isfinite(below_last_s)) below_s += t_s - below_last_s;
+                below_low_v = std::min(below_low_v, static_cast<double>(s.voltage_v));
+                below_last_s = t_s;
+            } else {
+                below_last_s = NAN;
+            }
+            continue;
+        }
         const bool above = std::isfinite(s.voltage_v) && s.voltage_v > o.min_voltage_v;
         if (!connected && !above) continue;
         if (connected && !above) {
@@ -128,9 +141,23 @@ DischargeResult process_discharge(const std::string& path, const DischargeOption
         raw.push_back(Raw{s.time_us * 1e-6, s.voltage_v, s.current_a});
     }
     r.info = reader->info();
-    if (raw.size() < 2)
-        throw InputError(path, 0, 0, "fewer than 2 samples above the minimum voltage of " + std::to_string(o.min_voltage_v) +
-                                         " V: is the battery connected, and is the minimum (--min-voltage or the config's) right?");
+    if (raw.size() < 2) {
+        char buf[240];
+        std::snprintf(buf, sizeof buf,
+                      "fewer than 2 samples above the minimum voltage of %.3f V: is the battery connected, and is the "
+                      "minimum right (--min-voltage, or the config's battery.min_voltage_v: without -c, a 4S pack's)?",
+                      o.min_voltage_v);
+        throw InputError(path, 0, 0, buf);
+    }
+    const double duration_s = raw.back().time_s - raw.front().time_s;
+    if (below_s > 0.01 * duration_s) {
+        char buf[300];
+        std::snprintf(buf, sizeof buf,
+                      "the discharge goes on under load below the minimum voltage of %.3f V for %.0f s, down to %.3f V: "
+                      "the capacity, the table and the zones end at the minimum (give --min-voltage to go lower)",
+                      o.min_voltage_v, below_s, below_low_v);
+        r.info.notes.push_back(buf);
+    }
     r.samples_kept = raw.size();
     r.start_time_s = raw.front().time_s;
     r.end_time_s = raw.back().time_s;
