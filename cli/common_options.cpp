@@ -313,7 +313,7 @@ void print_flight_brief(const nlohmann::json& s, std::ostream& out) {
     if (s["estimator"] == "joint") out << " (the estimator's own: " << fixed(f["voltage_error_v"]["adapted"]["mean_abs"], 3) << " V)";
     out << "\n";
     const auto& at20 = f["remaining_time_s"]["at20"];
-    out << "  remaining time at 20 %: " << (at20.is_number() ? fixed(at20, 1) + " s" : "not known yet") << "\n";
+    out << "  remaining time 20 % into the flight: " << (at20.is_number() ? fixed(at20, 1) + " s" : "not known yet") << "\n";
 }
 }  // namespace
 
