@@ -53,6 +53,22 @@ TEST_CASE("battsim fit writes a loadable config, byte-identical on a rerun", "[f
     for (const std::string& f : {log, out1, out2, report, png}) std::remove(f.c_str());
 }
 
+TEST_CASE("battsim fit says when it did not settle, and what to try", "[fit][cli]") {
+    synth::Options o;
+    o.rc_resistance_ohm = 0.01;
+    o.rc_time_constant_s = 4;
+    o.flight_s = 60;
+    o.seed = 5;
+    const std::string log = synth::write_log("cli-unsettled", o);
+    const auto r = testsupport::run_program(BATTSIM_BINARY, "fit " + log + " -c " + kConfig + " --add rc --max-iterations 1");
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.out, Catch::Contains("not settled: the iteration limit (1, --max-iterations) was reached"));
+    CHECK_THAT(r.out, Catch::Contains("--initial zero"));  // --initial free is the default
+    const auto settled = testsupport::run_program(BATTSIM_BINARY, "fit " + log + " -c " + kConfig + " --params none");
+    CHECK_THAT(settled.out, !Catch::Contains("not settled"));
+    std::remove(log.c_str());
+}
+
 TEST_CASE("battsim fit exit codes", "[fit][cli]") {
     synth::Options o;
     o.flight_s = 30;

@@ -239,6 +239,18 @@ void print_fit_brief(const nlohmann::json& r, std::ostream& out) {
         out << "\n";
     }
     if (r.contains("plot_note")) out << "  plot: " << r["plot_note"].get<std::string>() << "\n";
+    // What to try next when the fit did not settle, rather than a result that only looks like one.
+    size_t at_bound = 0;
+    for (const auto& p : r["parameters"]) at_bound += p.contains("at_bound") ? 1 : 0;
+    const bool limit = r["solver"]["stop"] == "iteration limit";
+    if (limit || at_bound > 0) {
+        out << "  not settled:";
+        if (limit) out << " the iteration limit (" << r["solver"]["iterations"] << ", --max-iterations) was reached";
+        if (limit && at_bound > 0) out << ";";
+        if (at_bound > 0) out << " " << at_bound << " parameter(s) at a bound";
+        if (r["options"]["initial"] == "free") out << "; a log that starts full and at rest (a bench discharge) fits better with --initial zero";
+        out << "\n";
+    }
 }
 
 }  // namespace fit
