@@ -371,7 +371,9 @@ void print_charger_check(const nlohmann::json& c, std::ostream& out) {
         << " Ah charged (x" << fixed(c["ratio"], 4) << "): "
         << (fault.is_null() ? "no verdict" : fault.get<bool>() ? "current sensor fault" : "within tolerance");
     if (c["suggested_current_gain"].is_number())
-        out << "; suggested extensions.current_sensor.gain " << fixed(c["suggested_current_gain"], 4);
+        out << (fault.is_boolean() && !fault.get<bool>() ? "; no change needed (the gain it implies: "
+                                                           : "; suggested extensions.current_sensor.gain ")
+            << fixed(c["suggested_current_gain"], 4) << (fault.is_boolean() && !fault.get<bool>() ? ")" : "");
     out << "\n";
 }
 

@@ -111,6 +111,15 @@ TEST_CASE("a charger count far from the monitor's suggests no gain and writes no
     const auto j = clitest::run_json("replay " + q(kExample) + " -c " + q(pack) + " --charged-mah 2000000 --json");
     CHECK(j["charger_check"]["suggested_current_gain"].is_null());
     CHECK(j["charger_check"]["fault"].is_null());
+    // mAh given as Ah: the typo is said alone (the start's deficit, measured against the
+    // count, had been said first: "the pack was not charged full").
+    const auto typo = clitest::run_json("replay " + q(kExample) + " -c " + q(pack) + " --charged-mah 1.5 --json");
+    REQUIRE(typo["charger_check"]["notes"].size() == 1);
+    CHECK_THAT(typo["charger_check"]["notes"][0].get<std::string>(), Catch::Contains("check --charged-mah (in mAh)"));
+    // Within tolerance the brief says no change is needed, not "suggested gain".
+    const double counted_mah = j["charger_check"]["counted_ah"].get<double>() * 1000.0;
+    const auto fine = run("replay " + q(kExample) + " -c " + q(pack) + " --charged-mah " + std::to_string(counted_mah));
+    CHECK_THAT(fine.out, Catch::Contains("within tolerance; no change needed (the gain it implies: 1.0000)"));
 }
 
 TEST_CASE("batch keeps a log's numbers when its summary file cannot be written, and exits 5", "[cli]") {

@@ -34,8 +34,18 @@ json charger_check(const json& summary, const ChargerCheckOptions& o) {
     // pack was not full, the charger's count holds that deficit too, and the monitor's
     // estimate of it is too rough to take off (a partly charged pack's deficit read from the
     // model's curve was 198 mAh against a true 468 on the simulated suite): no verdict.
+    // A current sensor off by a factor of two is broken, not miscalibrated; a count that far
+    // off is a typo (Ah given as mAh) or another flight's charge, and a gain fitted to it
+    // had written a config battsim then refused to load. Judged first: against a typo, the
+    // other notes (the start's deficit is measured against the count) only mislead.
+    const bool plausible = ratio >= 0.5 && ratio <= 2.0;
+    if (!plausible) {
+        notes.push_back("the monitor counted " + std::to_string(static_cast<long>(std::lround(ratio * 100.0))) +
+                        " % of the charger's count: check --charged-mah (in mAh) and that the log is of this charge; "
+                        "no gain suggested");
+    }
     const bool started_full = initial_ah <= 0.05 * o.charged_ah;
-    if (!started_full) {
+    if (!started_full && plausible) {
         notes.push_back("the monitor read " + std::to_string(static_cast<long>(std::lround(initial_ah * 1e3))) +
                         " mAh missing at the start: the pack was not charged full before the log, and the charger's "
                         "count includes that charge; no verdict");
@@ -48,15 +58,6 @@ json charger_check(const json& summary, const ChargerCheckOptions& o) {
     if (sensor_fault) {
         notes.push_back("a sensor fault was raised in flight (a current offset learnt on the ground, or missing "
                         "samples): an offset's charge reads as gain here; correct it first, no gain suggested");
-    }
-    // A current sensor off by a factor of two is broken, not miscalibrated; a count that far
-    // off is a typo (Ah given as mAh) or another flight's charge, and a gain fitted to it
-    // had written a config battsim then refused to load.
-    const bool plausible = ratio >= 0.5 && ratio <= 2.0;
-    if (!plausible) {
-        notes.push_back("the monitor counted " + std::to_string(static_cast<long>(std::lround(ratio * 100.0))) +
-                        " % of the charger's count: check --charged-mah (in mAh) and that the log is of this charge; "
-                        "no gain suggested");
     }
     json j;
     j["charged_ah"] = round_sig(o.charged_ah);
