@@ -653,6 +653,35 @@ TEST_CASE("table rendering: Markdown escapes, CSV quotes, JSON round-trips", "[b
     CHECK_THROWS_WITH(parse_table_format("xlsx"), "unknown table format \"xlsx\"; expected md, csv or json");
 }
 
+TEST_CASE("table rendering: the final capacity beside the mean, no Piao scores for the joint estimator", "[batch]") {
+    BatchItem it;
+    it.index = 0;
+    it.path = "/d/34.csv";
+    it.test = "6";
+    it.replay.config = default_config();
+    json joint = make_error_row(it, "x");
+    joint["status"] = "ok";
+    joint["error"] = nullptr;
+    joint["flight"] = true;
+    joint["estimator"] = "joint";
+    joint["capacity_mean_ah"] = 1.822;  // flight 34 with sim-4s.json: the highest mean, the lowest final
+    joint["capacity_final_ah"] = 1.043;
+    joint["capacity_final_sigma_ah"] = 0.085;
+    joint["cell_scores"] = json::array({0.0, 0.0, 0.0, 0.0});
+    json reference = joint;
+    reference["index"] = 1;
+    reference["estimator"] = "reference";
+    reference["capacity_final_sigma_ah"] = nullptr;
+    reference["cell_scores"] = json::array({-0.92, 0.01, 0.03, -0.04});
+    const std::string md =
+        render_table(make_table({joint, reference}, 2, "0123456789abcdef", ShardSpec()), TableFormat::Markdown);
+    CHECK(md.rfind("| test | log | pack | mean capacity Ah | first 20 % capacity Ah | final capacity Ah |", 0) == 0);
+    CHECK(md.find("| 6 | 34.csv | – | 1.822 | – | 1.043 ± 0.085 |") != std::string::npos);
+    CHECK(md.find("| – | – | – | ok |") != std::string::npos);  // the joint row: no cell differences
+    CHECK(md.find("| 1.043 | ") != std::string::npos);            // the reference row: no σ
+    CHECK(md.find("-0.92 / 0.01 / 0.03 / -0.04") != std::string::npos);
+}
+
 TEST_CASE("merge rebuilds the single run's table and refuses incomplete or foreign shards", "[batch]") {
     TempDir t;
     std::vector<json> rows;

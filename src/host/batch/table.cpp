@@ -134,12 +134,19 @@ std::string csv_field(const json& v) {
 
 std::string render_rows_md(const json& table) {
     std::ostringstream o;
-    o << "| test | log | pack | capacity Ah | first 20 % capacity Ah | error V | abs error V | R Ω | first 20 % R Ω "
-         "| cell differences | remaining at 20 % s | warnings | status |\n";
-    o << "|---|---|---|--:|--:|--:|--:|--:|--:|---|--:|---|---|\n";
+    // The appendix's columns, and the capacity at the landing beside its mean: over a flight
+    // the mean of a converging estimate can rank packs the wrong way round (the joint
+    // estimator's sad pack had the highest mean and the lowest final capacity).
+    o << "| test | log | pack | mean capacity Ah | first 20 % capacity Ah | final capacity Ah | error V | abs error V "
+         "| R Ω | first 20 % R Ω | cell differences | remaining at 20 % s | warnings | status |\n";
+    o << "|---|---|---|--:|--:|--:|--:|--:|--:|--:|---|--:|---|---|\n";
     for (const json& r : table["rows"]) {
         std::string cells;
-        for (const json& c : r["cell_scores"]) cells += (cells.empty() ? "" : " / ") + fixed(c, 2);
+        // The cells' Piao scores are the reference estimator's; the joint one does not compute them.
+        if (r["estimator"] != "joint")
+            for (const json& c : r["cell_scores"]) cells += (cells.empty() ? "" : " / ") + fixed(c, 2);
+        std::string final_ah = fixed(r["capacity_final_ah"], 3);
+        if (r["capacity_final_sigma_ah"].is_number()) final_ah += " ± " + fixed(r["capacity_final_sigma_ah"], 3);
         std::string warnings;
         for (const json& w : r["warnings"]) {
             warnings += (warnings.empty() ? "" : ", ") + text(w);
@@ -155,7 +162,7 @@ std::string render_rows_md(const json& table) {
         if (status != "ok" && r["error"].is_string()) status += ": " + r["error"].get<std::string>();
         o << "| " << md_cell(text(r["test"])) << " | " << md_cell(file_name(text(r["log"]))) << " | "
           << md_cell(r["pack"].is_string() ? text(r["pack"]) : "–") << " | " << fixed(r["capacity_mean_ah"], 3) << " | "
-          << fixed(r["capacity_first20_ah"], 3) << " | " << fixed(r["error_mean_v"], 3) << " | "
+          << fixed(r["capacity_first20_ah"], 3) << " | " << final_ah << " | " << fixed(r["error_mean_v"], 3) << " | "
           << fixed(r["abs_error_mean_v"], 3) << " | " << fixed(r["resistance_mean_ohm"], 4) << " | "
           << fixed(r["resistance_first20_ohm"], 4) << " | " << (cells.empty() ? "–" : cells) << " | "
           << fixed(r["remaining_at20_s"], 1) << " | " << (warnings.empty() ? "–" : md_cell(warnings)) << " | "
