@@ -18,7 +18,7 @@ struct ExportArgs {
 
 std::function<int()> setup(CLI::App& sub) {
     auto a = std::make_shared<ExportArgs>();
-    sub.add_option("--firmware", a->firmware, "Config JSON to export as the firmware's C++ header")->required();
+    sub.add_option("--firmware,-c,--config", a->firmware, "Config JSON to export as the firmware's C++ header (-c as in the other commands)")->required();
     sub.add_option("-o,--output", a->output, "Header to write (\"-\" = standard output)")->capture_default_str();
     sub.add_option("--estimator", a->estimator, "Estimator compiled in: reference or joint; default from the config")
         ->check(CLI::IsMember({"reference", "joint"}));

@@ -63,7 +63,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--report", a->report, "Write the fit report here (JSON, schema battsim.ocv_stitch)");
     sub.add_flag("--json", a->json, "Print the report on standard output");
     sub.add_option("--plot", a->plot, "Draw the table, the config's curve and each flight's voltage with the sag added back (.png or .svg)");
-    sub.add_option("--points", a->options.points, "Table points from empty to full")->check(CLI::Range(2, 21))->capture_default_str();
+    sub.add_option("--points,--ocv-points", a->options.points, "Table points from empty to full")->check(CLI::Range(2, 21))->capture_default_str();
     sub.add_option("--prior-sigma", a->options.prior_sigma_v,
                    "Per cell, V: how far the table may leave the config's curve where no flight reaches")
         ->check(number_in(0.0, 1.0e6, true))
@@ -84,7 +84,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--rest-weight", a->options.rest_weight, "Weight of a sample at rest (|I| < 1 A) against one in flight")
         ->check(number_in(0.0, 1.0e6, true))
         ->capture_default_str();
-    sub.add_option("--iterations", a->options.iterations, "Most rounds of the joint Levenberg-Marquardt step (20 alternating rounds come first)")
+    sub.add_option("--iterations,--max-iterations", a->options.iterations, "Most rounds of the joint Levenberg-Marquardt step (20 alternating rounds come first)")
         ->check(CLI::Range(1, 100000))
         ->capture_default_str();
     sub.add_flag("!--ignore-table", a->options.prior_from_table,

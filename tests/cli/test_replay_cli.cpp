@@ -146,6 +146,9 @@ TEST_CASE("replay notes what the config makes unreliable: no OCV table for the j
     CHECK_THAT(e.err, Catch::Contains("battsim export-config: note: the joint estimator has no OCV table"));
     CHECK(std::filesystem::exists(dir + "/h.h"));
     CHECK(e.err.find("cell taps") == std::string::npos);  // 4S: the taps read every cell
+    // -c names the config as in every other command.
+    REQUIRE(run("export-config -c " + q(kConfig) + " --estimator joint -o " + q(dir + "/hc.h")).exit_code == 0);
+    CHECK(clitest::read_file(dir + "/hc.h") == clitest::read_file(dir + "/h.h"));
     // A 6S pack: the reference hardware's three taps read none of its cells, and that is said.
     auto e6 = run("export-config --firmware " + q(kSource + "/configs/generic-6s.json") + " -o " + q(dir + "/h6.h"));
     CHECK(e6.exit_code == 0);
