@@ -297,13 +297,17 @@ std::string warning_spells(const nlohmann::json& w) {
 void print_flight_brief(const nlohmann::json& s, std::ostream& out) {
     const auto& f = s["flight"];
     const auto& cap = f["capacity_ah"];
-    out << "  flight " << fixed(f["duration_s"], 1) << " s; capacity ";
+    out << "  flight " << fixed(f["duration_s"], 1) << " s";
+    // Two hops are one window, the ground between them in it; say so rather than read as one flight.
+    if (f.value("take_offs", 1) > 1) out << " (" << f["take_offs"] << " take-offs: from the first to the last landing)";
+    out << "; capacity ";
+    const char* end = f.value("landed", true) ? "at the landing" : "at the end of the log (still flying)";
     // The joint estimator's standard error: a flight that draws little of the pack says little.
     if (cap.contains("final_sigma") && !cap["final_sigma"].is_null()) {
-        out << fixed(cap["final"], 3) << " +/- " << fixed(cap["final_sigma"], 3) << " Ah at the landing (mean "
+        out << fixed(cap["final"], 3) << " +/- " << fixed(cap["final_sigma"], 3) << " Ah " << end << " (mean "
             << fixed(cap["mean"], 3) << ", first 20 %: " << fixed(cap["first20_mean"], 3) << ")";
     } else {
-        out << "mean " << fixed(cap["mean"], 3) << " Ah (first 20 %: " << fixed(cap["first20_mean"], 3) << ", at the landing "
+        out << "mean " << fixed(cap["mean"], 3) << " Ah (first 20 %: " << fixed(cap["first20_mean"], 3) << ", " << end << " "
             << fixed(cap["final"], 3) << ")";
     }
     out << "; resistance mean " << fixed(f["resistance_ohm"]["mean"], 2, 1000.0) << " mOhm; model MAE "
@@ -337,7 +341,9 @@ void print_brief(const nlohmann::json& s, std::ostream& out) {
         out << (pack_kept_out ? "; does the config match this pack?\n" : "; a loose balance lead, or a config for another cell count?\n");
     }
     const auto& f = s["flight"];
-    if (f.is_null()) {
+    if (f.is_null() && s["samples"]["valid"] == 0) {
+        out << "  no valid sample (every one kept out, above): no flight, no estimate\n";
+    } else if (f.is_null()) {
         out << "  no flight (the current never stayed above the flying threshold long enough for a take-off)\n";
     } else {
         print_flight_brief(s, out);

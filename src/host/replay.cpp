@@ -140,6 +140,7 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     auto monitor = std::make_unique<core::Monitor>();
     monitor->configure(options.config.monitor);
     SummaryAccumulator summary;
+    summary.set_landed_below_a(options.config.monitor.flying.min_flying_current_a);
     std::unique_ptr<SeriesWriter> series;
     int series_cells = 0;
 
@@ -182,7 +183,8 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     j["schema"] = kSummarySchema;
     j["schema_version"] = kSummaryVersion;
     j["battsim_version"] = BATTSIM_VERSION;
-    nlohmann::json body = summary.to_json(info.cell_count);
+    nlohmann::json body =
+        summary.to_json(info.cell_count, options.config.monitor.estimator == core::EstimatorKind::Reference);
     std::vector<std::string> input_notes = info.notes;
     const bool flew = body["flight"].is_object();
     const core::JointEstimator::Config& jc = options.config.monitor.joint;

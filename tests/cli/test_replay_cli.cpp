@@ -72,6 +72,48 @@ TEST_CASE("replay --series leaves what is not known yet empty: models and SOC be
     CHECK(field(initialised, 8) == "0.99425");
 }
 
+TEST_CASE("replay's summary says how many take-offs its flight window holds and whether it ended landed", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    // Two hops: rest, 10 s at 20 A, 10 s on the ground, 10 s at 20 A, rest.
+    std::string two = raw_log(150, 150);
+    const std::string rest_row = ",16.50,4.12,4.13,4.12,4.13,250.00,1.32,\n", load_row = ",15.90,3.97,3.98,3.97,3.98,20000.00,7.94,\n";
+    long t = 630 + 300 * 67;
+    for (int k = 0; k < 150; ++k, t += 67) two += std::to_string(t) + rest_row;
+    for (int k = 0; k < 150; ++k, t += 67) two += std::to_string(t) + load_row;
+    for (int k = 0; k < 150; ++k, t += 67) two += std::to_string(t) + rest_row;
+    clitest::write_file(dir + "/two.csv", two);
+    const auto j = clitest::run_json("replay " + q(dir + "/two.csv") + " -c " + q(kConfig) + " --json");
+    CHECK(j["flight"]["take_offs"] == 2);
+    CHECK(j["flight"]["landed"] == true);
+    CHECK(j["flight"]["cell_scores"].is_array());  // the reference estimator's Piao scores
+    const auto brief = run("replay " + q(dir + "/two.csv") + " -c " + q(kConfig));
+    CHECK_THAT(brief.out, Catch::Contains("(2 take-offs: from the first to the last landing)"));
+    // A log that ends in the air: its last figures are no landing's.
+    clitest::write_file(dir + "/air.csv", raw_log(150, 150));
+    const auto air = clitest::run_json("replay " + q(dir + "/air.csv") + " -c " + q(kConfig) + " --json");
+    CHECK(air["flight"]["take_offs"] == 1);
+    CHECK(air["flight"]["landed"] == false);
+    CHECK_THAT(run("replay " + q(dir + "/air.csv") + " -c " + q(kConfig)).out,
+               Catch::Contains("at the end of the log (still flying)"));
+    // The joint estimator computes no Piao scores: null, not four zeros ("every cell typical").
+    const auto joint = clitest::run_json("replay " + q(dir + "/two.csv") + " -c " + q(kConfig) + " --estimator joint --json");
+    CHECK(joint["flight"]["cell_scores"].is_null());
+}
+
+TEST_CASE("replay of a log whose every sample is kept out says so, not 'no flight'", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    nlohmann::json cfg = nlohmann::json::parse(clitest::read_file(kConfig));
+    cfg["sensor"]["max_pack_voltage_v"] = 10.0;  // below every reading of this 4S log
+    clitest::write_file(dir + "/low.json", cfg.dump());
+    clitest::write_file(dir + "/log.csv", raw_log());
+    const auto r = run("replay " + q(dir + "/log.csv") + " -c " + q(dir + "/low.json"));
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.out, Catch::Contains("no valid sample (every one kept out, above)"));
+    CHECK_THAT(r.out, !Catch::Contains("no flight (the current never"));
+    const auto j = clitest::run_json("replay " + q(dir + "/log.csv") + " -c " + q(dir + "/low.json") + " --json");
+    CHECK(j["duration_s"].is_null());  // no valid sample spans no time (it had read 0.0 s)
+}
+
 TEST_CASE("replay says how many samples the config's sensor limits kept out, and why", "[cli]") {
     // A 4S log (16.5 V at rest) against limits for a 3S pack: the rest is above
     // max_pack_voltage_v, the loaded 15.9 V is not.

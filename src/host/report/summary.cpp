@@ -46,6 +46,7 @@ void SummaryAccumulator::Totals::add(const Totals& o) {
     n += o.n;
     capacity_ah += o.capacity_ah;
     resistance_ohm += o.resistance_ohm;
+    resistance_n += o.resistance_n;
     error_v += o.error_v;
     abs_error_v += o.abs_error_v;
     sq_error_v += o.sq_error_v;
@@ -126,6 +127,8 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
         initial_forced_ = s.initial_forced;
     }
     if (s.flying) ++flying_samples_;
+    if (s.flying && !was_flying_) ++take_offs_;
+    was_flying_ = s.flying;
     if (!have_flight_ && !s.flying) return;  // before take-off
     if (!have_flight_) {
         have_flight_ = true;
@@ -136,7 +139,9 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
     Totals t;
     t.n = 1;
     t.capacity_ah = s.capacity_ah;
-    t.resistance_ohm = s.resistance_ohm;
+    // No estimate yet (0) is no resistance of 0 ohm.
+    t.resistance_n = s.resistance_ohm > 0.0f ? 1 : 0;
+    t.resistance_ohm = s.resistance_ohm > 0.0f ? s.resistance_ohm : 0.0f;
     const double e = static_cast<double>(s.voltage_v) - s.model_voltage_v;
     const double ea = static_cast<double>(s.voltage_v) - s.adapted_model_voltage_v;
     t.error_v = e;
@@ -197,7 +202,7 @@ void SummaryAccumulator::add_fault_causes(json& e) const {
     e["cause"] = sensor_fault_cause_names(fault_causes_);
 }
 
-json SummaryAccumulator::to_json(int cells) const {
+json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
     json j;
     j["samples"] = {{"total", samples_}, {"valid", valid_samples_}, {"flying", flying_samples_}};
     // Only the reasons that occurred: a whole flight rejected (a config for another pack)
@@ -206,7 +211,7 @@ json SummaryAccumulator::to_json(int cells) const {
     for (int f = 1; f < core::kSampleFaultCount; ++f)
         if (rejected_[f] > 0) rejected[sample_fault_key(static_cast<uint8_t>(f))] = rejected_[f];
     j["samples"]["rejected"] = rejected;
-    j["duration_s"] = have_time_ ? round_sig((last_time_us_ - first_time_us_) * 1e-6, 7) : 0.0;
+    j["duration_s"] = have_time_ ? json(round_sig((last_time_us_ - first_time_us_) * 1e-6, 7)) : json(nullptr);
 
     if (!have_flight_) {
         j["flight"] = nullptr;
@@ -236,6 +241,11 @@ json SummaryAccumulator::to_json(int cells) const {
         flight["end_s"] = round_sig(flight_last_us_ * 1e-6, 9);
         flight["duration_s"] = round_sig(dur_s, 7);
         flight["samples"] = static_cast<uint64_t>(f.n);
+        // The window runs from the first take-off to the last flying sample: more than one
+        // take-off puts the time on the ground between them in it, and a log that ends in the
+        // air has no landing (its "final" figures are the last sample's).
+        flight["take_offs"] = take_offs_;
+        flight["landed"] = !last_.flying || last_.current_a < landed_below_a_;
         flight["capacity_ah"] = {{"mean", mean_or_null(f.capacity_ah, f.n)},
                                  {"first20_mean", mean_or_null(first20.capacity_ah, first20.n)},
                                  {"final", round_sig(last_flying_.capacity_ah)},
@@ -243,9 +253,10 @@ json SummaryAccumulator::to_json(int cells) const {
                                                      ? json(round_sig(last_flying_.capacity_sigma_ah))
                                                      : json(nullptr)},
                                  {"after_rest", rest_capacity_ah_ > 0.0f ? json(round_sig(rest_capacity_ah_)) : json(nullptr)}};
-        flight["resistance_ohm"] = {{"mean", mean_or_null(f.resistance_ohm, f.n)},
-                                    {"first20_mean", mean_or_null(first20.resistance_ohm, first20.n)},
-                                    {"final", round_sig(last_flying_.resistance_ohm)}};
+        flight["resistance_ohm"] = {{"mean", mean_or_null(f.resistance_ohm, f.resistance_n)},
+                                    {"first20_mean", mean_or_null(first20.resistance_ohm, first20.resistance_n)},
+                                    {"final", last_flying_.resistance_ohm > 0.0f ? json(round_sig(last_flying_.resistance_ohm))
+                                                                                : json(nullptr)}};
         flight["voltage_error_v"] = {
             {"model", {{"mean", mean_or_null(f.error_v, f.n)},
                        {"mean_abs", mean_or_null(f.abs_error_v, f.n)},
@@ -260,7 +271,7 @@ json SummaryAccumulator::to_json(int cells) const {
         flight["total_time_s"] = {{"final", last_flying_.time_valid ? json(round_sig(last_flying_.total_time_s)) : json(nullptr)}};
         json scores = json::array();
         for (int c = 0; c < cells && c < core::kMaxCells; ++c) scores.push_back(round_sig(last_flying_.cell_score[c], 4));
-        flight["cell_scores"] = scores;
+        flight["cell_scores"] = cell_scores ? scores : json(nullptr);
         bool cell_analysis = false;
         for (int c = 0; c < cells && c < core::kMaxCells; ++c)
             if (last_flying_.cell_resistance_ohm[c] != 0.0f) cell_analysis = true;
@@ -305,11 +316,9 @@ json SummaryAccumulator::to_json(int cells) const {
             json e;
             e["name"] = core::warning_name(static_cast<core::Warning>(w));
             e["first_time_s"] = round_sig(last_.warning_time_us[w] * 1e-6, 9);
-            if (have_flight_) {
-                e["flight_time_s"] = last_.warning_time_us[w] >= flight_first_us_
-                                         ? json(round_sig((last_.warning_time_us[w] - flight_first_us_) * 1e-6, 7))
-                                         : json(nullptr);
-            }
+            e["flight_time_s"] = have_flight_ && last_.warning_time_us[w] >= flight_first_us_
+                                     ? json(round_sig((last_.warning_time_us[w] - flight_first_us_) * 1e-6, 7))
+                                     : json(nullptr);
             e["active_at_end"] = (last_.warnings & bit) != 0;
             // Each time it was on: from its first sample to the first sample without it (null
             // when still on at the end); the short flight with the causes seen meanwhile.

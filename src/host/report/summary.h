@@ -37,10 +37,14 @@ public:
     explicit SummaryAccumulator(size_t max_buckets = 16384);
 
     void add(const core::MonitorStatus& s);
+    // The current below which a pack is on the ground: a log that ends within the landing
+    // hold (its last sample down, the flight not yet ended) has landed all the same.
+    void set_landed_below_a(float current_a) { landed_below_a_ = current_a; }
 
     struct Totals {
         double n = 0;
         double capacity_ah = 0, resistance_ohm = 0;
+        double resistance_n = 0;  // samples with a resistance estimate (0 = none yet: not averaged in)
         double error_v = 0, abs_error_v = 0, sq_error_v = 0;
         double adapted_error_v = 0, adapted_abs_error_v = 0, adapted_sq_error_v = 0;
         void add(const Totals& o);
@@ -52,8 +56,10 @@ public:
         Totals totals;
     };
 
-    // Everything except the input description; `cells` = pack cell count.
-    nlohmann::json to_json(int cells) const;
+    // Everything except the input description; `cells` = pack cell count; `cell_scores`:
+    // whether the estimator computes the cells' Piao scores (the reference; the joint
+    // estimator does not, and its zeros had read as "every cell typical").
+    nlohmann::json to_json(int cells, bool cell_scores = true) const;
 
     uint64_t samples() const { return samples_; }
 
@@ -69,6 +75,9 @@ private:
     size_t open_count_ = 0;
 
     uint64_t samples_ = 0, valid_samples_ = 0, flying_samples_ = 0;
+    float landed_below_a_ = 1.0f;
+    uint64_t take_offs_ = 0;     // flying after a sample that was not (two hops: one window, said)
+    bool was_flying_ = false;
     uint64_t rejected_[core::kSampleFaultCount] = {};  // samples (or their cells) kept out, by reason
     bool have_time_ = false, have_flight_ = false;
     uint64_t first_time_us_ = 0, last_time_us_ = 0;
