@@ -32,8 +32,10 @@ const char* sample_fault_limit(uint8_t fault);
 
 class SummaryAccumulator {
 public:
-    // Bucket count before neighbouring buckets merge; flights shorter than this are
-    // summarised exactly, longer ones to within one bucket of the 20 % boundary.
+    // Bucket count before neighbouring buckets merge. The buckets fill from the take-off to
+    // the end of the log, so a log whose flight and rest after it stay within this many
+    // samples (about 18 min at 15 Hz) is summarised exactly; a longer one (hours logged on the
+    // ground after a landing) gets its 20 % means and time points to within one bucket.
     explicit SummaryAccumulator(size_t max_buckets = 16384);
 
     void add(const core::MonitorStatus& s);
