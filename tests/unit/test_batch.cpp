@@ -668,16 +668,20 @@ TEST_CASE("table rendering: the final capacity beside the mean, no Piao scores f
     joint["capacity_final_ah"] = 1.043;
     joint["capacity_final_sigma_ah"] = 0.085;
     joint["cell_scores"] = json::array({0.0, 0.0, 0.0, 0.0});
+    joint["warnings"] = json::array({"cell_outlier"});
+    joint["outlier_cell"] = 4;
     json reference = joint;
     reference["index"] = 1;
     reference["estimator"] = "reference";
     reference["capacity_final_sigma_ah"] = nullptr;
     reference["cell_scores"] = json::array({-0.92, 0.01, 0.03, -0.04});
+    reference["warnings"] = json::array();
+    reference["outlier_cell"] = nullptr;
     const std::string md =
         render_table(make_table({joint, reference}, 2, "0123456789abcdef", ShardSpec()), TableFormat::Markdown);
     CHECK(md.rfind("| test | log | pack | mean capacity Ah | first 20 % capacity Ah | final capacity Ah |", 0) == 0);
     CHECK(md.find("| 6 | 34.csv | – | 1.822 | – | 1.043 ± 0.085 |") != std::string::npos);
-    CHECK(md.find("| – | – | – | ok |") != std::string::npos);  // the joint row: no cell differences
+    CHECK(md.find("| – | – | cell_outlier (cell 4) | ok |") != std::string::npos);  // no cell differences; which cell
     CHECK(md.find("| 1.043 | ") != std::string::npos);            // the reference row: no σ
     CHECK(md.find("-0.92 / 0.01 / 0.03 / -0.04") != std::string::npos);
 }

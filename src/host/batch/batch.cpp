@@ -253,13 +253,16 @@ json make_row(const BatchItem& item, const json& summary) {
     json warnings = json::array();
     json fault_cause = json::array();
     const json raised = pick("/warnings");
+    json outlier_cell;  // 1-based, null without a cell warning
     if (raised.is_array()) {
         for (const json& w : raised) {
             warnings.push_back(w.is_object() ? w.value("name", std::string("?")) : std::string("?"));
+            if (w.is_object() && w.value("name", std::string()) == "cell_outlier") outlier_cell = w.value("cell", json());
             if (w.is_object() && w.value("name", std::string()) == "sensor_fault") fault_cause = w.value("cause", json::array());
         }
     }
     row["warnings"] = warnings;
+    row["outlier_cell"] = outlier_cell;
     row["sensor_fault_cause"] = fault_cause;
     const json total = pick("/samples/total");
     row["samples"] = total.is_number_unsigned() ? total.get<uint64_t>() : 0;
@@ -295,6 +298,7 @@ json make_error_row(const BatchItem& item, const std::string& reason) {
     row["sensor_fault_samples"] = 0;
     row["sensor_fault_cause"] = json::array();
     row["notes"] = 0;
+    row["outlier_cell"] = nullptr;
     return row;
 }
 

@@ -29,7 +29,7 @@ const std::vector<std::string> kRowKeys = {
     "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah", "capacity_final_sigma_ah", "capacity_after_rest_ah", "charger_ratio",
     "charger_fault", "charger_current_gain", "charger_suggested_gain", "error_mean_v", "abs_error_mean_v", "resistance_mean_ohm",
     "resistance_first20_ohm", "resistance_final_ohm", "cell_scores", "remaining_at20_s", "warnings", "samples", "sensor_fault_samples",
-    "sensor_fault_cause", "notes"};
+    "sensor_fault_cause", "notes", "outlier_cell"};
 
 // The first key of a batch row whose value is not of the type batch writes ("key: expected
 // ..."), or an unknown key; empty when the row is well formed.
@@ -150,6 +150,9 @@ std::string render_rows_md(const json& table) {
         std::string warnings;
         for (const json& w : r["warnings"]) {
             warnings += (warnings.empty() ? "" : ", ") + text(w);
+            // Which cell, and for what: the operator's next step is that cell's lead or the pack.
+            if (text(w) == "cell_outlier" && r.value("outlier_cell", json()).is_number())
+                warnings += " (cell " + json_text(r["outlier_cell"]) + ")";
             // A fleet's table should tell a dropped log line from a broken sensor at a glance.
             if (text(w) == "sensor_fault" && !r["sensor_fault_cause"].empty()) {
                 std::string cause;
