@@ -63,6 +63,7 @@ std::function<int()> setup(CLI::App& sub) {
         std::cerr << "battsim log: " << stats.lines_written << " lines written to " << a->options.out_path << " ("
                   << stats.connections << " connections, " << stats.cut_lines << " cut lines dropped, "
                   << stats.corrupt_lines << " corrupt lines dropped";
+        if (stats.overlong_lines > 0) std::cerr << ", " << stats.overlong_lines << " over-long lines dropped";
         if (stats.held_dropped > 0) std::cerr << ", " << stats.held_dropped << " lines lost waiting for a header";
         std::cerr << ")\n";
         if (stats.device_gone && stats.connections == 0) {

@@ -217,6 +217,48 @@ TEST_CASE("serial logger: handshake, drop mid-line, return, device reset; every 
     CHECK(std::find(messages.begin(), messages.end(), "device: battery 1") != messages.end());
 }
 
+TEST_CASE("serial logger: a damaged header is asked for again, never taken from the next data row", "[serial]") {
+    // The header's checksum broken after hello: the next data row had become the new file's
+    // first line (and, with --append or on a reconnect, stopped the run as a mismatch).
+    const std::string dir = fwtest::temp_dir("serial-header");
+    const std::string link = dir + "/ttyBMS";
+    const std::string out = dir + "/log.csv";
+    FakeDevice dev(link);
+    dev.plug();
+    std::atomic<bool> stop{false};
+    SerialLogStats stats;
+    std::thread logger([&] { stats = run_serial_logger(options(link, out), stop, [](const std::string&) {}); });
+    Joiner joiner{stop, logger};
+
+    bool greeted = false;
+    for (int i = 0; i < 100 && !greeted; ++i) {
+        dev.send("BMS\r\n");
+        greeted = dev.heard_hello(100);
+    }
+    REQUIRE(greeted);
+    dev.send("hello\r\n");
+    std::string bad = with_checksum(kHeader);
+    bad[2] = bad[2] == 'm' ? 'n' : 'm';
+    dev.send(bad + "\n");
+    std::string expected = kHeader + "\n";
+    for (int n = 0; n < 5; ++n) {
+        dev.line(data_line(n));
+        expected += data_line(n) + "\n";
+    }
+    REQUIRE(dev.heard_hello(3000));  // greeted again for the header
+    dev.send("hello\r\n");
+    dev.line(kHeader);
+    for (int n = 5; n < 10; ++n) {
+        dev.line(data_line(n));
+        expected += data_line(n) + "\n";
+    }
+    REQUIRE(wait_for_lines(out, 11));
+    stop = true;
+    logger.join();
+    CHECK(fwtest::read_file(out) == expected);  // the header first, the held rows kept
+    CHECK(stats.corrupt_lines == 1);
+}
+
 TEST_CASE("serial logger: --append repairs a cut last line, refuses another device's header", "[serial]") {
     const std::string dir = fwtest::temp_dir("serial-append");
     const std::string link = dir + "/ttyBMS";

@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -168,13 +169,25 @@ public:
             if (!bytes.empty()) {
                 lines.clear();
                 splitter_.feed(bytes, lines);
+                stats_.overlong_lines = splitter_.overlong();
                 for (const std::string& l : lines) handle_line(l);
             }
-            if (!confirmed_ && seconds_since(last_hello_) >= o_.hello_interval_s) greet();
+            if (!confirmed_ && seconds_since(last_hello_) >= o_.hello_interval_s) {
+                // A wrong baud rate or another firmware looks like a slow start: said now and
+                // then, not only waited for.
+                if (seconds_since(connected_at_) >= next_silence_note_s_) {
+                    say("no header from " + o_.port + " after " + std::to_string(static_cast<int>(next_silence_note_s_)) +
+                        " s of greeting it: is it the battsim firmware, at --baud " + std::to_string(o_.baud) + "?");
+                    next_silence_note_s_ *= 2.0;
+                }
+                greet();
+            }
             file_.sync_if_due(o_.fsync_interval_s);
         }
-        // A clean stop: whatever is held without a confirmed header cannot be written.
+        // A clean stop: whatever is held without a confirmed header cannot be written, nor a
+        // line still arriving.
         stats_.held_dropped += held_.size();
+        if (splitter_.discard_partial() > 0) ++stats_.cut_lines;
         file_.sync();
     }
 
@@ -198,6 +211,8 @@ private:
         confirmed_ = false;
         expect_header_ = false;
         splitter_.discard_partial();
+        connected_at_ = Clock::now();
+        next_silence_note_s_ = 10.0;
         say("connected to " + o_.port);
         greet();
         return true;
@@ -237,15 +252,29 @@ private:
                 say("device: " + d.text);
                 return;
             case LineKind::Corrupt:
-                if (!raw.empty()) ++stats_.corrupt_lines;
+                if (raw.empty()) return;
+                ++stats_.corrupt_lines;
+                // The header itself damaged: the next data row must not be taken for it (it had
+                // become the new file's first line, or stopped an --append as a mismatch).
+                // Greeted again, the device sends hello and its header again.
+                if (expect_header_) {
+                    expect_header_ = false;
+                    greet();
+                }
                 return;
             case LineKind::Data:
                 break;
         }
         if (expect_header_) {
             expect_header_ = false;
-            confirm_header(d.text);
-            return;
+            // A header names columns; a row of numbers after hello is data (a header lost
+            // whole): taken as data below, and the device greeted again.
+            const bool number = !d.text.empty() && (std::isdigit(static_cast<unsigned char>(d.text[0])) || d.text[0] == '-');
+            if (!number) {
+                confirm_header(d.text);
+                return;
+            }
+            greet();
         }
         if (!confirmed_) {
             // Data before this connection's header: hold it (the header is on its way).
@@ -299,6 +328,8 @@ private:
     bool confirmed_ = false;
     bool expect_header_ = false;
     Clock::time_point last_hello_ = Clock::now() - std::chrono::hours(1);
+    Clock::time_point connected_at_ = Clock::now();
+    double next_silence_note_s_ = 10.0;  // the next "no header after N s" note (doubling)
 };
 
 }  // namespace

@@ -44,7 +44,8 @@ struct SerialLogStats {
     size_t header_written = 0;     // 1 if this run wrote the file's header
     size_t repeated_headers = 0;   // headers re-sent after a greeting, matched and dropped
     size_t corrupt_lines = 0;      // failed the checksum or framing (incl. joined fragments)
-    size_t cut_lines = 0;          // unfinished lines dropped when the link went down
+    size_t cut_lines = 0;          // unfinished lines dropped when the link went down or at the stop
+    size_t overlong_lines = 0;     // longer than the line limit (8 KiB), dropped whole
     size_t connections = 0;
     size_t notes = 0;              // "# ..." lines from the device, passed to the message sink
     size_t held_dropped = 0;       // held lines lost because no header came before the link dropped
