@@ -72,6 +72,7 @@ std::function<int()> setup(CLI::App& sub) {
         if (!a->output.empty()) {
             host::LoadedConfig out = opt.config;
             out.monitor.joint.health.polarisation_slow_share = static_cast<float>(c.chosen_share);
+            select_joint_estimator(out, command);
             out.description += (out.description.empty() ? "" : "; ") + std::string("health filter's slow share ") +
                                (c.changed ? "calibrated" : "checked") + " on " + std::to_string(c.logs.size()) +
                                " flight(s) by battsim calibrate";

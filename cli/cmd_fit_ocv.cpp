@@ -146,6 +146,7 @@ std::function<int()> setup(CLI::App& sub) {
         if (int rc = run_job(command, [&] { s = host::fit::stitch_ocv(logs, config, a->options); })) return rc;
         if (!a->output.empty()) {
             host::LoadedConfig out = host::fit::with_stitched_table(config, s);
+            select_joint_estimator(out, command);
             size_t fitted = 0;
             for (const host::fit::OcvStitchFlight& f : s.flights) fitted += !f.test;
             out.description += (out.description.empty() ? "" : "; ") + std::string("joint OCV table fitted by battsim fit-ocv on ") +

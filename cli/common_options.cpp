@@ -371,6 +371,13 @@ void print_said(const nlohmann::json& said, const nlohmann::json& flight, std::o
     }
 }
 
+void select_joint_estimator(host::LoadedConfig& config, const char* command) {
+    if (config.monitor.estimator == core::EstimatorKind::Joint) return;
+    config.monitor.estimator = core::EstimatorKind::Joint;
+    std::cerr << command << ": note: the written config selects the joint estimator (\"estimator\": \"joint\"), "
+              << "whose settings this tunes; the config given ran the reference one\n";
+}
+
 void print_charger_check(const nlohmann::json& c, std::ostream& out) {
     const nlohmann::json& fault = c["fault"];
     out << "  charger check: counted " << fixed(c["counted_ah"], 3) << " Ah against " << fixed(c["charged_ah"], 3)

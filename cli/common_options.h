@@ -82,6 +82,9 @@ void print_brief(const nlohmann::json& summary, std::ostream& out);
 void print_said(const nlohmann::json& said, const nlohmann::json& flight, std::ostream& out);
 // The summary's `charger_check` as one line for people.
 void print_charger_check(const nlohmann::json& check, std::ostream& out);
+// A config written by a command that tunes the joint estimator (calibrate, fit-ocv) selects
+// it: one left on the reference estimator changed nothing a replay or the firmware ran. Says so.
+void select_joint_estimator(host::LoadedConfig& config, const char* command);
 
 }  // namespace cli
 }  // namespace battsim

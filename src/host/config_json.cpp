@@ -464,6 +464,21 @@ json config_to_json(const LoadedConfig& c) {
     return j;
 }
 
+namespace {
+// How config_notes ends the notes that say the config is for another pack than the log's.
+const char* const kOtherPackEnd = ": does the config match this pack?";
+const char* const kMakeConfigAdvice = ": battsim make-config --from-log ";
+const char* const kMakeConfigAdviceEnd = " writes one for it";
+bool ends_with_text(const std::string& s, const std::string& end) {
+    return s.size() >= end.size() && s.compare(s.size() - end.size(), end.size(), end) == 0;
+}
+}  // namespace
+
+bool is_other_pack_note(const std::string& note) {
+    return ends_with_text(note, kOtherPackEnd) ||
+           (note.find(kMakeConfigAdvice) != std::string::npos && ends_with_text(note, kMakeConfigAdviceEnd));
+}
+
 std::vector<std::string> config_notes(const core::MonitorConfig& config, const LogFacts& log) {
     std::vector<std::string> notes;
     // A config for another pack runs without complaint (a 4S log with a 6S config read a
@@ -471,7 +486,7 @@ std::vector<std::string> config_notes(const core::MonitorConfig& config, const L
     const int cells = config.cells_in_series;
     if (log.cells > 0 && log.cells != cells) {
         notes.push_back("the log has " + std::to_string(log.cells) + " cell voltages but the config " +
-                        std::to_string(cells) + " cells in series (cells_in_series): does the config match this pack?");
+                        std::to_string(cells) + " cells in series (cells_in_series)" + kOtherPackEnd);
     }
     // No LiPo, LiHV or Li-ion cell rests outside this range unless it is damaged.
     constexpr double kRestMinV = 2.9, kRestMaxV = 4.45;
@@ -481,12 +496,11 @@ std::vector<std::string> config_notes(const core::MonitorConfig& config, const L
             char buf[160];
             std::snprintf(buf, sizeof buf, "the pack rests at %.2f V, %.3f V per cell for the config's %d cells in series",
                           log.resting_voltage_v, per_cell_v, cells);
-            notes.push_back(std::string(buf) +
-                            ", outside any lithium cell's resting range (2.9-4.45 V): does the config match this pack?");
+            notes.push_back(std::string(buf) + ", outside any lithium cell's resting range (2.9-4.45 V)" + kOtherPackEnd);
         }
     }
-    const std::string advice = log.path.empty() ? std::string(": does the config match this pack?")
-                                                : ": battsim make-config --from-log " + log.path + " writes one for it";
+    const std::string advice = log.path.empty() ? std::string(kOtherPackEnd)
+                                                : kMakeConfigAdvice + log.path + kMakeConfigAdviceEnd;
     if (log.declared_cells > 0 && log.declared_cells != cells)
         notes.push_back("the log's autopilot was set for " + std::to_string(log.declared_cells) + " cells (" +
                         log.declared_cells_from + "), the config has " + std::to_string(cells) + advice);

@@ -51,6 +51,9 @@ struct LogFacts {
     double capacity_passed_s = NAN;
 };
 std::vector<std::string> config_notes(const core::MonitorConfig& config, const LogFacts& log = LogFacts());
+// Whether a note of config_notes says the config is for another pack than the log's (its
+// cell count, its resting voltage, what its autopilot was set for).
+bool is_other_pack_note(const std::string& note);
 
 }  // namespace host
 }  // namespace battsim

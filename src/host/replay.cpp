@@ -1,6 +1,4 @@
 #include "host/replay.h"
-
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -130,6 +128,13 @@ private:
 };
 
 }  // namespace
+
+std::vector<std::string> other_pack_notes(const nlohmann::json& summary) {
+    std::vector<std::string> out;
+    for (const nlohmann::json& note : summary.value("config_notes", nlohmann::json::array()))
+        if (note.is_string() && is_other_pack_note(note.get<std::string>())) out.push_back(note.get<std::string>());
+    return out;
+}
 
 nlohmann::json replay_log(const std::string& path, const ReplayOptions& options, const SampleObserver& observer) {
     ReaderOptions reader_options = options.reader;

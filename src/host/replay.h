@@ -25,6 +25,11 @@ struct ReplayOptions {
 // Called for each sample after the monitor's update.
 using SampleObserver = std::function<void(const core::Sample&, const core::MonitorStatus&)>;
 
+// The notes of a replay's summary that say its config is for another pack than the log's
+// (is_other_pack_note). The tools that replay many logs say these per log, where a fleet's
+// rows or a fit's numbers would hide them.
+std::vector<std::string> other_pack_notes(const nlohmann::json& summary);
+
 // Replays `path`; throws InputError (bad log) or std::runtime_error (outputs). Returns
 // the summary JSON (schema battsim.summary).
 nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,

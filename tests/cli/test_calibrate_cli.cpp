@@ -98,4 +98,20 @@ TEST_CASE("calibrate fails clearly without a rest, on a bad log and for the refe
     CHECK(r.exit_code == 2);
     r = run("calibrate " + q(dir + "/no-rest.csv") + " -c " + q(kConfig) + " --shares 0.1,1.5");
     CHECK(r.exit_code == 2);  // a share outside 0..1 is a usage error
+    // A config for another pack: said as the cause, not only "no rest".
+    r = run("calibrate " + q(kSource + "/logs/example-4s.csv") + " -c " + q(kSource + "/configs/generic-6s.json"));
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("battsim calibrate: note: " + kSource + "/logs/example-4s.csv: the log has 4 cell "
+                                      "voltages but the config 6 cells in series"));
+}
+
+TEST_CASE("calibrate's config selects the joint estimator it tunes", "[cli]") {
+    // sim-4s.json runs the reference estimator: a calibrated share left there changed nothing
+    // a replay or the firmware ran.
+    const std::string dir = clitest::temp_dir();
+    const auto r = run("calibrate " + q(kSource + "/logs/example-4s.csv") + " -c " + q(kConfig) + " -o " + q(dir + "/c.json"));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("the written config selects the joint estimator"));
+    CHECK(nlohmann::json::parse(clitest::read_file(dir + "/c.json"))["estimator"] == "joint");
 }

@@ -121,6 +121,22 @@ TEST_CASE("fit-ocv says where its table is extrapolation and when a resistance c
     CHECK(negative);
 }
 
+TEST_CASE("fit-ocv says when its config is for another pack than the flights'", "[cli]") {
+    // 4S flights with a 6S config had stitched a table of 2.77 V per cell at full without a word.
+    const std::string dir = clitest::temp_dir();
+    const auto j = clitest::run_json("fit-ocv " + q(kSource + "/logs/example-4s.csv") + " -c " +
+                                     q(kSource + "/configs/generic-6s.json") + " --json");
+    bool said = false;
+    for (const auto& n : j["notes"])
+        said = said || n.get<std::string>().find("example-4s.csv: the log has 4 cell voltages but the config 6 cells") == 0 ||
+               n.get<std::string>().find("/logs/example-4s.csv: the log has 4 cell voltages") != std::string::npos;
+    CHECK(said);
+    // Its own config: no such note.
+    const auto own = clitest::run_json("fit-ocv " + q(kSource + "/logs/example-4s.csv") + " -c " +
+                                       q(kSource + "/configs/sim-4s.json") + " --json");
+    for (const auto& n : own["notes"]) CHECK(n.get<std::string>().find("does the config match") == std::string::npos);
+}
+
 TEST_CASE("fit-ocv reports bad input and bad options with their exit codes", "[cli]") {
     const std::string dir = clitest::temp_dir();
     const std::string cfg = q(kSource + "/configs/sim-4s.json");

@@ -342,14 +342,8 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
                     row = check_error.empty() ? make_row(item, summary) : make_error_row(item, check_error);
                     samples = check_error.empty() ? row["samples"].get<uint64_t>() : 0;
                     // The notes the log gave rise to (the config's own are said once per config).
-                    const json notes = summary.value("config_notes", json::array());
-                    const std::vector<std::string> general = config_notes(item.replay.config.monitor);
-                    for (const json& note : notes) {
-                        if (!note.is_string()) continue;
-                        const std::string text = note.get<std::string>();
-                        if (std::find(general.begin(), general.end(), text) == general.end())
-                            log_notes[k].push_back(item.path + ": " + text);
-                    }
+                    for (const std::string& note : other_pack_notes(summary))
+                        log_notes[k].push_back(item.path + ": " + note);
                 } catch (const std::exception& e) {
                     // InputError carries file:line:column; anything else is reported as is.
                     row = make_error_row(item, e.what());

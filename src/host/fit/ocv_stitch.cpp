@@ -589,6 +589,9 @@ OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& 
     std::vector<bool> is_test;
     for (const OcvStitchLog& log : logs) {
         Trace t = load_trace(log.path, log.reader, config);
+        // A config for another pack stitches a table no cell has (a 6S config on 4S flights:
+        // 2.77 V per cell at full): said, as replay says it.
+        for (const std::string& note : t.config_notes) s.notes.push_back(log.path + ": " + note);
         size_t valid = 0;
         for (const TracePoint& p : t.points) valid += p.valid;
         if (valid < 10) {

@@ -61,8 +61,14 @@ ShapeCalibration calibrate_slow_share(const std::vector<std::string>& logs, cons
         const std::vector<std::string>& used = k == 0 ? logs : out.logs;
         for (size_t i = 0; i < used.size(); ++i) {
             double final_ah = 0.0, rest_ah = 0.0;
-            read_capacities(replay_log(used[i], opt), final_ah, rest_ah);
+            const nlohmann::json summary = replay_log(used[i], opt);
+            read_capacities(summary, final_ah, rest_ah);
             if (k == 0) {
+                // The real cause when a log has no rest: a config for another pack keeps its
+                // samples out, which "no rest" alone had hidden.
+                for (const std::string& note : other_pack_notes(summary))
+                    out.notes.push_back(used[i] + ": " + note);
+                if (summary["samples"]["valid"] == 0) out.notes.push_back(used[i] + ": no valid sample (every one kept out by the config's sensor limits)");
                 if (!(rest_ah > 0.0) || !(final_ah > 0.0)) {
                     out.logs_without_rest.push_back(used[i]);
                     continue;

@@ -54,6 +54,7 @@ Trace load_trace(const std::string& path, const ReaderOptions& reader, const Loa
     t.info.cell_count = input["cells"].get<int>();
     t.info.has_temperature = input["has_temperature"].get<bool>();
     for (const auto& note : input["notes"]) t.info.notes.push_back(note.get<std::string>());
+    t.config_notes = other_pack_notes(summary);
     // The summary's flight window: initialised valid samples from the first flying sample
     // to the last flying one.
     long first_flying = -1, last_flying = -1;

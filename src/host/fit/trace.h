@@ -39,6 +39,7 @@ struct Trace {
     long settle_index = -1;  // first initialised sample; -1 = never initialised
     float monitor_initial_ah = 0;
     bool has_temperature = false;  // any valid sample carries one
+    std::vector<std::string> config_notes;  // the replay's notes that the config is for another pack (other_pack_notes)
 };
 
 // A trace's label: the file name of `path` without directory and extension.
