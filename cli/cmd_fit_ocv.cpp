@@ -139,6 +139,13 @@ std::function<int()> setup(CLI::App& sub) {
                                                    text_output("--report", a->report),
                                                    {"--plot", a->plot}};
         if (int rc = check_outputs(command, inputs, outputs)) return rc;
+        // A held-out log that is also fitted tests nothing: its "test" error was the fit's own.
+        for (const std::string& t : a->test_logs)
+            for (const host::fit::OcvStitchLog& l : logs)
+                if (host::same_output_file(t, l.path)) {
+                    std::cerr << command << ": " << t << " is both fitted and held out (--test): give it once\n";
+                    return kExitUsage;
+                }
         if (a->test_every > 0)
             for (size_t k = 0; k < logs.size(); ++k) logs[k].test = k % a->test_every == 1 % a->test_every;
         for (const std::string& p : a->test_logs) logs.push_back({p, reader, true});

@@ -204,6 +204,12 @@ TEST_CASE("bench batch refuses logs that do not replay instead of timing them", 
     const auto r = run("bench batch " + q(kExample) + " /nonexistent/x.csv --min-time 0 --min-runs 1");
     CHECK(r.exit_code == 3);
     CHECK_THAT(r.err, Catch::Contains("/nonexistent/x.csv: cannot open file"));
+    // No run is no figure: it had printed "runs: 0" and rates of 0.0 with exit 0.
+    for (const char* kind : {"replay", "batch"}) {
+        const auto none = run(std::string("bench ") + kind + " " + q(kExample) + " --min-time 0 --min-runs 0");
+        CHECK(none.exit_code == 2);
+        CHECK_THAT(none.err, Catch::Contains("--min-runs: Value 0 not in range 1"));
+    }
 }
 
 TEST_CASE("averaging into minute-long windows is not taken for a time column in milliseconds", "[cli]") {

@@ -131,6 +131,11 @@ TEST_CASE("fit-ocv says when its config is for another pack than the flights'", 
         said = said || n.get<std::string>().find("example-4s.csv: the log has 4 cell voltages but the config 6 cells") == 0 ||
                n.get<std::string>().find("/logs/example-4s.csv: the log has 4 cell voltages") != std::string::npos;
     CHECK(said);
+    // One log both fitted and held out tests nothing: refused.
+    const auto twice = run("fit-ocv " + q(kSource + "/logs/example-4s.csv") + " --test " + q(kSource + "/logs/example-4s.csv") +
+                           " -c " + q(kSource + "/configs/sim-4s.json"));
+    CHECK(twice.exit_code == 2);
+    CHECK_THAT(twice.err, Catch::Contains("is both fitted and held out (--test)"));
     // Its own config: no such note.
     const auto own = clitest::run_json("fit-ocv " + q(kSource + "/logs/example-4s.csv") + " -c " +
                                        q(kSource + "/configs/sim-4s.json") + " --json");
