@@ -83,8 +83,8 @@ public:
         }
         return false;
     }
-    // A device waiting for its host: "BMS" until greeted, then "hello" and the header.
-    void handshake(const std::string& header) {
+    // A device waiting for its host: "BMS" until greeted, then "hello" (and the header next).
+    void await_greeting() {
         bool greeted = false;
         for (int i = 0; i < 100 && !greeted; ++i) {
             send("BMS\r\n");
@@ -92,6 +92,9 @@ public:
         }
         REQUIRE(greeted);
         send("hello\r\n");
+    }
+    void handshake(const std::string& header) {
+        await_greeting();
         line(header);
     }
 
@@ -230,13 +233,7 @@ TEST_CASE("serial logger: a damaged header is asked for again, never taken from 
     std::thread logger([&] { stats = run_serial_logger(options(link, out), stop, [](const std::string&) {}); });
     Joiner joiner{stop, logger};
 
-    bool greeted = false;
-    for (int i = 0; i < 100 && !greeted; ++i) {
-        dev.send("BMS\r\n");
-        greeted = dev.heard_hello(100);
-    }
-    REQUIRE(greeted);
-    dev.send("hello\r\n");
+    dev.await_greeting();
     std::string bad = with_checksum(kHeader);
     bad[2] = bad[2] == 'm' ? 'n' : 'm';
     dev.send(bad + "\n");
