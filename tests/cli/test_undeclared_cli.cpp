@@ -125,9 +125,14 @@ TEST_CASE("battsim residual --plot shows every log it traced, up to four", "[cli
     // It had drawn the first log alone: the docs' four-temperature example showed 25 °C only.
     const std::string dir = clitest::temp_dir(), svg = dir + "/two.svg";
     const std::string flights = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/";
-    const json r = clitest::run_json("residual " + clitest::q(flights + "30.csv") + " " + clitest::q(flights + "32.csv") +
-                                     " -c " + clitest::q(kSource + "/configs/reference-modified.json") +
-                                     " --candidates rc_polarisation --max-effects 1 --json --plot " + clitest::q(svg));
+    const clitest::Result run = clitest::run("residual " + clitest::q(flights + "30.csv") + " " + clitest::q(flights + "32.csv") +
+                                             " -c " + clitest::q(kSource + "/configs/reference-modified.json") +
+                                             " --candidates rc_polarisation --max-effects 1 --json --plot " + clitest::q(svg));
+    INFO(run.err);
+    REQUIRE(run.exit_code == 0);
+    const json r = json::parse(run.out);
+    // It says what it is doing: a five-log run had been silent for 79 s after "analysing".
+    CHECK_THAT(run.err, Catch::Contains("battsim residual: effect 1 of at most 1: trying rc_polarisation"));
     CHECK(r["plot"] == svg);
     CHECK_FALSE(r.contains("plot_note"));
     const std::string text = clitest::read_file(svg);

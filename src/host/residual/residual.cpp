@@ -522,7 +522,8 @@ Structure residual_structure(const std::vector<Trace>& traces, const std::vector
     return s;
 }
 
-ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, const ResidualOptions& options) {
+ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, const ResidualOptions& options,
+                       std::ostream* progress) {
     if (traces.empty()) throw std::invalid_argument("residual: no logs");
     ResidualOptions o = options;
     o.max_capacity_ah = o.max_capacity_factor * spec.battery.capacity_ah;
@@ -562,6 +563,8 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
     rep.structure_before = residual_structure(traces, config_eval.model_v, o.window, o.initial);
 
     // Stage 1: the base parameters (and any extension already configured) refitted.
+    // Each refit takes seconds on long logs: said as it goes, so a minute-long run is not silent.
+    if (progress) *progress << "battsim residual: refitting the parameters\n";
     State current = refit(traces, config, fit::default_parameters(spec), &split.fit, o);
     Eval current_eval = evaluate_state(traces, current, o.initial, split, o.window);
     {
@@ -583,6 +586,9 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
         State best_state;
         int best = -1;
         for (const std::string& name : names) {
+            if (progress)
+                *progress << "battsim residual: effect " << round + 1 << " of at most " << o.max_effects << ": trying " << name
+                          << "\n";
             CandidateScore c;
             c.name = name;
             State trial = current;
@@ -996,7 +1002,7 @@ nlohmann::json run_residual_job(const ResidualJob& job, ResidualReport* out, std
     }
     const ModelSpec spec = fit::spec_from_config(job.config);
     if (progress) *progress << "battsim residual: analysing\n";
-    ResidualReport rep = analyse(traces, spec, job.options);
+    ResidualReport rep = analyse(traces, spec, job.options, progress);
     nlohmann::json j = report_to_json(rep, job.options);
     j["config"] = job.config.name;
     if (!job.output_config.empty()) {

@@ -12,6 +12,7 @@
 // search repeats. Finally the chosen model is refitted on all samples. A candidate that does
 // not pass on held-out data is reported but never added.
 #pragma once
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -99,7 +100,9 @@ struct ResidualReport {
     std::string verdict;
 };
 
-ResidualReport analyse(const std::vector<fit::Trace>& traces, const fit::ModelSpec& spec, const ResidualOptions& options);
+// `progress`, if given, is told each refit and each candidate tried.
+ResidualReport analyse(const std::vector<fit::Trace>& traces, const fit::ModelSpec& spec, const ResidualOptions& options,
+                       std::ostream* progress = nullptr);
 Structure residual_structure(const std::vector<fit::Trace>& traces, const std::vector<std::vector<float>>& model_v,
                              fit::Window window, fit::InitialMode mode);
 
