@@ -338,6 +338,10 @@ void print_brief(const nlohmann::json& s, std::ostream& out) {
         bool pack_kept_out = false;
         for (int f = 1; f < core::kSampleCellVoltage; ++f)
             pack_kept_out = pack_kept_out || rejected.contains(host::sample_fault_key(static_cast<uint8_t>(f)));
+        // The charge of a gap between valid samples is counted at the next one's current.
+        const double span_s = s["samples"].value("rejected_span_s", 0.0);
+        if (pack_kept_out && span_s > 0.0)
+            out << "; " << fixed(span_s, 1) << " s between valid samples, its charge counted at the current after it";
         out << (pack_kept_out ? "; does the config match this pack?\n" : "; a loose balance lead, or a config for another cell count?\n");
     }
     const auto& f = s["flight"];

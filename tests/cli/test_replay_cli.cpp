@@ -133,7 +133,16 @@ TEST_CASE("replay says how many samples the config's sensor limits kept out, and
     // Nothing kept out: an empty object, and no such line.
     const auto clean = clitest::run_json("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --json");
     CHECK(clean["samples"]["rejected"] == nlohmann::json::object());
+    CHECK(clean["samples"]["rejected_span_s"] == 0.0);
     CHECK_THAT(clitest::run("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig)).out, !Catch::Contains("kept out"));
+    // Readings kept out in flight: the time they span is said, as its charge is counted at the
+    // current after it (a 30 A limit on the example's 45 A bursts reads `consumed` 18 % low).
+    nlohmann::json low = nlohmann::json::parse(clitest::read_file(kSource + "/configs/sim-4s.json"));
+    low["sensor"]["max_current_a"] = 30;
+    clitest::write_file(dir + "/max30.json", low.dump());
+    const std::string ex = "replay " + q(kSource + "/logs/example-4s.csv") + " -c " + q(dir + "/max30.json");
+    CHECK(clitest::run_json(ex + " --json")["samples"]["rejected_span_s"].get<double>() == Approx(48.3).margin(0.1));
+    CHECK_THAT(clitest::run(ex).out, Catch::Contains("48.3 s between valid samples, its charge counted at the current after it"));
 }
 
 TEST_CASE("replay --estimator joint reports the cell step check's measurements", "[cli]") {

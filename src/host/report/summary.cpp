@@ -111,7 +111,12 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
     }
     if (s.sensor_fault_cause & core::kFaultCurrentOffset) fault_offset_a_ = s.current_offset_a;
     if (s.sample_fault != core::kSampleOk && s.sample_fault < core::kSampleFaultCount) ++rejected_[s.sample_fault];
-    if (!s.sample_valid) return;
+    if (!s.sample_valid) {
+        after_rejected_ = true;
+        return;
+    }
+    if (after_rejected_ && have_time_) rejected_span_s_ += s.dt_s;
+    after_rejected_ = false;
     ++valid_samples_;
     if (!have_time_) first_time_us_ = s.time_us;
     have_time_ = true;
@@ -211,6 +216,7 @@ json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
     for (int f = 1; f < core::kSampleFaultCount; ++f)
         if (rejected_[f] > 0) rejected[sample_fault_key(static_cast<uint8_t>(f))] = rejected_[f];
     j["samples"]["rejected"] = rejected;
+    j["samples"]["rejected_span_s"] = round_sig(rejected_span_s_, 6);
     j["duration_s"] = have_time_ ? json(round_sig((last_time_us_ - first_time_us_) * 1e-6, 7)) : json(nullptr);
 
     if (!have_flight_) {

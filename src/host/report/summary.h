@@ -81,6 +81,10 @@ private:
     uint64_t take_offs_ = 0;     // flying after a sample that was not (two hops: one window, said)
     bool was_flying_ = false;
     uint64_t rejected_[core::kSampleFaultCount] = {};  // samples (or their cells) kept out, by reason
+    // The time the pack readings kept out spanned: the monitor counts it at the next valid
+    // sample's current, which a limit below the flight's current reads low.
+    double rejected_span_s_ = 0.0;
+    bool after_rejected_ = false;
     bool have_time_ = false, have_flight_ = false;
     uint64_t first_time_us_ = 0, last_time_us_ = 0;
     uint64_t flight_first_us_ = 0, flight_last_us_ = 0;
