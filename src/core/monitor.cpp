@@ -5,17 +5,6 @@
 namespace battsim {
 namespace core {
 
-const char* warning_name(Warning w) {
-    switch (w) {
-        case kWarnLowCapacity: return "low_capacity";
-        case kWarnHighResistance: return "high_resistance";
-        case kWarnCellOutlier: return "cell_outlier";
-        case kWarnSensorFault: return "sensor_fault";
-        case kWarnShortFlight: return "short_flight";
-        default: return "unknown";
-    }
-}
-
 void Monitor::configure(const MonitorConfig& config) {
     config_ = config;
     status_ = MonitorStatus{};

@@ -20,7 +20,6 @@ enum Warning : uint8_t {
     kWarnShortFlight = 4,  // the flight will be > 20 % shorter than a healthy pack's
     kWarnCount = 5,
 };
-const char* warning_name(Warning w);
 
 // Why a sample was kept out (the last sample's; the pack reading's reason wins over the
 // cells'): replay reports them, since a config for another pack rejects whole flights.

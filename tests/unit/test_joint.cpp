@@ -251,6 +251,7 @@ struct Flight {
     bool solves_from_takeoff_soc = true;
     float health_time_share = JointEstimator::Config{}.health_time_share;
     bool verdict = true;  // the verdict's own filter
+    float glitch_at_s = -1.0f;  // one current reading of 100 A at this flight time (a garbled read)
 };
 
 // Flies the plant at the demand profile until the loaded voltage reaches 13.3 V and
@@ -311,7 +312,8 @@ FlightResult fly(const Flight& f) {
     for (float tt = 0.0f; tt < out.true_total_s; tt += dt, t_us += 67000) {
         v = p.step(i, dt);
         const float vm = std::round((v + 0.005f * rng.next()) * 100.0f) / 100.0f;
-        e.update(t_us, vm, i + 0.05f * rng.next(), dt, true);
+        const bool glitch = f.glitch_at_s >= 0.0f && tt >= f.glitch_at_s && tt < f.glitch_at_s + dt;
+        e.update(t_us, vm, glitch ? 100.0f : i + 0.05f * rng.next(), dt, true);
         if (out.first_warning_s < 0.0f && e.status().short_flight) out.first_warning_s = tt;
         if (!recorded && tt >= 0.2f * out.true_total_s) {
             out.at20 = e.status();
@@ -392,6 +394,37 @@ TEST_CASE("Joint estimator on injected packs: capacity, resistance, warnings by 
     CHECK((hover_resistive.end.cause & JointEstimator::kCauseCapacity) == 0);
 }
 
+
+TEST_CASE("Joint estimator: one garbled current reading of 100 A moves neither the resistance nor the capacity", "[joint][truth]") {
+    // A register read garbled to 100 A with no sag to match pairs, on each side, a large
+    // current step with no voltage step: weighted by ΔI² they had pulled R0 to a sixth and
+    // the capacity to half, with a short-flight warning to the landing (glitch at 120 s).
+    Flight hover;
+    hover.hover_w = 250.0f;
+    hover.rest_before_s = 10.0f;
+    const FlightResult clean = fly(hover);
+    for (float at_s : {30.0f, 120.0f}) {
+        hover.glitch_at_s = at_s;
+        const FlightResult glitched = fly(hover);
+        INFO("glitch at " << at_s << " s: end R0 " << glitched.end.resistance_ohm << " Ω (clean " << clean.end.resistance_ohm
+                          << "), capacity " << glitched.end.capacity_ah << " Ah (clean " << clean.end.capacity_ah << ")");
+        CHECK(glitched.end.resistance_ohm == Approx(clean.end.resistance_ohm).epsilon(0.05));
+        CHECK(glitched.end.capacity_ah == Approx(clean.end.capacity_ah).epsilon(0.05));
+        CHECK_FALSE(glitched.end.short_flight);
+        CHECK(glitched.first_warning_s < 0.0f);
+    }
+    // The racing profile's bursts fill the window with large steps: there the glitch's pair
+    // is no larger than the window and counts, but it moves little.
+    Flight racing;
+    const FlightResult racing_clean = fly(racing);
+    racing.glitch_at_s = 30.0f;
+    const FlightResult racing_glitched = fly(racing);
+    INFO("racing: end R0 " << racing_glitched.end.resistance_ohm << " Ω (clean " << racing_clean.end.resistance_ohm
+                           << "), capacity " << racing_glitched.end.capacity_ah << " Ah (clean " << racing_clean.end.capacity_ah << ")");
+    CHECK(racing_glitched.end.resistance_ohm == Approx(racing_clean.end.resistance_ohm).epsilon(0.05));
+    CHECK(racing_glitched.end.capacity_ah == Approx(racing_clean.end.capacity_ah).epsilon(0.05));
+    CHECK(racing_glitched.warned == racing_clean.warned);
+}
 
 TEST_CASE("Joint estimator: early in a flight the remaining time leans on the health filter", "[joint][truth]") {
     // A pack at 70 % of its rated capacity: at 20 % of the flight the tracking filter still

@@ -44,6 +44,10 @@ void DifferenceResistanceEstimator::update(uint64_t time_us, float voltage_v, fl
     const float di = current_a - i_[pick];
     const float dv = voltage_v - v_[pick];
     if (fabsf(di) < config_.min_step_a) return;
+    // A pair that would outweigh the whole window and sits far from the resistance found so
+    // far is a garbled reading, not the pack: one 100 A read with no sag, weighted by ΔI², had
+    // pulled R0 to a sixth. Smaller pairs always count, so a real change is never locked out.
+    if (status_.valid && di * di > sxx_ && fabsf(dv + status_.resistance_ohm * di) > 0.5f * status_.resistance_ohm * fabsf(di) + 0.05f) return;
     sxx_ += di * di;
     sxy_ += di * dv;
     syy_ += dv * dv;

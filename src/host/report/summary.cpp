@@ -7,6 +7,17 @@
 namespace battsim {
 namespace host {
 
+const char* warning_name(core::Warning w) {
+    switch (w) {
+        case core::kWarnLowCapacity: return "low_capacity";
+        case core::kWarnHighResistance: return "high_resistance";
+        case core::kWarnCellOutlier: return "cell_outlier";
+        case core::kWarnSensorFault: return "sensor_fault";
+        case core::kWarnShortFlight: return "short_flight";
+        default: return "unknown";
+    }
+}
+
 using nlohmann::json;
 
 double round_sig(double x, int digits) {
@@ -320,7 +331,7 @@ json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
             const uint8_t bit = static_cast<uint8_t>(1u << w);
             if (!(last_.warnings_raised & bit)) continue;
             json e;
-            e["name"] = core::warning_name(static_cast<core::Warning>(w));
+            e["name"] = warning_name(static_cast<core::Warning>(w));
             e["first_time_s"] = round_sig(last_.warning_time_us[w] * 1e-6, 9);
             e["flight_time_s"] = have_flight_ && last_.warning_time_us[w] >= flight_first_us_
                                      ? json(round_sig((last_.warning_time_us[w] - flight_first_us_) * 1e-6, 7))

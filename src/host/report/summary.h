@@ -12,6 +12,10 @@
 namespace battsim {
 namespace host {
 
+// The warnings' names in summaries and scoreboards (host only: the device sends bits and
+// its own sentences, so the names stay out of the core's flash).
+const char* warning_name(core::Warning w);
+
 constexpr const char* kSummarySchema = "battsim.summary";
 constexpr int kSummaryVersion = 1;
 

@@ -675,7 +675,7 @@ json to_json(const ScoreResult& r) {
             const auto opt = [](bool has, double x) { return has ? json(sim::round_fixed(x, 3)) : json(nullptr); };
             json warn = json::object();
             for (int w = 0; w < core::kWarnCount; ++w) {
-                warn[core::warning_name(static_cast<core::Warning>(w))] =
+                warn[warning_name(static_cast<core::Warning>(w))] =
                     cf.first_warning_s[w] >= 0.0 ? json(sim::round_fixed(cf.first_warning_s[w], 3)) : json(nullptr);
             }
             per[r.columns[c]] = {{"remaining_time_error_pct", {opt(cf.has_rt[0], cf.rt_err[0]), opt(cf.has_rt[1], cf.rt_err[1]), opt(cf.has_rt[2], cf.rt_err[2])}},
