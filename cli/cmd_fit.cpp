@@ -30,7 +30,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--test", a->tests, "Logs to evaluate the fitted model on (not fitted)");
     sub.add_option("--add", a->add,
                    "Enable an extension before fitting: rc[:TAU_S], temperature[:REF_C], thermal[:AMBIENT_C], "
-                   "hysteresis, ocv[:N], sensor, timing (repeatable)");
+                   "hysteresis, ocv[:N], sensor, timing (repeatable; residual's names, such as rc_polarisation or self_heating, also)");
     sub.add_option("--params", a->params, "Parameters to fit (default: e0,r,kappa,a,b,q and those of the enabled extensions; none = only evaluate)")
         ->delimiter(',');
     sub.add_option("--per-log", a->per_log, "Parameters fitted separately for each log (e.g. r,q)")->delimiter(',');

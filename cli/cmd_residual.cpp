@@ -26,7 +26,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--name", a->name, "Name of the written config");
     sub.add_option("--candidates", a->candidates,
                    "Effects to try (default all): rc_polarisation, temperature, self_heating, soc_shape, current_sensor, "
-                   "hysteresis, sample_timing")
+                   "hysteresis, sample_timing (fit --add's rc, thermal, ocv, sensor, timing also)")
         ->delimiter(',');
     sub.add_option("--fixed", a->fixed, "Parameters kept at the config's values (e.g. q when a slow discharge measured it)")
         ->delimiter(',');

@@ -231,6 +231,22 @@ TEST_CASE("small typos that read on unseen: a weak cell twice, a misspelt --fixe
     r = run("residual " + q(kExample) + " -c " + q(kConfig) + " --fixed foo");
     CHECK(r.exit_code == 2);
     CHECK_THAT(r.err, Catch::Contains("--fixed: unknown parameter \"foo\""));
+    CHECK_THAT(r.err, !Catch::Contains("residual: residual:"));
+    // An effect's name from the other command: fit --add's short names in residual and
+    // residual's names in fit --add (both had been refused); an unknown one lists them.
+    r = run("residual " + q(kExample) + " -c " + q(kConfig) + " --candidates thermal --max-effects 1");
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("effect 1 of at most 1: trying self_heating"));
+    r = run("residual " + q(kExample) + " -c " + q(kConfig) + " --candidates rc_polarization");
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains("unknown candidate \"rc_polarization\"; expected rc_polarisation, temperature"));
+    r = run("fit " + q(kExample) + " -c " + q(kConfig) + " --add self_heating --params none --json");
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    r = run("fit " + q(kExample) + " -c " + q(kConfig) + " --add heating");
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains("--add: unknown extension \"heating\"; expected rc, temperature, thermal"));
     // Checked before the replay: an upper-case extension is a PNG as well.
     r = run("replay " + q(kExample) + " -c " + q(kConfig) + " --plot " + q(dir + "/p.TXT"));
     CHECK(r.exit_code == 2);

@@ -137,7 +137,7 @@ TEST_CASE("battsim residual rejects bad input with the documented exit codes", "
     synth::Options o;
     o.flight_s = 20;
     const std::string path = synth::write_log("cli-bad", o);
-    CHECK(WEXITSTATUS(std::system((bin + " residual " + path + " --candidates rc > /dev/null 2>&1").c_str())) == 2);
+    CHECK(WEXITSTATUS(std::system((bin + " residual " + path + " --candidates rcx > /dev/null 2>&1").c_str())) == 2);
     CHECK(WEXITSTATUS(std::system((bin + " residual " + path + " --blocks 3 > /dev/null 2>&1").c_str())) == 2);
     std::remove(path.c_str());
 }

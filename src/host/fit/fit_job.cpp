@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "host/fit/effect_names.h"
 #include "host/io/atomic_file.h"
 #include "host/io/number_text.h"
 #include "host/plot/plot.h"
@@ -32,7 +33,7 @@ std::string join_labels(const std::vector<Trace>& traces) {
 
 std::vector<std::string> enable_extension(ModelSpec& s, const std::string& what) {
     const size_t colon = what.find(':');
-    const std::string name = what.substr(0, colon);
+    const std::string name = extension_name(what.substr(0, colon));
     const bool has_arg = colon != std::string::npos;
     const std::string arg = has_arg ? what.substr(colon + 1) : "";
     if (name == "rc") {
@@ -77,7 +78,7 @@ std::vector<std::string> enable_extension(ModelSpec& s, const std::string& what)
     if (name == "sensor") return {"gain", "offset"};
     if (name == "timing") return {"lead"};
     throw std::invalid_argument("--add: unknown extension \"" + name +
-                                "\"; expected rc, temperature, thermal, hysteresis, ocv, sensor or timing");
+                                "\"; expected rc, temperature, thermal, hysteresis, ocv, sensor or timing (or residual's names: rc_polarisation, self_heating, soc_shape, current_sensor, sample_timing)");
 }
 
 std::string per_log_config_path(const FitJob& job, const std::string& log) {

@@ -6,6 +6,7 @@
 #include <limits>
 #include <ostream>
 
+#include "host/fit/effect_names.h"
 #include "host/io/atomic_file.h"
 #include "host/plot/plot.h"
 #include "host/report/summary.h"
@@ -524,28 +525,33 @@ Structure residual_structure(const std::vector<Trace>& traces, const std::vector
 
 ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, const ResidualOptions& options,
                        std::ostream* progress) {
-    if (traces.empty()) throw std::invalid_argument("residual: no logs");
+    if (traces.empty()) throw std::invalid_argument("no logs");
     ResidualOptions o = options;
     o.max_capacity_ah = o.max_capacity_factor * spec.battery.capacity_ah;
     o.bounds_full_voltage_v = spec.battery.full_voltage_v;
     o.bounds_capacity_ah = spec.battery.capacity_ah;
-    if (o.blocks < 4 || o.blocks % 2 != 0) throw std::invalid_argument("residual: --blocks must be even and at least 4");
+    if (o.blocks < 4 || o.blocks % 2 != 0) throw std::invalid_argument("--blocks must be even and at least 4");
     // A misspelt --fixed name had been ignored, and the parameter fitted after all.
     const std::vector<std::string> known = fit::known_parameter_names();
     for (const std::string& f : o.fixed)
         if (std::find(known.begin(), known.end(), f) == known.end())
-            throw std::invalid_argument("residual: --fixed: unknown parameter \"" + f + "\"");
+            throw std::invalid_argument("--fixed: unknown parameter \"" + f + "\"");
     ResidualReport rep;
     rep.initial = o.initial;
     for (const Trace& t : traces) rep.logs.push_back(t.path);
-    if (o.initial == fit::InitialMode::Monitor) throw std::invalid_argument("residual: the initial charge is free or zero");
+    if (o.initial == fit::InitialMode::Monitor) throw std::invalid_argument("the initial charge is free or zero");
     const Split split = make_split(traces, o.window, o.initial, o.blocks);
     const fit::InitialMode config_mode = o.initial == fit::InitialMode::Zero ? fit::InitialMode::Zero : fit::InitialMode::Monitor;
     std::vector<std::string> names = o.candidates.empty() ? candidate_names() : o.candidates;
-    for (const std::string& n : names) {
+    for (std::string& n : names) {
+        n = fit::candidate_name(n);  // fit --add's short names (rc, thermal, ocv, sensor, timing) too
         const std::vector<std::string> known = candidate_names();
-        if (std::find(known.begin(), known.end(), n) == known.end())
-            throw std::invalid_argument("residual: unknown candidate \"" + n + "\"");
+        if (std::find(known.begin(), known.end(), n) == known.end()) {
+            std::string list;
+            for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+            throw std::invalid_argument("unknown candidate \"" + n + "\"; expected " + list +
+                                        " (or fit --add's names: rc, thermal, ocv, sensor, timing)");
+        }
     }
 
     // Stage 0: the config as given, run as the monitor runs it.
