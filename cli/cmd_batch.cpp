@@ -105,7 +105,7 @@ int run(const BatchArgs& a) {
         text_output(a.output_given ? "-o/--output" : "the table (standard output without -o)", a.output),
         text_output("--packs", a.packs),
         text_output("--monitors", a.monitors),
-        {"--out", a.out_dir}};
+        {"--out", a.out_dir, false, host::Dash::Refused, true}};
     for (const host::BatchItem& it : items) {
         if (!a.compare.empty())
             inputs.push_back({"--compare's " + it.stem + ".json", (fs::path(a.compare) / (it.stem + ".json")).string()});
@@ -113,17 +113,6 @@ int run(const BatchArgs& a) {
             outputs.push_back({"--out's " + it.stem + ".json", (fs::path(a.out_dir) / (it.stem + ".json")).string()});
     }
     if (int rc = check_outputs("battsim batch", inputs, outputs)) return rc;
-    // A fleet takes minutes: an output that cannot be written is said before, not after.
-    for (const auto& [what, path] : {std::pair<const char*, const std::string&>{"-o/--output", a.output},
-                                     {"--packs", a.packs},
-                                     {"--monitors", a.monitors}}) {
-        const std::string why = host::unwritable_reason(path);
-        if (!why.empty()) {
-            std::cerr << me << what << ": cannot write " << path << ": " << why << "\n";
-            return kExitOutputError;
-        }
-    }
-
     // What each config makes unreliable, once per config: the table only counts notes, and a
     // fleet replayed with the joint estimator and no OCV table reads plausible nonsense.
     std::map<std::string, size_t> noted;

@@ -66,7 +66,7 @@ std::function<int()> setup(CLI::App& sub) {
                                              text_output("-o/--output", a->output, true),
                                              text_output("--report", a->common.report),
                                              {"--plot", a->common.plot},
-                                             {"--output-dir", a->output_dir}};
+                                             {"--output-dir", a->output_dir, false, host::Dash::Refused, true}};
         // One config per log: none may land on a log or the config read (a log's stem is its
         // name there), nor two logs of one stem on one file.
         if (!a->output_dir.empty()) {

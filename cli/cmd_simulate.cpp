@@ -82,7 +82,7 @@ std::function<int()> setup(CLI::App& sub) {
         // Where each scenario's log and truth go, checked against the scenarios and each other
         // before any is flown (two scenarios of one name in --out-dir, say).
         std::vector<std::pair<std::string, std::string>> targets;
-        std::vector<host::NamedPath> inputs, outputs{{"--out-dir", a->out_dir}};
+        std::vector<host::NamedPath> inputs, outputs{{"--out-dir", a->out_dir, false, host::Dash::Refused, true}};
         add_named(inputs, "a scenario", files);
         for (const host::sim::Scenario& s : scenarios) {
             if (!a->out_dir.empty()) {

@@ -210,6 +210,14 @@ int check_outputs(const std::string& command, const std::vector<host::NamedPath>
         std::cerr << command << ": " << e.what() << "\n";
         return kExitUsage;
     }
+    // Said before the work: a run that fails at its last output had thrown the work away,
+    // and had already replaced the outputs written before it.
+    std::string what, path;
+    const std::string why = host::first_unwritable_output(outputs, &what, &path);
+    if (!why.empty()) {
+        std::cerr << command << ": " << what << ": cannot write " << path << ": " << why << "\n";
+        return kExitOutputError;
+    }
     return kExitOk;
 }
 

@@ -62,8 +62,9 @@ int finish_report(const std::string& command, const nlohmann::json& report, cons
 // kExitOk if `path` is empty or a plot name (.png, .svg); else says why, kExitUsage. Checked
 // before the work, so a typo does not cost a long run.
 int check_plot_option(const std::string& command, const std::string& path);
-// kExitOk unless an output names an input or another output's file (host::check_output_paths);
-// then says which, prefixed with `command`, and returns kExitUsage. Called before the work.
+// kExitOk unless an output names an input or another output's file (host::check_output_paths;
+// kExitUsage) or cannot be written (host::first_unwritable_output; kExitOutputError); then
+// says which, prefixed with `command`. Called before the work.
 int check_outputs(const std::string& command, const std::vector<host::NamedPath>& inputs,
                   const std::vector<host::NamedPath>& outputs);
 // An output of text that "-" sends to standard output (a table, a CSV, a JSON document).

@@ -339,3 +339,68 @@ TEST_CASE("standard output by another name is standard output: /dev/stdout besid
     CHECK(read_file(dir + "/rc.txt") == "2\n");
     CHECK_THAT(read_file(dir + "/err.txt"), Catch::Contains("would both write to standard output"));
 }
+
+TEST_CASE("an output that cannot be written is said before the work, and no other output is replaced", "[cli][paths]") {
+    // replay had written the series, then failed on the summary: the old series was gone and
+    // the run failed anyway (fit, residual and fit-ocv the same, after their whole fit).
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/log.csv", testsupport::raw_flight(12, 0.001));
+    clitest::write_file(dir + "/s.csv", "old series\n");
+    clitest::write_file(dir + "/cfg.json", "old config\n");
+    clitest::Result r = run("replay " + q(dir + "/log.csv") + " -c " + q(kConfig) + " --series " + q(dir + "/s.csv") +
+                            " --summary " + q(dir + "/nodir/s.json"));
+    CHECK(r.exit_code == 5);
+    CHECK_THAT(r.err, Catch::Contains("--summary: cannot write " + dir + "/nodir/s.json: the directory " + dir +
+                                      "/nodir does not exist"));
+    CHECK(read_file(dir + "/s.csv") == "old series\n");
+    r = run("residual " + q(dir + "/log.csv") + " -c " + q(kConfig) + " -o " + q(dir + "/cfg.json") + " --report " +
+            q(dir + "/nodir/r.json"));
+    CHECK(r.exit_code == 5);
+    CHECK_THAT(r.err, Catch::Contains("--report: cannot write"));
+    CHECK_THAT(r.err, !Catch::Contains("analysing"));  // before the work
+    CHECK(read_file(dir + "/cfg.json") == "old config\n");
+    // A directory a command makes is made, with its parents (fit --output-dir had not been).
+    r = run("fit " + q(dir + "/log.csv") + " -c " + q(kConfig) + " --params none --output-dir " + q(dir + "/made/deeper"));
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    CHECK(fs::exists(dir + "/made/deeper/fitted-log.json"));
+    r = run("fit " + q(dir + "/log.csv") + " -c " + q(kConfig) + " --params none --output-dir " + q(dir + "/s.csv/sub"));
+    CHECK(r.exit_code == 5);
+    CHECK_THAT(r.err, Catch::Contains("--output-dir: cannot write " + dir + "/s.csv/sub: " + dir + "/s.csv is not a directory"));
+}
+
+TEST_CASE("an output keeps the permissions of the file it replaces; a name near the limit is written", "[cli][paths]") {
+    const std::string dir = clitest::temp_dir(), priv = dir + "/private.json";
+    clitest::write_file(priv, "{}\n");
+    fs::permissions(priv, fs::perms::owner_read | fs::perms::owner_write);
+    clitest::Result r = run("make-config --cells 4 --capacity-mah 1500 -o " + q(priv));
+    REQUIRE(r.exit_code == 0);
+    CHECK(fs::status(priv).permissions() == (fs::perms::owner_read | fs::perms::owner_write));
+    CHECK(read_file(priv).size() > 100);
+    // 250 characters: the temporary beside it (".tmp.<pid>.<n>") had passed the 255 the file
+    // system allows, and a name the user may create could not be written.
+    const std::string long_name = dir + "/" + std::string(245, 'c') + ".json";
+    r = run("make-config --cells 4 --capacity-mah 1500 -o " + q(long_name));
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    CHECK(fs::exists(long_name));
+    CHECK(temporaries(dir).empty());
+}
+
+TEST_CASE("a reader of standard output gone, or a hang-up, leaves no temporary file", "[cli][paths]") {
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/log.csv", testsupport::raw_flight(12, 0.001));
+    // `| head -1`: the series on standard output, the MAVLink stream into a file.
+    std::string cmd = q(BATTSIM_BINARY) + " replay " + q(dir + "/log.csv") + " -c " + q(kConfig) + " --mavlink " +
+                      q(dir + "/m.bin") + " --series - 2>/dev/null | head -1 > /dev/null";
+    std::system(cmd.c_str());
+    CHECK(temporaries(dir).empty());
+    for (const char* sig : {"HUP"}) {
+        cmd = "timeout --preserve-status -s " + std::string(sig) + " 1 " + q(BATTSIM_BINARY) + " replay " + q(dir + "/log.csv") +
+              " -c " + q(kConfig) + " --realtime --series " + q(dir + "/rt.csv") + " 2>/dev/null";
+        std::system(cmd.c_str());
+        INFO(sig);
+        CHECK(temporaries(dir).empty());
+        CHECK_FALSE(fs::exists(dir + "/rt.csv"));
+    }
+}

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <stdexcept>
 
 #include "host/fit/effect_names.h"
@@ -167,6 +168,10 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
         written.push_back(job.output_config);
     }
     if (!job.output_dir.empty()) {
+        // As batch --out and simulate --out-dir: a directory not there yet is made.
+        std::error_code ec;
+        std::filesystem::create_directories(job.output_dir, ec);
+        if (ec) throw std::runtime_error(job.output_dir + ": cannot create the directory (" + ec.message() + ")");
         for (size_t t = 0; t < traces.size(); ++t) {
             const std::string name = (job.name.empty() ? std::string("fitted") : job.name) + "-" + traces[t].label;
             const std::string path = per_log_config_path(job, traces[t].path);

@@ -24,7 +24,15 @@ namespace {
 std::string temp_name(const std::string& path) {
     // Unique per process and per call, so parallel writers never share a temporary.
     static std::atomic<unsigned> counter{0};
-    return path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+    const std::string suffix = ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+    // The name beside a target whose own name is near the file system's limit (255 bytes)
+    // is cut, or a name the user may create could not be written.
+    constexpr size_t kNameMax = 255;
+    const size_t slash = path.rfind('/');
+    const size_t name_start = slash == std::string::npos ? 0 : slash + 1;
+    const size_t name_size = path.size() - name_start;
+    if (name_size + suffix.size() <= kNameMax) return path + suffix;
+    return path.substr(0, name_start + kNameMax - suffix.size()) + suffix;
 }
 
 // The temporaries alive now, for the signal handler: it may neither lock nor allocate, so a
@@ -103,7 +111,8 @@ std::string resolve_output_path(const std::string& path) {
 void install_temp_cleanup_on_signals() {
     static std::once_flag once;
     std::call_once(once, [] {
-        for (int sig : {SIGINT, SIGTERM}) {
+        // SIGPIPE: a reader of standard output gone (`| head`); SIGHUP: the terminal closed.
+        for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE}) {
             struct sigaction old {};
             if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) continue;
             struct sigaction act {};
@@ -147,6 +156,10 @@ AtomicFile::AtomicFile(const std::string& path) : path_(path) {
         unregister_temp(temp_slot_);
         throw std::runtime_error(path + ": cannot create output (" + std::strerror(err) + ")");
     }
+    // The file it replaces keeps its permissions (a config made private stays private).
+    struct stat old_target {};
+    if (!direct_ && exists && ::stat(target_.c_str(), &old_target) == 0)
+        (void)::fchmod(::fileno(file_), old_target.st_mode & 07777);
 }
 
 AtomicFile::~AtomicFile() {

@@ -13,6 +13,8 @@ public:
     // replaces, so the link stays. An existing target that is not a regular file (a terminal,
     // /dev/null, a FIFO) is written straight, without a temporary: it cannot be renamed over.
     // "-" is standard output, written straight too.
+    // An existing target's permissions carry over to the file that replaces it; a hard link
+    // to the old file keeps the old contents (the rename gives the name a new file).
     explicit AtomicFile(const std::string& path);  // throws std::runtime_error if it cannot create
     ~AtomicFile();                                 // discards the temporary if not committed
     AtomicFile(const AtomicFile&) = delete;
@@ -63,7 +65,8 @@ void write_file_atomic(const std::string& path, const std::string& text);
 // would create): the file a write replaces. Throws std::runtime_error on a loop of links.
 std::string resolve_output_path(const std::string& path);
 
-// Installs SIGINT and SIGTERM handlers (once; a signal already ignored stays ignored) that
+// Installs SIGINT, SIGTERM, SIGHUP, SIGQUIT and SIGPIPE handlers (once; a signal already
+// ignored stays ignored) that
 // remove the temporaries of the AtomicFiles still open and the ScratchFiles, then die of the
 // same signal.
 void install_temp_cleanup_on_signals();

@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <stdexcept>
@@ -103,6 +104,51 @@ std::string unwritable_reason(const std::string& path) {
     if (!S_ISDIR(st.st_mode)) return dir + " is not a directory";
     // The temporary beside the file is created there, then renamed over it.
     if (::access(dir.c_str(), W_OK | X_OK) != 0) return "no permission to write in " + dir;
+    return "";
+}
+
+std::string unwritable_directory_reason(const std::string& path) {
+    if (path.empty()) return "";
+    struct stat st {};
+    fs::path p(path);
+    if (::stat(p.c_str(), &st) == 0) {
+        if (!S_ISDIR(st.st_mode)) return path + " is not a directory";
+        if (::access(p.c_str(), W_OK | X_OK) != 0) return "no permission to write in " + path;
+        return "";
+    }
+    // Made with its parents: the nearest one there must be a directory to write in.
+    for (p = p.lexically_normal().parent_path(); !p.empty(); p = p.parent_path()) {
+        if (::stat(p.c_str(), &st) != 0) {
+            if (p == p.root_path()) break;
+            continue;
+        }
+        if (!S_ISDIR(st.st_mode)) return p.string() + " is not a directory";
+        if (::access(p.c_str(), W_OK | X_OK) != 0) return "no permission to write in " + p.string();
+        return "";
+    }
+    return ::access(".", W_OK | X_OK) == 0 ? "" : "no permission to write in the current directory";
+}
+
+std::string first_unwritable_output(const std::vector<NamedPath>& outputs, std::string* what, std::string* path) {
+    std::vector<fs::path> dirs;
+    for (const NamedPath& out : outputs)
+        if (out.directory && !out.path.empty()) dirs.push_back(fs::path(out.path).lexically_normal());
+    for (const NamedPath& out : outputs) {
+        if (out.path.empty() || out.path == "-") continue;
+        std::string why;
+        if (out.directory) {
+            why = unwritable_directory_reason(out.path);
+        } else {
+            const fs::path parent = fs::path(out.path).lexically_normal().parent_path();
+            if (std::find(dirs.begin(), dirs.end(), parent) != dirs.end()) continue;  // its directory's check covers it
+            why = unwritable_reason(out.path);
+        }
+        if (!why.empty()) {
+            *what = out.what;
+            *path = out.path;
+            return why;
+        }
+    }
     return "";
 }
 

@@ -19,6 +19,9 @@ struct NamedPath {
     // whole before the run, and writing it back updated is the point (`--config-out PACK.json`).
     bool config = false;
     Dash dash = Dash::Refused;  // outputs only
+    // An output directory the command makes when it is not there (batch --out): checked as
+    // a directory, and the files listed inside it are not asked for a directory that exists.
+    bool directory = false;
 };
 
 // Throws std::invalid_argument("--series and the log name the same file: X") when an output
@@ -39,6 +42,15 @@ bool names_standard_output(const std::string& path);
 // to write in /x"), "" when it can (or it is "-", a device, a FIFO). For commands whose run is
 // long, checked before it, so a typo in -o does not throw the run away.
 std::string unwritable_reason(const std::string& path);
+
+// The same for a directory the command makes (with its parents) and writes files in: ""
+// when it is one, or when the nearest existing one above it can be written in.
+std::string unwritable_directory_reason(const std::string& path);
+
+// The first output of `outputs` that cannot be written, with why ("" when all can): each file
+// by unwritable_reason, unless it lies in one of the directory outputs; each directory by
+// unwritable_directory_reason. `what` is set to the output's NamedPath::what.
+std::string first_unwritable_output(const std::vector<NamedPath>& outputs, std::string* what, std::string* path);
 
 // True when `a` and `b` name the same regular file, or the same file to be created.
 bool same_output_file(const std::string& a, const std::string& b);

@@ -1,14 +1,11 @@
 #include "host/score/scoreboard.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
-#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <mutex>
@@ -17,6 +14,7 @@
 #include <thread>
 
 #include "host/report/summary.h"
+#include "host/io/atomic_file.h"
 #include "host/io/sample_reader.h"
 #include "host/stats.h"
 #include "host/sim/det_math.h"
@@ -28,7 +26,6 @@ namespace score {
 namespace {
 
 using nlohmann::json;
-namespace fs = std::filesystem;
 
 // Cell `cell` (0-based) is one of the flight's outlier cells (by the truth).
 bool is_outlier(const std::vector<int>& outlier_cells, int cell) {
@@ -163,14 +160,6 @@ std::vector<core::Sample> read_samples(const std::string& path, const sim::Simul
     core::Sample s;
     while (reader->next(s)) out.push_back(s);
     return out;
-}
-
-std::string make_temp_dir() {
-    std::string base = fs::temp_directory_path().string() + "/battsim-score-XXXXXX";
-    std::vector<char> buf(base.begin(), base.end());
-    buf.push_back('\0');
-    if (!mkdtemp(buf.data())) throw std::runtime_error("cannot create a temporary directory under " + fs::temp_directory_path().string());
-    return std::string(buf.data());
 }
 
 // --- aggregation -----------------------------------------------------------------------
@@ -407,7 +396,6 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& suite, const std::
     }
     result.flights.resize(scenarios.size());
     std::vector<std::exception_ptr> errors(scenarios.size());
-    const std::string tmp = options.logs_dir.empty() ? make_temp_dir() : std::string();
 
     std::atomic<size_t> next{0};
     const auto worker = [&]() {
@@ -419,13 +407,15 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& suite, const std::
                 so.keep_snapshots = true;
                 const sim::SimulationResult simr = sim::simulate(scenarios[i], so);
                 std::string path;
-                bool remove = false;
+                // The log goes through a file, as a user's would; a scratch file, so that a
+                // signal removes it too.
+                std::unique_ptr<ScratchFile> scratch;
                 if (options.logs_dir.empty()) {
-                    path = tmp + "/" + std::to_string(i) + ".csv";
+                    scratch = std::make_unique<ScratchFile>("battsim-score-");
+                    path = scratch->path();
                     std::ofstream out(path, std::ios::binary);
                     out << simr.log_text;
                     if (!out) throw std::runtime_error(path + ": cannot write the temporary log");
-                    remove = true;
                 } else {
                     path = options.logs_dir + "/" + simr.scenario.name + ".csv";
                 }
@@ -433,14 +423,13 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& suite, const std::
                 try {
                     samples = read_samples(path, simr);
                 } catch (const InputError& e) {
-                    if (remove) std::remove(path.c_str());
                     // The temporary log is gone by the time this is read: name the scenario.
                     throw InputError(scenarios[i].source_path, 0, 0,
                                      "scenario " + simr.scenario.name + ": its simulated log cannot be read back" +
                                          (e.line() > 0 ? " (line " + std::to_string(e.line()) + ")" : std::string()) +
                                          ": " + e.message());
                 }
-                if (remove) std::remove(path.c_str());
+                scratch.reset();
                 result.flights[i] = score_flight(simr, samples, columns);
                 result.flights[i].copy = copy_of[i];
                 if (simr.truth.sensor_stats.current_clipped > 0)
@@ -465,10 +454,6 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& suite, const std::
     for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
     worker();
     for (std::thread& t : threads) t.join();
-    if (!tmp.empty()) {
-        std::error_code ec;
-        fs::remove_all(tmp, ec);
-    }
     for (const std::exception_ptr& e : errors) {
         if (e) std::rethrow_exception(e);  // the first failing scenario, in suite order
     }
