@@ -76,6 +76,7 @@ std::function<int()> setup(CLI::App& sub) {
             }
         }
         if (int rc = check_outputs(me, inputs, outputs)) return rc;
+        if (int rc = check_logs_once(me, std::vector<host::NamedPath>(inputs.begin() + 1, inputs.end()))) return rc;
         job.options.params = a->params;
         job.options.per_log_params = a->per_log;
         job.options.max_points_per_log = a->max_points;

@@ -146,6 +146,12 @@ std::function<int()> setup(CLI::App& sub) {
                     std::cerr << command << ": " << t << " is both fitted and held out (--test): give it once\n";
                     return kExitUsage;
                 }
+        {
+            std::vector<host::NamedPath> all_logs;
+            for (const host::fit::OcvStitchLog& l : logs) all_logs.push_back({"a log", l.path});
+            add_named(all_logs, "a --test log", a->test_logs);
+            if (int rc = check_logs_once(command, all_logs)) return rc;
+        }
         if (a->test_every > 0)
             for (size_t k = 0; k < logs.size(); ++k) logs[k].test = k % a->test_every == 1 % a->test_every;
         for (const std::string& p : a->test_logs) logs.push_back({p, reader, true});

@@ -60,6 +60,11 @@ std::function<int()> setup(CLI::App& sub) {
             if (!a->logs_dir.empty()) inputs.push_back({"--logs' " + s.name + ".csv", a->logs_dir + "/" + s.name + ".csv"});
         }
         if (int rc = check_outputs("battsim score", inputs, {text_output("-o/--output", a->output)})) return rc;
+        {
+            std::vector<host::NamedPath> files;
+            for (const host::sim::Scenario& s : scenarios) files.push_back({"a scenario", s.source_path});
+            if (int rc = check_logs_once("battsim score", files)) return rc;
+        }
         for (host::sim::Scenario& s : scenarios) {
             if (a->log_format.empty()) continue;
             const std::string problem = host::sim::log_format_problem(a->log_format, s.pack.cells);

@@ -2,11 +2,13 @@
 
 #include <cmath>
 #include <iostream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <stdexcept>
 
 #include "command.h"
+#include "host/batch/inputs.h"
 #include "host/config_reader.h"
 #include "host/io/atomic_file.h"
 #include "host/io/number_text.h"
@@ -217,6 +219,20 @@ int check_outputs(const std::string& command, const std::vector<host::NamedPath>
     if (!why.empty()) {
         std::cerr << command << ": " << what << ": cannot write " << path << ": " << why << "\n";
         return kExitOutputError;
+    }
+    return kExitOk;
+}
+
+int check_logs_once(const std::string& command, const std::vector<host::NamedPath>& logs) {
+    std::map<std::string, const host::NamedPath*> seen;
+    for (const host::NamedPath& log : logs) {
+        if (log.path.empty() || log.path == "-") continue;
+        const auto [it, fresh] = seen.emplace(host::log_file_key(log.path), &log);
+        if (fresh) continue;
+        const host::NamedPath& first = *it->second;
+        std::cerr << command << ": " << log.what << " \"" << log.path << "\" names the same file as " << first.what
+                  << " \"" << first.path << "\"; give each once (twice, it would count twice)\n";
+        return kExitUsage;
     }
     return kExitOk;
 }

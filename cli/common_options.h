@@ -67,6 +67,10 @@ int check_plot_option(const std::string& command, const std::string& path);
 // says which, prefixed with `command`. Called before the work.
 int check_outputs(const std::string& command, const std::vector<host::NamedPath>& inputs,
                   const std::vector<host::NamedPath>& outputs);
+// kExitOk unless two of `logs` name one file (by any name: a link, "./x" beside "x"); then
+// says which, prefixed with `command`, and returns kExitUsage. A log given twice weighs
+// twice in a fit, doubles a test's evidence, or counts twice in a score.
+int check_logs_once(const std::string& command, const std::vector<host::NamedPath>& logs);
 // An output of text that "-" sends to standard output (a table, a CSV, a JSON document).
 host::NamedPath text_output(const std::string& what, const std::string& path, bool config = false);
 // A flag that prints a document on standard output (--json), as check_outputs' output "-":

@@ -20,6 +20,7 @@ namespace {
 // lost the pack: the simulated suites' flights sit at 0.5–13 mV per cell, the dissertation's
 // racing flights at 6–28 mV, the Matrice 100's middle half at 7–38 mV.
 constexpr double kLostModelVPerCell = 0.25;
+constexpr double kMaxRealtimeWaitS = 2.0;  // --realtime: the longest wait for one sample
 
 // Two misreadings no reader can tell from the data alone, and no number shows: a log that
 // counts discharge as negative flies nothing, and a time column in milliseconds read as
@@ -36,9 +37,18 @@ public:
             varied_ = varied_ || s.voltage_v != first_v_;
             ++voltages_;
         }
-        if (have_ && s.time_us > last_us_) intervals_s_.push_back(static_cast<double>(s.time_us - last_us_) * 1e-6);
+        if (have_ && s.time_us > last_us_) {
+            const double step_s = static_cast<double>(s.time_us - last_us_) * 1e-6;
+            intervals_s_.push_back(step_s);
+            if (step_s > longest_s_) {
+                longest_s_ = step_s;
+                longest_at_s_ = static_cast<double>(last_us_ - first_us_) * 1e-6;
+                longest_mah_ = 0.5 * (static_cast<double>(last_a_) + static_cast<double>(s.current_a)) * step_s / 3.6;
+            }
+        }
         if (!have_) first_us_ = s.time_us;
         last_us_ = s.time_us;
+        last_a_ = s.current_a;
         have_ = true;
         if (std::isfinite(s.current_a)) {
             min_a_ = std::min(min_a_, static_cast<double>(s.current_a));
@@ -99,6 +109,16 @@ public:
                           core::DifferenceResistanceEstimator::kHistory, fastest_s * 1e3, std::ceil(fastest_s * 1e3));
             out.push_back(buf);
         }
+        // A clock that jumps (a logging gap, or two sessions in one file): the monitor counts
+        // the charge over it at the currents either side, and a flight's time spans it.
+        if (dt_s > 0.0 && longest_s_ > kLongestGapS && longest_s_ > kGapMedians * dt_s) {
+            std::snprintf(buf, sizeof buf,
+                          "the log's clock jumps %.4g s at %.4g s into the log (a logging gap, or two sessions in one "
+                          "file): the charge over the gap is counted at the currents either side (%.4g mAh) and a "
+                          "flight's time spans it; replay two sessions apart",
+                          longest_s_, longest_at_s_, std::isfinite(longest_mah_) ? longest_mah_ : 0.0);
+            out.push_back(buf);
+        }
         // A log written once a second (ArduCopter 3.0's CURR rows): no pair is close enough,
         // so R0 is never measured and a resistive pack hides (underpowered.log, README).
         if (flew && lags.slowest_s > 0.0 && dt_s > lags.slowest_s) {
@@ -118,11 +138,15 @@ private:
     static constexpr double kFastestIntervalS = 1e-3;  // a flight controller's blackbox at most
     static constexpr double kShortestSpanS = 10.0;
     static constexpr long kCoarseMinSamples = 20;
+    static constexpr double kLongestGapS = 60.0;  // and kGapMedians of the usual interval
+    static constexpr double kGapMedians = 100.0;
     bool coarse_ = true, varied_ = false;
     float first_v_ = 0.0f;
     long voltages_ = 0;
     std::vector<double> intervals_s_;
     uint64_t first_us_ = 0, last_us_ = 0;
+    float last_a_ = 0.0f;
+    double longest_s_ = 0.0, longest_at_s_ = 0.0, longest_mah_ = 0.0;  // the longest interval, where, its charge
     bool have_ = false;
     double min_a_ = INFINITY, max_a_ = -INFINITY;
 };
@@ -157,9 +181,11 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     bool first = true;
     uint64_t t0_us = 0;
     const auto wall0 = std::chrono::steady_clock::now();
+    double paced_us = 0.0;  // --realtime: the log's time paced so far (gaps shortened)
+    uint64_t paced_last_us = 0;
     while (reader->next(sample)) {
         if (first) {
-            t0_us = sample.time_us;
+            t0_us = paced_last_us = sample.time_us;
             if (!options.series_path.empty()) {
                 series_cells = sample.cell_count;
                 series = std::make_unique<SeriesWriter>(options.series_path, series_cells);
@@ -168,9 +194,14 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
         }
         rest.add(sample);
         if (options.realtime_speed > 0) {
-            // Pace only the output; the monitor still sees the log's time stamps.
-            const auto due = wall0 + std::chrono::microseconds(static_cast<int64_t>(
-                                         (sample.time_us - t0_us) / options.realtime_speed));
+            // Pace only the output; the monitor still sees the log's time stamps. A gap in the
+            // log is waited out for at most kMaxRealtimeWaitS (a clock that jumped by hours
+            // had the replay sleep silently for as long).
+            const double max_step_us = kMaxRealtimeWaitS * 1e6 * options.realtime_speed;
+            if (sample.time_us > paced_last_us)
+                paced_us += std::min(static_cast<double>(sample.time_us - paced_last_us), max_step_us);
+            paced_last_us = std::max(paced_last_us, sample.time_us);
+            const auto due = wall0 + std::chrono::microseconds(static_cast<int64_t>(paced_us / options.realtime_speed));
             std::this_thread::sleep_until(due);
         }
         shape.add(sample);

@@ -3,10 +3,14 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <sys/wait.h>
+
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 
 #include "cli_util.h"
+#include "raw_logs.h"
 
 using clitest::q;
 using clitest::run;
@@ -347,4 +351,61 @@ TEST_CASE("log --port names what it expected when the path is no serial device",
     clitest::write_file(dir + "/kept.csv", "");
     CHECK(run("log --port /dev/null --out " + q(dir + "/kept.csv") + " --max-wait 1").exit_code == 2);
     CHECK(std::filesystem::exists(dir + "/kept.csv"));
+}
+
+TEST_CASE("a log whose clock jumps is said, and --realtime does not wait the jump out", "[cli]") {
+    // Two sessions in one file, an hour apart: the charge over the hour was counted at the
+    // currents either side without a word (with the reference estimator), and --realtime
+    // slept through the hour.
+    const std::string dir = clitest::temp_dir();
+    std::string text = testsupport::raw_flight(12, 0.001), jumped;
+    size_t row = 0, start = 0;
+    for (size_t end; (end = text.find('\n', start)) != std::string::npos; start = end + 1, ++row) {
+        std::string line = text.substr(start, end - start + 1);
+        if (row >= 300) {
+            const size_t comma = line.find(',');
+            line = std::to_string(std::stol(line.substr(0, comma)) + 3600000) + line.substr(comma);
+        }
+        jumped += line;
+    }
+    clitest::write_file(dir + "/two.csv", jumped);
+    auto r = run("replay " + q(dir + "/two.csv") + " -c " + q(kConfig) + " --json");
+    REQUIRE(r.exit_code == 0);
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    bool said = false;
+    for (const auto& note : j["input"]["notes"])
+        said = said || note.get<std::string>().find("the log's clock jumps 3600 s at") == 0;
+    CHECK(said);
+    // The unbroken log has no such note.
+    clitest::write_file(dir + "/one.csv", text);
+    r = run("replay " + q(dir + "/one.csv") + " -c " + q(kConfig) + " --json");
+    CHECK(r.out.find("clock jumps") == std::string::npos);
+    // 37 s of log at 10 x: about 4 s, plus at most 2 s for the jump (it had waited 360 s).
+    const std::string cmd = "timeout 60 " + q(BATTSIM_BINARY) + " replay " + q(dir + "/two.csv") + " -c " + q(kConfig) +
+                            " --realtime --speed 10 --series " + q(dir + "/s.csv") + " > /dev/null 2>&1";
+    const int status = std::system(cmd.c_str());
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 0);  // 124: timeout stopped it
+}
+
+TEST_CASE("a log given twice is refused where it would count twice: fit, residual, fit-ocv, score", "[cli]") {
+    // Twice, it had weighed double: fit's standard errors fell by √2, residual's test took
+    // an effect one copy does not earn, fit-ocv fitted "2 flights", score scored 2.
+    const std::string dir = clitest::temp_dir();
+    std::filesystem::copy_file(kExample, dir + "/a.csv");
+    std::filesystem::create_symlink(dir + "/a.csv", dir + "/link.csv");
+    const std::string a = q(dir + "/a.csv"), other = q(dir + "/./link.csv");
+    for (const std::string& args : {"fit " + a + " " + other + " -c " + q(kConfig) + " --params none",
+                                    "fit " + a + " -c " + q(kConfig) + " --params none --test " + other,
+                                    "residual " + a + " " + other + " -c " + q(kConfig),
+                                    "fit-ocv " + a + " " + other + " -c " + q(kConfig) + " -o " + q(dir + "/t.json")}) {
+        const auto r = run(args);
+        INFO(args);
+        CHECK(r.exit_code == 2);
+        CHECK_THAT(r.err, Catch::Contains("names the same file as a log \"" + dir + "/a.csv\"; give each once"));
+    }
+    const std::string scenario = kSource + "/configs/scenarios/3s-hover-healthy.json";
+    const auto r = run("score " + q(kSource + "/configs/scenarios") + " " + q(scenario));
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains("a scenario \"" + scenario + "\" names the same file as a scenario"));
 }

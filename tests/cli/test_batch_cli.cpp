@@ -68,6 +68,14 @@ TEST_CASE("batch: a bad log becomes an error row, the rest are replayed and kept
         CHECK(s["input"]["path"] == dir + "/" + stem + ".csv");
     }
     CHECK_FALSE(exists(out + "/bad.json"));
+    // An earlier run's summary of the bad log that cannot be removed (here a directory with a
+    // file in it) is said, exit 5: it had stayed without a word and read as this run's.
+    std::filesystem::create_directories(out + "/bad.json");
+    clitest::write_file(out + "/bad.json/x", "x");
+    auto stuck = run("batch " + q(dir) + " -c " + q(kConfig) + " --out " + q(out) + " --format json");
+    CHECK(stuck.exit_code == 5);
+    CHECK_THAT(stuck.err, Catch::Contains(dir + "/bad.csv: an earlier run's summary " + out + "/bad.json could not be removed"));
+    std::filesystem::remove_all(out + "/bad.json");
     // Identical to what `battsim replay --summary` writes for the same log.
     auto rep = run("replay " + q(dir + "/g2.csv") + " -c " + q(kConfig) + " --summary " + q(dir + "/rep.json"));
     REQUIRE(rep.exit_code == 0);
@@ -189,6 +197,14 @@ TEST_CASE("batch: shards merged give exactly the single run's table", "[cli][bat
     auto foreign = run("merge" + shards + " " + q(dir + "/other.json"));
     CHECK(foreign.exit_code == 3);
     CHECK(foreign.err.find("comes from a different input list") != std::string::npos);
+    // The same manifest by another path: one run (its digest had hashed the path as typed).
+    const std::string respelt = dir + "/respelt.json";
+    auto r = run("batch --manifest " + q(dir + "/./../" + std::filesystem::path(dir).filename().string() + "/fleet.csv") +
+                 " -c " + q(kConfig) + " --format json --shard 3/3 --output " + q(respelt));
+    CHECK(r.exit_code == 0);
+    auto mixed = run("merge " + q(s1) + " " + q(s2) + " " + q(respelt) + " --format json");
+    INFO(mixed.err);
+    CHECK(mixed.exit_code == 1);  // bad.csv's row
 }
 
 TEST_CASE("batch --compare: passes on identical summaries, lists a changed field", "[cli][batch]") {

@@ -25,8 +25,11 @@ TEST_CASE("battsim fit writes a loadable config, byte-identical on a rerun", "[f
     o.flight_s = 120;
     o.seed = 31;
     const std::string log = synth::write_log("cli-fit", o);
+    // The held-out log is another flight of the same pack (the fitted one itself is refused).
+    o.seed = 32;
+    const std::string held_out = synth::write_log("cli-fit-test", o);
     const std::string out1 = log + ".1.json", out2 = log + ".2.json", report = log + ".report.json", png = log + ".png";
-    const std::string args = log + " -c " + kConfig + " --add rc --test " + log + " --plot " + png + " --report " + report + " -o ";
+    const std::string args = log + " -c " + kConfig + " --add rc --test " + held_out + " --plot " + png + " --report " + report + " -o ";
     REQUIRE(run(args + out1) == 0);
     REQUIRE(run(args + out2) == 0);
     CHECK(testsupport::read_file(out1) == testsupport::read_file(out2));
@@ -50,7 +53,7 @@ TEST_CASE("battsim fit writes a loadable config, byte-identical on a rerun", "[f
     const nlohmann::json e = nlohmann::json::parse(ein);
     CHECK(e["parameters"].empty());
     CHECK(e["logs"][0]["monitor"]["all"]["rmse_v"] == e["start_monitor"][0]["all"]["rmse_v"]);
-    for (const std::string& f : {log, out1, out2, report, png}) std::remove(f.c_str());
+    for (const std::string& f : {log, held_out, out1, out2, report, png}) std::remove(f.c_str());
 }
 
 TEST_CASE("battsim fit says when it did not settle, and what to try", "[fit][cli]") {

@@ -155,7 +155,11 @@ std::string inputs_digest(const std::vector<BatchItem>& items) {
     };
     mix(std::to_string(items.size()));
     for (const BatchItem& it : items) {
-        mix(it.path);
+        // The file, not its spelling: shards run from other working directories, or with
+        // the manifest named by another path, are one run (rows keep the path as given).
+        std::error_code ec;
+        const std::filesystem::path canonical = std::filesystem::weakly_canonical(std::filesystem::absolute(it.path), ec);
+        mix(ec ? it.path : canonical.string());
         mix(it.test);
         mix(it.pack);
         mix(it.replay.config.name);
@@ -319,6 +323,14 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
     std::atomic<size_t> next{0};
     std::mutex lock;
     size_t done = 0;
+    // A log with no summary this run: an earlier run's summary of it would read as this run's.
+    auto forget_old_summary = [&](size_t k) {
+        const fs::path old_summary = fs::path(options.out_dir) / (items[k].stem + ".json");
+        std::error_code ec;
+        if (!fs::remove(old_summary, ec) && ec && ec != std::errc::no_such_file_or_directory)
+            unwritten[k] = items[k].path + ": an earlier run's summary " + old_summary.string() + " could not be removed (" +
+                           ec.message() + "); it is not this run's";
+    };
     auto work = [&]() {
         for (size_t k = next++; k < n; k = next++) {
             const BatchItem& item = items[k];
@@ -326,6 +338,7 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
             uint64_t samples = 0;
             if (!item.error.empty()) {
                 row = make_error_row(item, item.error);
+                if (!options.out_dir.empty()) forget_old_summary(k);
             } else {
                 try {
                     summary = replay_log(item.path, item.replay);
@@ -350,9 +363,7 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
                     summary = json();
                 }
                 if (summary.is_null() && !options.out_dir.empty()) {
-                    // An earlier run's summary of this log would read as this run's.
-                    std::error_code ec;
-                    fs::remove(fs::path(options.out_dir) / (item.stem + ".json"), ec);
+                    forget_old_summary(k);
                 } else if (!options.out_dir.empty()) {
                     // Written now, not at the end: a crash later loses nothing done so far.
                     try {
