@@ -29,7 +29,10 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--max-voltage", a->max_v, "Top of the tables (default: the config's max_voltage_v)")
         ->check(number_in(0.0, host::discharge::kMaxTableVoltage_v));
     sub.add_option("--reaction", a->reaction_s, "Smoothing: moving-average (exponential) time constant in s; 0 = none")->check(number_in(0.0, 1.0e6))->capture_default_str();
-    sub.add_option("--alpha", a->alpha, "Smoothing: fixed per-sample constant in (0, 1] instead of --reaction")->check(number_in(0.0, 1.0));
+    CLI::Option* reaction = sub.get_option("--reaction");
+    sub.add_option("--alpha", a->alpha, "Smoothing: fixed per-sample constant in (0, 1] instead of --reaction")
+        ->check(number_in(0.0, 1.0, true))
+        ->excludes(reaction);
     sub.add_option("--decimate", a->decimate, "Average every x samples")->capture_default_str();
     sub.add_option("--table", a->table, "Write the voltage -> mAh/mWh lookup table CSV here (10 mV rows, max to min)");
     sub.add_option("--curve", a->curve, "Write the smoothed, decimated curve with its gradient (CSV)");

@@ -32,6 +32,7 @@ std::function<int()> setup(CLI::App& sub) {
         ->delimiter(',');
     sub.add_option("--window", a->window, "Samples analysed: all (initialised) or flight")->capture_default_str();
     sub.add_option("--initial", a->initial, "Initial charge: free (fitted per log; flights) or zero (logs start full: constant-current discharges)")
+        ->check(CLI::IsMember({"free", "zero"}))
         ->capture_default_str();
     sub.add_option("--blocks", a->blocks, "Blocks per log; odd ones (but the last) are held out, the others fitted")->check(CLI::Range(4, 1000))->capture_default_str();
     sub.add_option("--max-effects", a->max_effects, "Most effects added")->check(CLI::Range(0, 20))->capture_default_str();

@@ -82,12 +82,12 @@ json pack_config_json(const PackRating& r) {
         throw std::invalid_argument("cells: expected 1.." + std::to_string(core::kMaxCells) + ", found " + std::to_string(r.cells));
     if (!(r.capacity_ah >= 0.05 && r.capacity_ah <= 1000.0))
         throw std::invalid_argument("capacity: expected 50 mAh .. 1000 Ah, found " + number_text(r.capacity_ah * 1000.0, "%g mAh"));
-    if (std::isfinite(r.resistance_ohm) && !(r.resistance_ohm > 0.0 && r.resistance_ohm < 10.0))
-        throw std::invalid_argument("resistance: expected above 0 and below 10 ohm, found " + number_text(r.resistance_ohm, "%g ohm"));
+    if (std::isfinite(r.resistance_ohm) && !(r.resistance_ohm > 0.0 && r.resistance_ohm <= 10.0))
+        throw std::invalid_argument("resistance: expected above 0 and at most 10 ohm, found " + number_text(r.resistance_ohm, "%g ohm"));
     const double n = r.cells;
     if (std::isfinite(r.cutoff_voltage_v) && !(r.cutoff_voltage_v / n >= kCutoffMinV && r.cutoff_voltage_v / n <= kCutoffMaxV))
         throw std::invalid_argument("cutoff: expected " + number_text(kCutoffMinV, "%.1f") + ".." + number_text(kCutoffMaxV, "%.1f") +
-                                    " V per cell, found " + number_text(r.cutoff_voltage_v / n, "%.3f V") +
+                                    " V per cell, found " + number_text(r.cutoff_voltage_v / n, "%.4g V") +
                                     " (it is the pack's voltage: " + std::to_string(r.cells) + " cells x the per-cell figure)");
     if (std::isfinite(r.cutoff_delay_s) && !(r.cutoff_delay_s >= 0.0 && r.cutoff_delay_s <= 600.0))
         throw std::invalid_argument("cutoff delay: expected 0..600 s, found " + number_text(r.cutoff_delay_s, "%g s"));

@@ -29,6 +29,7 @@ constexpr double kMaxRealtimeWaitS = 2.0;  // --realtime: the longest wait for o
 // radio's telemetry log) and samples too close together for the resistance's lag.
 class InputShape {
 public:
+    explicit InputShape(bool negated) : negated_(negated) {}
     void add(const core::Sample& s) {
         if (std::isfinite(s.voltage_v) && s.voltage_v != 0.0f) {
             const double tenths = 10.0 * static_cast<double>(s.voltage_v);
@@ -66,10 +67,14 @@ public:
         std::vector<std::string> out;
         char buf[320];
         if (!flew && max_a_ < takeoff_a && min_a_ <= -takeoff_a) {
+            // With the option already given, the log counts discharge as positive.
             std::snprintf(buf, sizeof buf,
-                          "the current never reaches the take-off threshold (%.3g A) but falls to %.3g A: if this log "
-                          "counts discharge as negative, replay it with --negative-discharge (manifest: "
-                          "\"negative_is_discharge\": true)",
+                          negated_ ? "the current never reaches the take-off threshold (%.3g A) but falls to %.3g A with "
+                                     "--negative-discharge: if this log counts discharge as positive, replay it without "
+                                     "(manifest: \"negative_is_discharge\": false)"
+                                   : "the current never reaches the take-off threshold (%.3g A) but falls to %.3g A: if "
+                                     "this log counts discharge as negative, replay it with --negative-discharge "
+                                     "(manifest: \"negative_is_discharge\": true)",
                           takeoff_a, min_a_);
             out.push_back(buf);
         }
@@ -140,6 +145,7 @@ private:
     static constexpr long kCoarseMinSamples = 20;
     static constexpr double kLongestGapS = 60.0;  // and kGapMedians of the usual interval
     static constexpr double kGapMedians = 100.0;
+    bool negated_;  // --negative-discharge given
     bool coarse_ = true, varied_ = false;
     float first_v_ = 0.0f;
     long voltages_ = 0;
@@ -174,7 +180,7 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     int series_cells = 0;
 
     core::Sample sample;
-    InputShape shape;
+    InputShape shape(options.reader.columns.current_negative_is_discharge);
     LogFacts facts;  // for the config's notes
     FirstRest rest(options.config.monitor.initial.max_resting_current_a);
     const double capacity_mah = 1000.0 * options.config.monitor.battery.capacity_ah;

@@ -153,7 +153,7 @@ TEST_CASE("option typos are refused with the range in plain figures", "[cli]") {
         {"replay " + q(kExample) + " --realtime --speed 1e-30", "--speed: expected a number in [0.001, 1e+06]"},
         {"make-config --cells 4 --capacity-mah 0", "--capacity-mah: expected a number in (0, 1e+06], found 0"},
         {"discharge " + q(kExample) + " -c " + q(kConfig) + " --max-voltage 100000", "--max-voltage: expected a number in [0, 200], found 100000"},
-        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --alpha nan", "--alpha: expected a number in [0, 1]"},
+        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --alpha nan", "--alpha: expected a number in (0, 1]"},
         {"discharge " + q(kExample) + " -c " + q(kConfig) + " --min-voltage nan", "--min-voltage: expected a number in [0, 200], found nan"},
         {"fit-ocv " + q(kExample) + " --prior-sigma nan", "--prior-sigma: expected a number in (0, 1e+06]"},
     };
@@ -408,4 +408,19 @@ TEST_CASE("a log given twice is refused where it would count twice: fit, residua
     const auto r = run("score " + q(kSource + "/configs/scenarios") + " " + q(scenario));
     CHECK(r.exit_code == 2);
     CHECK_THAT(r.err, Catch::Contains("a scenario \"" + scenario + "\" names the same file as a scenario"));
+}
+
+TEST_CASE("a spreadsheet's ';' CSV is named as such; a column name's raw bytes are escaped", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/semi.csv", "time_s;voltage_v;current_a\n0;16,5;1\n");
+    auto r = run("replay " + q(dir + "/semi.csv") + " -c " + q(kConfig));
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("columns found: time_s;voltage_v;current_a (one column: the header is separated by ';'"));
+    clitest::write_file(dir + "/latin1.csv", "time_s,volt\xe9,current_a\n0,16.5,1\n");
+    r = run("replay " + q(dir + "/latin1.csv") + " -c " + q(kConfig));
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("columns found: time_s, \"volt\\xE9\", current_a"));
+    // A missing config, manifest or scenario says it is missing.
+    r = run("replay " + q(kExample) + " -c " + q(dir + "/absent.json"));
+    CHECK_THAT(r.err, Catch::Contains(dir + "/absent.json: cannot open config file: no such file"));
 }

@@ -261,7 +261,7 @@ TEST_CASE("batch: manifest and option errors are clear and exit non-zero", "[cli
     CHECK(r.err.find(dir + "/nope.json: cannot open config file") != std::string::npos);
     r = run("batch --manifest " + q(dir + "/none.json"));
     CHECK(r.exit_code == 3);
-    CHECK(r.err == "battsim batch: " + dir + "/none.json: cannot open manifest\n");
+    CHECK(r.err == "battsim batch: " + dir + "/none.json: cannot open manifest: no such file\n");
 
     CHECK(run("batch").exit_code == 2);
     CHECK(run("batch " + q(dir) + " --shard 0/2").exit_code == 2);

@@ -50,7 +50,7 @@ TEST_CASE("battsim make-config: from a rating, and what it refuses", "[cli][make
     CHECK(no_capacity.err.find("give --capacity-mah") != std::string::npos);
     const clitest::Result bad_cutoff = clitest::run("make-config --cells 4 --capacity-mah 1500 --cutoff-v 8");
     CHECK(bad_cutoff.exit_code == 2);
-    CHECK(bad_cutoff.err.find("V per cell, found 2.000 V") != std::string::npos);
+    CHECK(bad_cutoff.err.find("V per cell, found 2 V") != std::string::npos);
     const clitest::Result missing = clitest::run("make-config --from-log " + q(dir + "/nothing.bin"));
     CHECK(missing.exit_code == 3);
     // A CSV log without cell columns whose voltage fits two cell counts says what it lacks.

@@ -184,7 +184,7 @@ TEST_CASE("JSON manifest errors name the line, column and what was expected", "[
           p + ":4:22: not valid JSON: syntax error while parsing object key - unexpected '}'; expected string literal");
     CHECK(err("{\"schema\": \"battsim.manifest\", \"logs\": [{\"path\": \"${BATTSIM_TEST_NOT_SET_EVER}/a\"}]}")
               .find("BATTSIM_TEST_NOT_SET_EVER is not set") != std::string::npos);
-    CHECK(input_error([&] { load_manifest(t.path("nope.json")); }) == t.path("nope.json") + ": cannot open manifest");
+    CHECK(input_error([&] { load_manifest(t.path("nope.json")); }) == t.path("nope.json") + ": cannot open manifest: no such file");
     // A stray closer used to stall the position scanner (an endless loop before the message).
     CHECK(err("[}") == p + ":1:2: not valid JSON: syntax error while parsing value - unexpected '}'; expected '[', '{', or a literal");
     CHECK(err("{\"schema\": \"battsim.manifest\", \"version\": 1e400}") == p + ":1:43: not valid JSON: number 1e400 is beyond a double's range");
@@ -348,7 +348,7 @@ TEST_CASE("plan: manifest order, settings per file, paths matched to entries", "
     // A manifest's config that cannot be read fails its logs' rows, not the fleet's run.
     const auto bad_items = plan_batch(req);
     REQUIRE(bad_items.size() == 1);
-    CHECK(bad_items[0].error == "config: " + t.path("missing.json") + ": cannot open config file");
+    CHECK(bad_items[0].error == "config: " + t.path("missing.json") + ": cannot open config file: no such file");
     // The command line's config is one mistake for the whole run.
     req.command_line.config = t.path("missing.json");
     CHECK_THROWS_AS(plan_batch(req), ConfigError);

@@ -157,7 +157,7 @@ TEST_CASE("Config files: errors give the line and column of the key or value", "
     CHECK(read_text_file(range, text, 16) == TextRead::TooLarge);  // a cap, not the memory, ends a runaway read
     CHECK(read_text_file(range, text) == TextRead::Ok);
     CHECK(text.size() == 82);
-    CHECK(error_of(temp.path("absent.json")) == temp.path("absent.json") + ": cannot open config file");
+    CHECK(error_of(temp.path("absent.json")) == temp.path("absent.json") + ": cannot open config file: no such file");
     // Values checked while parsed whole keep only the path (no text to locate in).
     json j = config_to_json(default_config());
     j["joint"]["cutoff_delay_s"] = -3;

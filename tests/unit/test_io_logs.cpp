@@ -1082,3 +1082,26 @@ TEST_CASE("ULog: a message size that lied costs the bytes to the next sync messa
                                "where it can be read: the log is corrupt at byte 56537, and 28232 bytes were skipped "
                                "to find its messages again)");
 }
+
+TEST_CASE("DataFlash text: a BCL cell that reads nothing before one that reads, and text for millivolts, are said", "[io-logs]") {
+    // Both had ended the cells there without a word: the log read as 2 cells, every sample
+    // then kept out by the cell-sum check.
+    LogTempDir d;
+    const std::string fmts = "FMT, 128, 89, FMT, BBnNZ, Type,Length,Name,Format,Columns\n"
+                             "FMT, 147, 38, BAT, QBfffffcf, TimeUS,Inst,Volt,VoltR,Curr,CurrTot,EnrgTot,Temp,Res\n"
+                             "FMT, 150, 24, BCL, QBfHHHH, TimeUS,Instance,Volt,V1,V2,V3,V4\n";
+    const std::string bat0 = "BAT, 0, 0, 16.8, 16.8, 0.5, 0, 0, 25.0, 0.02\n";
+    const std::string bat1 = "BAT, 100000, 0, 16.8, 16.8, 0.5, 0, 0, 25.0, 0.02\n";
+    const auto hole = read_all(Kind::DfText, d.write("hole.log", fmts + bat0 + "BCL, 0, 0, 16.8, 4200, 4200, nan, 4200\n" + bat1));
+    CHECK(any_note(hole, "line 5 column 7: BCL.V3 reads 'nan' while a later cell reads a voltage"));
+    // Text where the millivolts belong: that row is skipped, the cells before it stand.
+    const auto text = read_all(Kind::DfText, d.write("text.log", fmts + "BCL, 0, 0, 16.8, 4200, 4200, 4200, 4200\n" + bat0 +
+                                                                     "BCL, 50000, 0, 16.8, 4200, 4200, abc, 4200\n" + bat1));
+    CHECK(any_note(text, "line 6 column 7: BCL.V3: expected a number, found 'abc'; cell row skipped"));
+    REQUIRE(text.samples.size() == 2);
+    CHECK(text.samples[1].cell_count == 4);
+    // The pack's last cells unused (0): the end of its cells, no note.
+    const auto three = read_all(Kind::DfText, d.write("three.log", fmts + "BCL, 0, 0, 12.6, 4200, 4200, 4200, 0\n" + bat0));
+    CHECK_FALSE(any_note(three, "BCL.V4"));
+    CHECK(three.samples[0].cell_count == 3);
+}

@@ -76,7 +76,7 @@ TEST_CASE("make-config: a rating out of range is refused with what was expected"
     r.cells = 4;
     r.capacity_ah = 1.5;
     r.cutoff_voltage_v = 8.0;  // 2.0 V per cell
-    CHECK_THROWS_WITH(pack_config_json(r), Catch::Contains("2.5..3.9 V per cell, found 2.000 V") &&
+    CHECK_THROWS_WITH(pack_config_json(r), Catch::Contains("2.5..3.9 V per cell, found 2 V") &&
                                                Catch::Contains("it is the pack's voltage: 4 cells x the per-cell figure"));
     r.cutoff_voltage_v = NAN;
     r.cells = 13;

@@ -356,9 +356,9 @@ TEST_CASE("Scenario files: the suite loads, covers what it must, and bad files a
     const std::string weakc = write("weak.json", head + R"(, "pack": {"weak_cells": [{"cell": 5}]}})");
     CHECK(error_of(weakc).find("$.pack.weak_cells[0].cell: expected a whole number in [1, 4]") != std::string::npos);
     const std::string nocfg = write("nocfg.json", R"({"schema": "battsim.scenario", "version": 1, "name": "x", "monitor_config": "missing.json"})");
-    CHECK(error_of(nocfg).find(nocfg + ":1:77: $.monitor_config: " + tmp + "/missing.json: cannot open config file") == 0);
+    CHECK(error_of(nocfg).find(nocfg + ":1:77: $.monitor_config: " + tmp + "/missing.json: cannot open config file: no such file") == 0);
     CHECK(error_of(write("empty.json", "")).find("file is empty") != std::string::npos);
-    CHECK(error_of(tmp + "/absent.json") == tmp + "/absent.json: cannot open scenario file");
+    CHECK(error_of(tmp + "/absent.json") == tmp + "/absent.json: cannot open scenario file: no such file");
     CHECK_THROWS_AS(find_scenario_files({tmp + "/nothing"}), ScenarioError);
 }
 

@@ -598,7 +598,10 @@ private:
         const std::size_t shown = std::min<std::size_t>(names_.size(), 60);
         for (std::size_t i = 0; i < shown; ++i) {
             if (i > 0) s += ", ";
-            s += names_[i].empty() ? std::string("(empty)") : names_[i];
+            // A name with bytes a terminal would act on is quoted with them escaped.
+            const std::string& n = names_[i];
+            const bool plain = std::all_of(n.begin(), n.end(), [](char c) { return c >= 0x20 && c < 0x7F; });
+            s += n.empty() ? std::string("(empty)") : plain ? n : text::quote_for_message(n);
         }
         if (names_.size() > shown) s += ", ... (" + std::to_string(names_.size()) + " in all)";
         bool all_numbers = true;
@@ -608,6 +611,10 @@ private:
             if (!(n.empty() && &n == &names_.back())) all_numbers = false;
         }
         if (all_numbers) s += " (the first line looks like data, not a header row)";
+        // A spreadsheet's export in a locale that writes decimal commas separates with ';'.
+        if (names_.size() == 1 && names_[0].find_first_of(";\t") != std::string::npos)
+            s += " (one column: the header is separated by ';' or tabs, and battsim reads comma-separated CSV; "
+                 "convert the separators, and decimal commas to points, first)";
         return s;
     }
 

@@ -810,6 +810,22 @@ int read_cells(const DfFormat& f, const FieldReader& r, float* cells, int& beyon
     return std::min(n, core::kMaxCells);
 }
 
+// The first cell field whose value ends the cells (0, 65535, not finite) while a later one
+// reads a voltage: a broken value, not the end of the pack's cells. -1 when there is none.
+int cell_hole(const DfFormat& f, const FieldReader& r) {
+    const auto valid = [&](int k) {
+        double mv;
+        return f.cells[k] >= 0 && r.number(f.cells[k], mv) && std::isfinite(mv) && mv > 0 && mv < 65535;
+    };
+    for (int k = 0; k < kMaxCellFields && f.cells[k] >= 0; ++k) {
+        if (valid(k)) continue;
+        for (int later = k + 1; later < kMaxCellFields && f.cells[later] >= 0; ++later)
+            if (valid(later)) return k;
+        return -1;
+    }
+    return -1;
+}
+
 void scan_message(const DfFormat& f, const FieldReader& r, const std::string& where, long line,
                   const std::string& path, ScanStats& s, Clocks& clocks) {
     clocks.update(f, r);
@@ -1061,6 +1077,22 @@ private:
         if (f.role == Role::Cells && f.decodable) {
             double inst;
             if (!read_instance(f, r, inst) || inst != 0) return false;
+            // Text where a cell's millivolts belong (a text log's "abc"): the row is skipped and
+            // said, as a battery row is; read on, it had ended the cells there without a word.
+            for (int k = 0; k < kMaxCellFields && f.cells[k] >= 0; ++k) {
+                double mv;
+                if (r.number(f.cells[k], mv)) continue;
+                notes_.add("unreadable", where + (r.column_of(f.cells[k]) ? " column " + std::to_string(r.column_of(f.cells[k])) : "") +
+                                             ": " + f.name + "." + f.labels[static_cast<size_t>(f.cells[k])] +
+                                             ": expected a number, found " + r.raw(f.cells[k]) +
+                                             "; cell row skipped (the cells before it are kept)");
+                return false;
+            }
+            const int hole = cell_hole(f, r);
+            if (hole >= 0)
+                notes_.add("cell-hole", where + (r.column_of(f.cells[hole]) ? " column " + std::to_string(r.column_of(f.cells[hole])) : "") +
+                                            ": " + f.name + "." + f.labels[static_cast<size_t>(f.cells[hole])] + " reads " +
+                                            r.raw(f.cells[hole]) + " while a later cell reads a voltage: the cells are read up to the one before it");
             int beyond = 0;
             float cells[core::kMaxCells] = {};
             cell_count_ = read_cells(f, r, cells, beyond);

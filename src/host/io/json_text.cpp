@@ -198,7 +198,7 @@ TextRead read_text_file(const std::string& path, std::string& text, std::size_t 
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) return TextRead::IsDirectory;
     std::ifstream in(path, std::ios::binary);
-    if (!in) return TextRead::CannotOpen;
+    if (!in) return std::filesystem::exists(std::filesystem::symlink_status(path, ec)) ? TextRead::CannotOpen : TextRead::Missing;
     text.clear();
     char block[64 * 1024];
     while (in) {
@@ -212,6 +212,7 @@ TextRead read_text_file(const std::string& path, std::string& text, std::size_t 
 std::string text_read_message(TextRead r, const std::string& what) {
     switch (r) {
         case TextRead::Ok: return "";
+        case TextRead::Missing: return "cannot open " + what + ": no such file";
         case TextRead::CannotOpen: return "cannot open " + what;
         case TextRead::IsDirectory: return "cannot open " + what + ": it is a directory";
         case TextRead::TooLarge: return what + " is larger than " + std::to_string(kMaxTextFileBytes >> 20) + " MiB";

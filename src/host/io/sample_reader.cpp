@@ -7,7 +7,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "host/io/csv_reader.h"
@@ -211,6 +213,32 @@ std::unique_ptr<SampleReader> open_format(const std::string& path, const ReaderO
     const std::vector<unsigned char> head = peek(path);
     LogFormat format = options.format;
     if (format == LogFormat::Auto) format = detect(path, head);
+    // Options for one format given for a log of another are refused: read on, they had been
+    // dropped without a word (a log counting discharge as negative then flew nothing).
+    std::vector<std::string> foreign;
+    const ColumnMapping& c = options.columns;
+    if (format != LogFormat::Csv) {
+        const std::pair<bool, const char*> csv_only[] = {
+            {!c.time.empty(), "--time-col"},        {c.time_scale_to_s != 0, "--time-unit"},
+            {!c.voltage.empty(), "--voltage-col"},  {!c.current.empty(), "--current-col"},
+            {c.current_scale_to_a != 0, "--current-unit"}, {c.current_negative_is_discharge, "--negative-discharge"},
+            {!c.cells.empty(), "--cell-cols"},      {!c.temperature.empty(), "--temperature-col"}};
+        std::string names;
+        size_t count = 0;
+        for (const auto& [given, name] : csv_only)
+            if (given) names += (count++ ? ", " : "") + std::string(name);
+        if (count) foreign.push_back(names + (count > 1 ? " apply" : " applies") + " to headered CSV logs only");
+    }
+    if (format != LogFormat::RawPbms && format != LogFormat::Csv && options.current_source != CurrentSource::Auto)
+        foreign.push_back("--current-source applies to raw and CSV logs only");
+    if (!foreign.empty()) {
+        std::string what;
+        for (const std::string& f : foreign) what += (what.empty() ? "" : "; ") + f;
+        throw InputError(path, 0, 0,
+                         what + ", and this log reads as " + to_string(format) +
+                             ": drop the option, or give --format if the log is of another format (a manifest: its "
+                             "column settings)");
+    }
     switch (format) {
         case LogFormat::RawPbms: return open_raw_pbms(path, options);
         case LogFormat::Csv: return open_csv(path, options);

@@ -424,6 +424,11 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& suite, const std::
                     samples = read_samples(path, simr);
                 } catch (const InputError& e) {
                     // The temporary log is gone by the time this is read: name the scenario.
+                    // A simulated log is gone by now: its line is all there is to say. A log of
+                    // --logs is the user's file: its path, line and column.
+                    if (!options.logs_dir.empty())
+                        throw InputError(scenarios[i].source_path, 0, 0,
+                                         "scenario " + simr.scenario.name + ": its log in --logs cannot be read: " + e.what());
                     throw InputError(scenarios[i].source_path, 0, 0,
                                      "scenario " + simr.scenario.name + ": its simulated log cannot be read back" +
                                          (e.line() > 0 ? " (line " + std::to_string(e.line()) + ")" : std::string()) +
