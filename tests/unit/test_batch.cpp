@@ -723,6 +723,16 @@ TEST_CASE("merge rebuilds the single run's table and refuses incomplete or forei
     foreign["inputs"]["digest"] = "d2";
     CHECK(input_error([&] { merge_tables({shards[0], foreign}, {"a", "b"}); })
               .find("b: comes from a different input list than a") == 0);
+    // A shard of a run split another way (here its 1/3 holds inputs 0 and 3, which no 2/2 holds).
+    std::vector<json> third;
+    for (const json& r : rows)
+        if (parse_shard("2/3").contains(r["index"].get<size_t>())) third.push_back(r);
+    CHECK(input_error([&] { merge_tables({shards[0], make_table(third, 5, "d1", parse_shard("2/3"))}, {"a", "b"}); }) ==
+          "b: is split into 3 shard(s), a into 2; give the shards of one run");
+    json weird = shards[0];
+    weird["rows"][0]["status"] = "weird";
+    const std::string pw = t.write("w.json", weird.dump());
+    CHECK(input_error([&] { read_table_file(pw); }) == pw + ": rows[0].status: expected \"ok\" or \"error\", found \"weird\"");
 
     const std::string notjson = t.write("x.json", "{\"schema\": \"battsim.batch\",\n \"rows\": [}");
     CHECK(input_error([&] { read_table_file(notjson); }) ==

@@ -1105,3 +1105,20 @@ TEST_CASE("DataFlash text: a BCL cell that reads nothing before one that reads, 
     CHECK_FALSE(any_note(three, "BCL.V4"));
     CHECK(three.samples[0].cell_count == 3);
 }
+
+TEST_CASE("A binary log cut short before its battery data says it is cut short", "[io-logs][data]") {
+    // It had said "the topic is not logged" / "no BAT or CURR messages" of a file cut in two.
+    LogTempDir d;
+    const auto head_of = [&](const std::string& from, const std::string& name, size_t bytes) {
+        std::ifstream in(from, std::ios::binary);
+        std::string data(bytes, '\0');
+        in.read(&data[0], static_cast<std::streamsize>(bytes));
+        return d.write(name, data);
+    };
+    const std::string ulog = head_of(data_path("/px4/test.ulg"), "cut.ulg", 60000);
+    CHECK_THAT(error_of(Kind::Ulog, ulog), Catch::Contains("no battery_status data") &&
+                                               Catch::Contains("the file ends inside a message at byte") &&
+                                               Catch::Contains("cut short"));
+    const std::string bin = head_of(data_path("/ardupilot/log171.bin"), "cut.bin", 1000);
+    CHECK_THAT(error_of(Kind::DfBinary, bin), Catch::Contains("no BAT or CURR messages") && Catch::Contains("cut short"));
+}

@@ -643,6 +643,8 @@ json read_table_file(const std::string& path) {
                 fail(where + ".index: expected a whole number below the input count " + std::to_string(count));
             if (!r["status"].is_string() || !r["flight"].is_boolean())
                 fail(where + ": expected \"status\" text and \"flight\" true/false");
+            if (r["status"] != "ok" && r["status"] != "error")
+                fail(where + ".status: expected \"ok\" or \"error\", found " + json_brief(r["status"]));
             if (!r["cell_scores"].is_array() || !r["warnings"].is_array() || !r["sensor_fault_cause"].is_array())
                 fail(where + ": expected \"cell_scores\", \"warnings\" and \"sensor_fault_cause\" arrays");
             // Every value of the type batch writes: an edited or corrupted shard must not pass its
@@ -674,6 +676,14 @@ json merge_tables(const std::vector<json>& tables, const std::vector<std::string
                                  " vs " + std::to_string(count) + " / \"" + digest +
                                  "\"); run every shard with the same paths, manifest and options");
         }
+        // Shards of one run split it the same way: a 1/1 table beside a 2/2 one is two runs.
+        const json& shard = tab["shard"], &first_shard = first["shard"];
+        const json shard_count = shard.is_object() ? shard.value("count", json()) : json(1);
+        const json first_count = first_shard.is_object() ? first_shard.value("count", json()) : json(1);
+        if (shard_count != first_count)
+            throw InputError(origin, 0, 0,
+                             "is split into " + json_text(shard_count) + " shard(s), " + origins[0] + " into " +
+                                 json_text(first_count) + "; give the shards of one run");
         if (tab.value("battsim_version", std::string()) != first.value("battsim_version", std::string()))
             throw InputError(origin, 0, 0, "was written by battsim " + tab.value("battsim_version", std::string("?")) +
                                                ", " + origins[0] + " by " + first.value("battsim_version", std::string("?")));

@@ -737,6 +737,7 @@ struct ScanStats {
     bool boot_seen = false, gps_seen = false;
     double first_boot_us = 0, first_gps_us = 0;
     int max_cells = 0;
+    bool cut_short = false;  // the file ends inside a message
 };
 
 enum class Clock { Boot, Gps, None };
@@ -909,6 +910,7 @@ Plan make_plan(const ScanStats& s, const std::string& path, std::vector<std::str
         if (s.bat.other_instance + s.curr.other_instance > 0)
             extra = " (only rows of battery instances other than 0: " +
                     std::to_string(s.bat.other_instance + s.curr.other_instance) + ")";
+        if (s.cut_short) extra += "; the file ends inside a message: it is cut short, and the battery data may be in the part missing";
         throw InputError(path, 0, 0, "no BAT or CURR messages (battery data) in this DataFlash log" + extra);
     }
     if (c->other_instance > 0)
@@ -993,6 +995,7 @@ public:
             std::string where;
             long line;
             while (src->next(f, r, where, line)) scan_message(*f, *r, where, line, path_, stats, clocks);
+            stats.cut_short = silent.count("truncated") > 0;
             plan_ = make_plan(stats, path_, info_.notes);
             info_.cell_count = stats.max_cells;
             info_.has_temperature = plan_.use_temp;

@@ -19,21 +19,26 @@ namespace host {
 namespace logio {
 
 // Notes with a cap per kind, so a badly damaged file cannot grow the list without bound.
-// A NoteLog over nullptr discards everything (used by pre-scan passes).
+// A NoteLog over nullptr keeps no text (used by pre-scan passes), only the counts.
 class NoteLog {
 public:
     static constexpr long kPerKind = 8;
     explicit NoteLog(std::vector<std::string>* out) : out_(out) {}
     void add(const char* kind, const std::string& text) {
-        if (!out_) return;
         for (auto& k : kinds_) {
             if (k.name == kind) {
-                if (++k.count <= kPerKind) out_->push_back(text);
+                if (++k.count <= kPerKind && out_) out_->push_back(text);
                 return;
             }
         }
         kinds_.push_back({kind, 1});
-        out_->push_back(text);
+        if (out_) out_->push_back(text);
+    }
+    // How many notes of `kind` were added (listed or not).
+    long count(const char* kind) const {
+        for (const auto& k : kinds_)
+            if (k.name == kind) return k.count;
+        return 0;
     }
     // Appends "... and N more" for every kind that hit the cap. Idempotent.
     void finish() {

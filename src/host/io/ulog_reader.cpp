@@ -177,6 +177,8 @@ public:
     // Bytes skipped to find the framing again after corrupt headers, and where the first was.
     uint64_t corrupt_bytes() const { return corrupt_bytes_; }
     uint64_t first_corrupt() const { return first_corrupt_; }
+    // Where the file ends inside a message (cut short), -1 when it ends between messages.
+    int64_t cut_at() const { return cut_at_; }
 
     bool next(BatteryRecord& rec) {
         for (;;) {
@@ -192,6 +194,7 @@ public:
             size_t avail = in_.ensure(3);
             if (avail == 0) return false;
             if (avail < 3) {
+                cut_at_ = static_cast<int64_t>(off);
                 notes_.add("truncated", "byte " + std::to_string(off) + ": file ends inside a message header (" +
                                             std::to_string(avail) + " bytes); ignored");
                 in_.consume(avail);
@@ -210,6 +213,7 @@ public:
             avail = in_.ensure(3 + size);
             p = in_.data();
             if (avail < 3 + size) {
+                cut_at_ = static_cast<int64_t>(off);
                 notes_.add("truncated", "byte " + std::to_string(off) + ": message '" + printable(type) +
                                             "' declares " + std::to_string(size) + " payload bytes but the file "
                                             "ends after " + std::to_string(avail - 3) +
@@ -610,6 +614,7 @@ private:
     bool subscribed_ = false;
     bool subscribed_ever_ = false;
     uint64_t corrupt_bytes_ = 0, first_corrupt_ = 0;
+    int64_t cut_at_ = -1;
     uint16_t battery_id_ = 0;
     BatteryLayout layout_;
     std::vector<uint8_t> padded_;
@@ -699,12 +704,15 @@ private:
                                              std::to_string(s.first_corrupt()) + ", and " +
                                              std::to_string(s.corrupt_bytes()) +
                                              " bytes were skipped to find its messages again)";
+            const std::string cut = s.cut_at() < 0 ? std::string()
+                                                   : "; the file ends inside a message at byte " + std::to_string(s.cut_at()) +
+                                                         ": it is cut short, and the battery data may be in the part missing";
             throw InputError(path_, 0, 0,
                              (s.saw_subscription()
                                   ? "no battery_status data (multi_id 0) in this ULog: the topic is subscribed but "
                                     "never logged"
                                   : "no battery_status data (multi_id 0) in this ULog: the topic is not logged") +
-                                 corrupt);
+                                 corrupt + cut);
         }
         // PX4 fills every cell with pack / count when it cannot measure cells: such cells
         // say nothing of any cell, and their sum, rounded apart from the pack's, read as a
