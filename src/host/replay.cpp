@@ -40,7 +40,9 @@ public:
         }
         if (have_ && s.time_us > last_us_) {
             const double step_s = static_cast<double>(s.time_us - last_us_) * 1e-6;
-            intervals_s_.push_back(step_s);
+            // The first kMaxIntervals: their median is the log's usual interval, and a replay's
+            // memory stays flat however long the log (every interval had been kept).
+            if (intervals_s_.size() < kMaxIntervals) intervals_s_.push_back(step_s);
             if (step_s > longest_s_) {
                 longest_s_ = step_s;
                 longest_at_s_ = static_cast<double>(last_us_ - first_us_) * 1e-6;
@@ -143,6 +145,7 @@ private:
     static constexpr double kFastestIntervalS = 1e-3;  // a flight controller's blackbox at most
     static constexpr double kShortestSpanS = 10.0;
     static constexpr long kCoarseMinSamples = 20;
+    static constexpr size_t kMaxIntervals = 65536;
     static constexpr double kLongestGapS = 60.0;  // and kGapMedians of the usual interval
     static constexpr double kGapMedians = 100.0;
     bool negated_;  // --negative-discharge given
