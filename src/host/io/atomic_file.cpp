@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -74,8 +75,36 @@ void unregister_temp(int slot) {
     s.taken.store(false);
 }
 
+// Creations in flight, and whether a signal is cleaning up: the handler waits for the
+// creations other threads have begun, so that no temporary is made after its sweep (with
+// -j2, a worker's fopen could land after the main thread's sweep: 4 of 300 interrupted
+// batches left an empty temporary). A creation begun after the sweep started never makes
+// its file.
+std::atomic<int> g_creating{0};
+std::atomic<bool> g_cleaning{false};
+
+class CreationGuard {
+public:
+    CreationGuard() {
+        g_creating.fetch_add(1);
+        if (g_cleaning.load()) {
+            g_creating.fetch_sub(1);
+            for (;;) ::pause();  // the process is about to die of the signal
+        }
+    }
+    ~CreationGuard() { g_creating.fetch_sub(1); }
+    CreationGuard(const CreationGuard&) = delete;
+    CreationGuard& operator=(const CreationGuard&) = delete;
+};
+
 extern "C" void remove_temps_and_reraise(int sig) {
     const int saved_errno = errno;
+    g_cleaning.store(true);
+    // Bounded: the signal may have come to a thread inside its own creation.
+    for (int waited_ms = 0; g_creating.load() > 0 && waited_ms < 200; ++waited_ms) {
+        struct timespec ms {0, 1000000};
+        ::nanosleep(&ms, nullptr);
+    }
     for (TempSlot& s : g_temps) {
         if (!s.taken.load()) continue;
         const unsigned before = s.version.load();
@@ -143,6 +172,7 @@ AtomicFile::AtomicFile(const std::string& path) : path_(path) {
                        resolved.st_ino != given.st_ino))
             direct_ = true;
     }
+    CreationGuard creating;
     if (direct_) {
         target_ = temp_path_ = path;
     } else {
@@ -206,11 +236,18 @@ ScratchFile::ScratchFile(const std::string& prefix) {
     // A name nobody can guess, registered before it exists (as AtomicFile's temporaries), and
     // O_EXCL: a file of that name already there is someone else's and is never touched.
     static std::random_device entropy;
+    static std::mutex entropy_lock;  // score's workers make scratch files at once
     static std::atomic<unsigned> counter{0};
     for (int attempt = 0; attempt < 100; ++attempt) {
         char tag[32];
-        std::snprintf(tag, sizeof tag, "%d.%u.%08x", static_cast<int>(::getpid()), counter++, entropy());
+        unsigned random_bits;
+        {
+            std::lock_guard<std::mutex> hold(entropy_lock);
+            random_bits = entropy();
+        }
+        std::snprintf(tag, sizeof tag, "%d.%u.%08x", static_cast<int>(::getpid()), counter++, random_bits);
         const std::string path = (dir / (prefix + tag)).string();
+        CreationGuard creating;
         const int slot = register_temp(path);
         const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
         if (fd >= 0) {
