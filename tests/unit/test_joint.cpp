@@ -108,6 +108,35 @@ TEST_CASE("Difference resistance: one step by hand, then recovery under noise", 
     CHECK(e.status().sigma_ohm < 0.002f);
 }
 
+TEST_CASE("Difference resistance: a wrong first estimate is not locked in by the garbled-reading gate", "[joint][truth]") {
+    // A take-off whose pairs read 10 mΩ, then a 20 mΩ pack whose only steps are a 30 A climb
+    // every 90 s: each climb's pair outweighs the forgetting window and sits far from 10 mΩ.
+    // A gate judging by a window that had forgotten everything kept 10 mΩ for good; the gate
+    // judges only while the window holds its bar (min_excitation_a2), so the climbs count.
+    DifferenceResistanceEstimator::Config c;
+    c.trend_sigma_per_s = 0.002f;
+    DifferenceResistanceEstimator e;
+    e.configure(c);
+    Lcg rng;
+    for (int k = 0; k < 18000; ++k) {  // 30 min at 10 Hz
+        const double t = 0.1 * k;
+        double i, r = 0.020;
+        if (t < 10.0) {
+            i = t < 0.5 ? 100.0 * t : 50.0;
+            r = 0.010;
+        } else {
+            i = std::fmod(t - 2.0, 90.0) >= 87.0 ? 80.0 : 50.0;
+        }
+        const double v = 16.0 - r * i + 0.002 * rng.next();
+        e.update(static_cast<uint64_t>(std::llround(t * 1e6)), static_cast<float>(v), static_cast<float>(i));
+        if (k == 50) {
+            INFO("after the take-off: " << e.status().resistance_ohm);
+            CHECK(e.status().resistance_ohm == Approx(0.010).epsilon(0.1));
+        }
+    }
+    CHECK(e.status().resistance_ohm == Approx(0.020).epsilon(0.05));
+}
+
 TEST_CASE("Difference resistance: a warming pack's falling resistance, window mean and trend", "[joint][truth]") {
     // R0 falls linearly from 0.020 to 0.014 ohm over 120 s of racing (a pack warming from
     // cold). The 60 s window's mean lags by tens of seconds; the trend fit reads now.

@@ -44,15 +44,18 @@ void DifferenceResistanceEstimator::update(uint64_t time_us, float voltage_v, fl
     const float di = current_a - i_[pick];
     const float dv = voltage_v - v_[pick];
     if (fabsf(di) < config_.min_step_a) return;
-    // A pair that would outweigh the whole window and sits far from the resistance found so
-    // far is a garbled reading, not the pack: one 100 A read with no sag, weighted by ΔI², had
-    // pulled R0 to a sixth. Smaller pairs always count, so a real change is never locked out.
-    if (status_.valid && di * di > sxx_ && fabsf(dv + status_.resistance_ohm * di) > 0.5f * status_.resistance_ohm * fabsf(di) + 0.05f) return;
+    // A pair that would outweigh the whole window and sits far from the resistance the window
+    // holds is a garbled reading, not the pack: one 100 A read with no sag, weighted by ΔI², had
+    // pulled R0 to a sixth. Only while the window holds enough to judge by: a skipped pair adds
+    // nothing, so once the window has forgotten below its bar the next pair counts, and a real
+    // change (or a wrong first estimate) is never locked out.
+    if (sxx_ >= config_.min_excitation_a2 && di * di > sxx_ &&
+        fabsf(dv + status_.resistance_ohm * di) > 0.5f * status_.resistance_ohm * fabsf(di))
+        return;
     sxx_ += di * di;
     sxy_ += di * dv;
     syy_ += dv * dv;
     n_ += 1.0f;
-    status_.excitation_a2 = sxx_;
     if (sxx_ < config_.min_excitation_a2 || n_ < 3.0f) return;
     const float r = -sxy_ / sxx_;
     if (!(r > 0.0f) || !finitef(r)) return;

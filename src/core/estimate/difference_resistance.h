@@ -29,7 +29,6 @@ public:
         float sigma_ohm = 0.0f;       // standard error of the estimate
         float resistance_now_ohm = 0.0f;  // with the trend carried to now (see Config)
         float sigma_now_ohm = 0.0f;
-        float excitation_a2 = 0.0f;   // Σ weighted ΔI²
         bool valid = false;
     };
 

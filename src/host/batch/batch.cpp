@@ -106,6 +106,14 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
         BatchItem item;
         item.index = items.size();
         item.path = p.input.path;
+        item.digest_path = p.input.path;
+        if (manifest) {
+            std::error_code ec;
+            const fs::path base = fs::weakly_canonical(fs::absolute(fs::path(manifest->path).parent_path()), ec);
+            const fs::path file = ec ? fs::path() : fs::weakly_canonical(fs::absolute(p.input.path), ec);
+            const fs::path relative = ec ? fs::path() : file.lexically_relative(base);
+            if (!ec && !relative.empty()) item.digest_path = relative.string();
+        }
         item.stem = path_stem(p.input.path);
         item.error = p.input.error;
         item.test = p.settings.test ? *p.settings.test : (item.error.empty() ? item.stem : p.input.path);
@@ -155,11 +163,7 @@ std::string inputs_digest(const std::vector<BatchItem>& items) {
     };
     mix(std::to_string(items.size()));
     for (const BatchItem& it : items) {
-        // The file, not its spelling: shards run from other working directories, or with
-        // the manifest named by another path, are one run (rows keep the path as given).
-        std::error_code ec;
-        const std::filesystem::path canonical = std::filesystem::weakly_canonical(std::filesystem::absolute(it.path), ec);
-        mix(ec ? it.path : canonical.string());
+        mix(it.digest_path.empty() ? it.path : it.digest_path);
         mix(it.test);
         mix(it.pack);
         mix(it.replay.config.name);
