@@ -35,7 +35,9 @@ std::function<int()> setup(CLI::App& sub) {
         ->check(number_in(0.0, 1.0e7));
     sub.add_flag("-q,--quiet", a->quiet, "Print only errors and the final count");
     return [a]() -> int {
-        if (int rc = check_outputs("battsim log", {{"--port", a->options.port}}, {{"--out", a->options.out_path}})) return rc;
+        host::NamedPath out{"--out", a->options.out_path};
+        out.appended = a->options.append;  // continued in place: the file's own permission counts
+        if (int rc = check_outputs("battsim log", {{"--port", a->options.port}}, {out})) return rc;
         g_stop.store(false);
         std::signal(SIGINT, on_signal);
         std::signal(SIGTERM, on_signal);

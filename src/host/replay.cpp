@@ -46,12 +46,12 @@ public:
             if (step_s > longest_s_) {
                 longest_s_ = step_s;
                 longest_at_s_ = static_cast<double>(last_us_ - first_us_) * 1e-6;
-                longest_mah_ = 0.5 * (static_cast<double>(last_a_) + static_cast<double>(s.current_a)) * step_s / 3.6;
+                // The monitor's counter takes each interval at the current that ends it.
+                longest_mah_ = static_cast<double>(s.current_a) * step_s / 3.6;
             }
         }
         if (!have_) first_us_ = s.time_us;
         last_us_ = s.time_us;
-        last_a_ = s.current_a;
         have_ = true;
         if (std::isfinite(s.current_a)) {
             min_a_ = std::min(min_a_, static_cast<double>(s.current_a));
@@ -121,7 +121,7 @@ public:
         if (dt_s > 0.0 && longest_s_ > kLongestGapS && longest_s_ > kGapMedians * dt_s) {
             std::snprintf(buf, sizeof buf,
                           "the log's clock jumps %.4g s at %.4g s into the log (a logging gap, or two sessions in one "
-                          "file): the charge over the gap is counted at the currents either side (%.4g mAh) and a "
+                          "file): the charge over the gap is counted at the current after it (%.4g mAh) and a "
                           "flight's time spans it; replay two sessions apart",
                           longest_s_, longest_at_s_, std::isfinite(longest_mah_) ? longest_mah_ : 0.0);
             out.push_back(buf);
@@ -154,7 +154,6 @@ private:
     long voltages_ = 0;
     std::vector<double> intervals_s_;
     uint64_t first_us_ = 0, last_us_ = 0;
-    float last_a_ = 0.0f;
     double longest_s_ = 0.0, longest_at_s_ = 0.0, longest_mah_ = 0.0;  // the longest interval, where, its charge
     bool have_ = false;
     double min_a_ = INFINITY, max_a_ = -INFINITY;

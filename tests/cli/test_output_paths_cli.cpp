@@ -360,7 +360,7 @@ TEST_CASE("an output that cannot be written is said before the work, and no othe
     CHECK_THAT(r.err, !Catch::Contains("analysing"));  // before the work
     CHECK(read_file(dir + "/cfg.json") == "old config\n");
     // A directory a command makes is made, with its parents (fit --output-dir had not been).
-    r = run("fit " + q(dir + "/log.csv") + " -c " + q(kConfig) + " --params none --output-dir " + q(dir + "/made/deeper"));
+    r = run("fit " + q(dir + "/log.csv") + " -c " + q(kConfig) + " --params none --output-dir " + q(dir + "/made/deeper/"));
     INFO(r.err);
     CHECK(r.exit_code == 0);
     CHECK(fs::exists(dir + "/made/deeper/fitted-log.json"));
@@ -390,7 +390,8 @@ TEST_CASE("an output keeps the permissions of the file it replaces; a name near 
 TEST_CASE("a reader of standard output gone, or a hang-up, leaves no temporary file", "[cli][paths]") {
     const std::string dir = clitest::temp_dir();
     clitest::write_file(dir + "/log.csv", testsupport::raw_flight(12, 0.001));
-    // `| head -1`: the series on standard output, the MAVLink stream into a file.
+    // `| head -1`: the series on standard output, the MAVLink stream into a file. The series
+    // (about 160 KB) outgrows the pipe's buffer, so battsim writes on after head has gone.
     std::string cmd = q(BATTSIM_BINARY) + " replay " + q(dir + "/log.csv") + " -c " + q(kConfig) + " --mavlink " +
                       q(dir + "/m.bin") + " --series - 2>/dev/null | head -1 > /dev/null";
     std::system(cmd.c_str());

@@ -189,7 +189,7 @@ AtomicFile::AtomicFile(const std::string& path) : path_(path) {
     // The file it replaces keeps its permissions (a config made private stays private).
     struct stat old_target {};
     if (!direct_ && exists && ::stat(target_.c_str(), &old_target) == 0)
-        (void)::fchmod(::fileno(file_), old_target.st_mode & 07777);
+        (void)::fchmod(::fileno(file_), old_target.st_mode & 0777);  // not set-user-ID and kin
 }
 
 AtomicFile::~AtomicFile() {

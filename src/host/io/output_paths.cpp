@@ -130,14 +130,26 @@ std::string unwritable_directory_reason(const std::string& path) {
 }
 
 std::string first_unwritable_output(const std::vector<NamedPath>& outputs, std::string* what, std::string* path) {
+    // "d/" and "d" name one directory: the trailing separator goes.
+    const auto dir_form = [](const std::string& p) {
+        fs::path n = fs::path(p).lexically_normal();
+        return n.has_filename() || n == n.root_path() ? n : n.parent_path();
+    };
     std::vector<fs::path> dirs;
     for (const NamedPath& out : outputs)
-        if (out.directory && !out.path.empty()) dirs.push_back(fs::path(out.path).lexically_normal());
+        if (out.directory && !out.path.empty()) dirs.push_back(dir_form(out.path));
     for (const NamedPath& out : outputs) {
         if (out.path.empty() || out.path == "-") continue;
         std::string why;
         if (out.directory) {
-            why = unwritable_directory_reason(out.path);
+            why = unwritable_directory_reason(dir_form(out.path).string());
+        } else if (out.appended) {
+            // Opened in place to append: the file, not its directory, must be writable.
+            struct stat st {};
+            if (::stat(out.path.c_str(), &st) == 0 && S_ISREG(st.st_mode))
+                why = ::access(out.path.c_str(), W_OK) == 0 ? "" : "no permission to write " + out.path;
+            else
+                why = unwritable_reason(out.path);
         } else {
             const fs::path parent = fs::path(out.path).lexically_normal().parent_path();
             if (std::find(dirs.begin(), dirs.end(), parent) != dirs.end()) continue;  // its directory's check covers it

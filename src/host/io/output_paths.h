@@ -22,6 +22,8 @@ struct NamedPath {
     // An output directory the command makes when it is not there (batch --out): checked as
     // a directory, and the files listed inside it are not asked for a directory that exists.
     bool directory = false;
+    // A file written in place, not replaced (`log --append`): its own permission counts.
+    bool appended = false;
 };
 
 // Throws std::invalid_argument("--series and the log name the same file: X") when an output

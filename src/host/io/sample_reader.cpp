@@ -209,12 +209,29 @@ private:
     mutable SourceInfo info_;
 };
 
+// A reader with one more note of its own (options that do not apply to the log's format).
+class NotedReader final : public SampleReader {
+public:
+    NotedReader(std::unique_ptr<SampleReader> inner, std::string note) : inner_(std::move(inner)), note_(std::move(note)) {}
+    bool next(core::Sample& out) override { return inner_->next(out); }
+    const SourceInfo& info() const override {
+        info_ = inner_->info();
+        info_.notes.insert(info_.notes.begin(), note_);
+        return info_;
+    }
+
+private:
+    std::unique_ptr<SampleReader> inner_;
+    std::string note_;
+    mutable SourceInfo info_;
+};
+
 std::unique_ptr<SampleReader> open_format(const std::string& path, const ReaderOptions& options) {
     const std::vector<unsigned char> head = peek(path);
     LogFormat format = options.format;
     if (format == LogFormat::Auto) format = detect(path, head);
-    // Options for one format given for a log of another are refused: read on, they had been
-    // dropped without a word (a log counting discharge as negative then flew nothing).
+    // Options for one format given for a log of another: they had been dropped without a
+    // word (a log counting discharge as negative then flew nothing); now a note says so.
     std::vector<std::string> foreign;
     const ColumnMapping& c = options.columns;
     if (format != LogFormat::Csv) {
@@ -231,23 +248,23 @@ std::unique_ptr<SampleReader> open_format(const std::string& path, const ReaderO
     }
     if (format != LogFormat::RawPbms && format != LogFormat::Csv && options.current_source != CurrentSource::Auto)
         foreign.push_back("--current-source applies to raw and CSV logs only");
-    if (!foreign.empty()) {
-        std::string what;
-        for (const std::string& f : foreign) what += (what.empty() ? "" : "; ") + f;
-        throw InputError(path, 0, 0,
-                         what + ", and this log reads as " + to_string(format) +
-                             ": drop the option, or give --format if the log is of another format (a manifest: its "
-                             "column settings)");
-    }
+    std::unique_ptr<SampleReader> reader;
     switch (format) {
-        case LogFormat::RawPbms: return open_raw_pbms(path, options);
-        case LogFormat::Csv: return open_csv(path, options);
-        case LogFormat::DataflashText: return open_dataflash_text(path, options);
-        case LogFormat::DataflashBinary: return open_dataflash_binary(path, options);
-        case LogFormat::Ulog: return open_ulog(path, options);
-        case LogFormat::Auto: break;
+        case LogFormat::RawPbms: reader = open_raw_pbms(path, options); break;
+        case LogFormat::Csv: reader = open_csv(path, options); break;
+        case LogFormat::DataflashText: reader = open_dataflash_text(path, options); break;
+        case LogFormat::DataflashBinary: reader = open_dataflash_binary(path, options); break;
+        case LogFormat::Ulog: reader = open_ulog(path, options); break;
+        case LogFormat::Auto: throw InputError(path, 0, 0, "cannot detect the log format");
     }
-    throw InputError(path, 0, 0, "cannot detect the log format");
+    if (foreign.empty()) return reader;
+    // Said, not refused: a manifest's defaults for a fleet's CSV logs reach its .bin logs too,
+    // and no entry can unset them.
+    std::string what;
+    for (const std::string& f : foreign) what += (what.empty() ? "" : "; ") + f;
+    return std::unique_ptr<SampleReader>(new NotedReader(
+        std::move(reader), what + ", and this log reads as " + to_string(format) +
+                               ": ignored (give --format if the log is of another format)"));
 }
 
 }  // namespace
