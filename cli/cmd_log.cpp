@@ -36,7 +36,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_flag("-q,--quiet", a->quiet, "Print only errors and the final count");
     return [a]() -> int {
         host::NamedPath out{"--out", a->options.out_path};
-        out.appended = a->options.append;  // continued in place: the file's own permission counts
+        out.appended = true;  // written in place, new or continued: the file's own permission counts
         if (int rc = check_outputs("battsim log", {{"--port", a->options.port}}, {out})) return rc;
         g_stop.store(false);
         std::signal(SIGINT, on_signal);

@@ -217,11 +217,11 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("resistance_lag_s", jc.resistance.lag_s, 0, 60);
         r.number("resistance_memory_s", jc.resistance.memory_s, 0, kBig);
         r.number("resistance_min_step_a", jc.resistance.min_step_a, 0, kBig);
-        r.number("resistance_min_excitation_a2", jc.resistance.min_excitation_a2, 0, kBig);
+        r.number("resistance_min_excitation_a2", jc.resistance.min_excitation_a2, 0.001, kBig);  // a bar: the garbled-reading gate lets pairs through below it
         r.number("resistance_trend_sigma_per_s", jc.resistance.trend_sigma_per_s, 0, 1);
         r.number("hover_resistance_lag_s", jc.hover_resistance.lag_s, 0, 60);
         r.number("hover_resistance_min_step_a", jc.hover_resistance.min_step_a, 0, kBig);
-        r.number("hover_resistance_min_excitation_a2", jc.hover_resistance.min_excitation_a2, 0, kBig);
+        r.number("hover_resistance_min_excitation_a2", jc.hover_resistance.min_excitation_a2, 0.001, kBig);
         r.number("polarisation_time_s", jc.polarisation_time_s, 0, kBig);
         r.number("polarisation_slow_time_s", jc.polarisation_slow_time_s, 0, kBig);
         r.number("polarisation_slow_share", jc.polarisation_slow_share, 0, 1);

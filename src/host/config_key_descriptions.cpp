@@ -79,11 +79,11 @@ const std::map<std::string, std::string>& config_key_descriptions() {
     {"joint.resistance_lag_s", "Lag (s) of the short-lag differences the pack's R0 is fitted from: each sample pairs with the newest sample at least this old (at most 15 samples back)."},
     {"joint.resistance_memory_s", "Forgetting time constant (s) of the short-lag resistance fit: shorter follows a warming pack sooner but is noisier."},
     {"joint.resistance_min_step_a", "Smallest current change (A) between a pair that enters the resistance fit; smaller ones carry only noise."},
-    {"joint.resistance_min_excitation_a2", "Weighted sum of squared current steps (A²) before the short-lag resistance counts as measured; lower trusts R0 sooner, on less data."},
+    {"joint.resistance_min_excitation_a2", "Weighted sum of squared current steps (A²) before the short-lag resistance counts as measured; lower trusts R0 sooner, on less data; also the bar below which the window is too thin to judge a garbled reading by (a pair that alone outweighs the window and misses its resistance by half is skipped only above it)."},
     {"joint.resistance_trend_sigma_per_s", "Prior σ of the resistance's linear trend, as a fraction of R per second, with which the reported R0 is carried to now as a pack warms; 0: no trend, the window's mean."},
     {"joint.hover_resistance_lag_s", "Lag (s) of the stand-in resistance estimator used when the short-lag one lacks excitation (a steady hover); it is fed on the ground too, so the take-off step counts."},
     {"joint.hover_resistance_min_step_a", "Smallest current change (A) between a pair that enters the hover resistance fit."},
-    {"joint.hover_resistance_min_excitation_a2", "Weighted sum of squared current steps (A²) before the hover resistance estimate counts as measured."},
+    {"joint.hover_resistance_min_excitation_a2", "Weighted sum of squared current steps (A²) before the hover resistance estimate counts as measured, and the bar for its garbled-reading gate (as resistance_min_excitation_a2)."},
     // joint: the tracking filter (state of charge and remaining time); health_filter and verdict_filter borrow its noise keys.
     {"joint.polarisation_time_s", "Time constant (s) of the fast low-passed current the tracking filter's polarisation sees: fast enough to follow the throttle, so it cannot mimic the state of charge's trend."},
     {"joint.polarisation_slow_time_s", "Time constant (s) of the slow part of the tracking filter's polarisation current, for the pack's slow relaxation (the shape of `battsim fit`'s RC branches)."},

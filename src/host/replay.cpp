@@ -30,7 +30,10 @@ constexpr double kMaxRealtimeWaitS = 2.0;  // --realtime: the longest wait for o
 class InputShape {
 public:
     explicit InputShape(bool negated) : negated_(negated) {}
-    void add(const core::Sample& s) {
+    // After the monitor's update: `consumed_mah` is its count then (the charge a gap adds is
+    // what it counted, with the config's current-sensor corrections, or nothing for a sample
+    // it kept out).
+    void add(const core::Sample& s, double consumed_mah) {
         if (std::isfinite(s.voltage_v) && s.voltage_v != 0.0f) {
             const double tenths = 10.0 * static_cast<double>(s.voltage_v);
             coarse_ = coarse_ && std::fabs(tenths - std::round(tenths)) < 2e-3;
@@ -46,12 +49,12 @@ public:
             if (step_s > longest_s_) {
                 longest_s_ = step_s;
                 longest_at_s_ = static_cast<double>(last_us_ - first_us_) * 1e-6;
-                // The monitor's counter takes each interval at the current that ends it.
-                longest_mah_ = static_cast<double>(s.current_a) * step_s / 3.6;
+                longest_mah_ = consumed_mah - last_consumed_mah_;
             }
         }
         if (!have_) first_us_ = s.time_us;
         last_us_ = s.time_us;
+        last_consumed_mah_ = consumed_mah;
         have_ = true;
         if (std::isfinite(s.current_a)) {
             min_a_ = std::min(min_a_, static_cast<double>(s.current_a));
@@ -121,7 +124,7 @@ public:
         if (dt_s > 0.0 && longest_s_ > kLongestGapS && longest_s_ > kGapMedians * dt_s) {
             std::snprintf(buf, sizeof buf,
                           "the log's clock jumps %.4g s at %.4g s into the log (a logging gap, or two sessions in one "
-                          "file): the charge over the gap is counted at the current after it (%.4g mAh) and a "
+                          "file): the monitor counted %.4g mAh over the gap (at the current after it) and a "
                           "flight's time spans it; replay two sessions apart",
                           longest_s_, longest_at_s_, std::isfinite(longest_mah_) ? longest_mah_ : 0.0);
             out.push_back(buf);
@@ -155,6 +158,7 @@ private:
     std::vector<double> intervals_s_;
     uint64_t first_us_ = 0, last_us_ = 0;
     double longest_s_ = 0.0, longest_at_s_ = 0.0, longest_mah_ = 0.0;  // the longest interval, where, its charge
+    double last_consumed_mah_ = 0.0;
     bool have_ = false;
     double min_a_ = INFINITY, max_a_ = -INFINITY;
 };
@@ -212,8 +216,8 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
             const auto due = wall0 + std::chrono::microseconds(static_cast<int64_t>(paced_us / options.realtime_speed));
             std::this_thread::sleep_until(due);
         }
-        shape.add(sample);
         const core::MonitorStatus& status = monitor->update(sample);
+        shape.add(sample, static_cast<double>(status.consumed_mah));
         if (std::isnan(facts.capacity_passed_s) && status.initialised && status.consumed_mah > capacity_mah)
             facts.capacity_passed_s = static_cast<double>(sample.time_us - t0_us) * 1e-6;
         summary.add(status);

@@ -243,8 +243,8 @@ TEST_CASE("replay notes a current of the other sign and a time column in millise
     auto raw = run("replay " + q(kSource + "/logs/example-4s.csv") + " -c " + q(kConfig) + " --negative-discharge --json");
     CHECK(raw.exit_code == 0);
     CHECK(nlohmann::json::parse(raw.out)["input"]["notes"][0] ==
-          "--negative-discharge applies to headered CSV logs only, and this log reads as raw: ignored (give --format if "
-          "the log is of another format)");
+          "--negative-discharge applies to headered CSV logs only, and this log reads as raw: ignored (if the log is of "
+          "another format, give it: --format, in batch --log-format or a manifest's \"format\")");
     const auto m = notes("ms.csv", "");
     REQUIRE(m.size() == 1);
     CHECK(m[0] == "the samples are 67 s apart (median): if the time column counts milliseconds, give --time-unit ms (or "

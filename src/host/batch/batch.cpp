@@ -106,14 +106,6 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
         BatchItem item;
         item.index = items.size();
         item.path = p.input.path;
-        item.digest_path = p.input.path;
-        if (manifest) {
-            std::error_code ec;
-            const fs::path base = fs::weakly_canonical(fs::absolute(fs::path(manifest->path).parent_path()), ec);
-            const fs::path file = ec ? fs::path() : fs::weakly_canonical(fs::absolute(p.input.path), ec);
-            const fs::path relative = ec ? fs::path() : file.lexically_relative(base);
-            if (!ec && !relative.empty()) item.digest_path = relative.string();
-        }
         item.stem = path_stem(p.input.path);
         item.error = p.input.error;
         item.test = p.settings.test ? *p.settings.test : (item.error.empty() ? item.stem : p.input.path);
@@ -163,7 +155,11 @@ std::string inputs_digest(const std::vector<BatchItem>& items) {
     };
     mix(std::to_string(items.size()));
     for (const BatchItem& it : items) {
-        mix(it.digest_path.empty() ? it.path : it.digest_path);
+        // The path as given or resolved from the manifest as given: shards on nodes that
+        // mount the fleet elsewhere agree when run with the same relative paths (no form of
+        // the path serves every case: an absolute one differs between nodes, one relative
+        // to the manifest differs with the mount of data outside it).
+        mix(it.path);
         mix(it.test);
         mix(it.pack);
         mix(it.replay.config.name);

@@ -20,10 +20,6 @@ namespace host {
 struct BatchItem {
     std::size_t index = 0;   // place in the full, unsharded list
     std::string path;        // log path as given or resolved from the manifest
-    // What the inputs' digest hashes: with a manifest, the path relative to the manifest's
-    // folder (the same for any spelling of -m, any working directory, any machine that
-    // mounts the fleet elsewhere); without one, the path as given.
-    std::string digest_path;
     std::string stem;        // file stem: names the --out summary and the golden file
     std::string test;        // row label (default: the stem)
     std::string pack;        // empty = none

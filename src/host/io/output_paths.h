@@ -22,7 +22,8 @@ struct NamedPath {
     // An output directory the command makes when it is not there (batch --out): checked as
     // a directory, and the files listed inside it are not asked for a directory that exists.
     bool directory = false;
-    // A file written in place, not replaced (`log --append`): its own permission counts.
+    // A file written in place, not replaced (`battsim log`): an existing one's own
+    // permission counts, not its directory's.
     bool appended = false;
 };
 

@@ -264,7 +264,8 @@ std::unique_ptr<SampleReader> open_format(const std::string& path, const ReaderO
     for (const std::string& f : foreign) what += (what.empty() ? "" : "; ") + f;
     return std::unique_ptr<SampleReader>(new NotedReader(
         std::move(reader), what + ", and this log reads as " + to_string(format) +
-                               ": ignored (give --format if the log is of another format)"));
+                               ": ignored (if the log is of another format, give it: --format, in batch --log-format or "
+                               "a manifest's \"format\")"));
 }
 
 }  // namespace
