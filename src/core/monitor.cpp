@@ -128,7 +128,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
             initial_wh = model.energy_wh_to(initial_ah, settle_a);
         }
         counter_.reset(initial_ah * 1000.0f, initial_wh * 1000.0f);
-        if (config_.estimator == EstimatorKind::Joint) joint_.start(settle_v, settle_a);
+        if (!reference) joint_.start(settle_v, settle_a);
     } else {
         counter_.update(current_a, sample.voltage_v, dt_s);
     }
@@ -180,7 +180,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
     status_.time_valid = ft.valid;
 
     bool short_flight = false;
-    if (config_.estimator == EstimatorKind::Joint) {
+    if (!reference) {
         joint_.set_weakest_cell_deficit(cell_analyzer_.status().pack_capacity_deficit);
         joint_.update(sample.time_us, sample.voltage_v, current_a, dt_s, flying);
         const JointEstimator::Status& js = joint_.status();
@@ -235,24 +235,21 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
     }
 
     const WarningConfig& wc = config_.warnings;
-    if (config_.estimator == EstimatorKind::Joint) {
-        // The joint estimator warns about the flight, naming its cause(s).
+    if (!reference) {
+        // The joint estimator warns about the flight, naming its cause(s), and its cell.
         raise(kWarnShortFlight, short_flight);
         raise(kWarnLowCapacity, short_flight && (status_.short_flight_cause & JointEstimator::kCauseCapacity));
         raise(kWarnHighResistance, short_flight && (status_.short_flight_cause & JointEstimator::kCauseResistance));
+        const CellAnalyzer::Status& ca = cell_analyzer_.status();
+        raise(kWarnCellOutlier, ca.flagged_cell >= 0);
+        status_.outlier_cell = ca.flagged_cell;
+        status_.cell_finding = ca.finding;
     } else {
         const float rated_ah = config_.battery.capacity_ah;
         raise(kWarnLowCapacity, status_.capacity_ah < wc.low_capacity_fraction * rated_ah);
         raise(kWarnHighResistance, resistance_.status().updates >= wc.min_resistance_updates &&
                                        status_.resistance_ohm >
                                            wc.high_resistance_factor * config_.battery.internal_resistance_ohm);
-    }
-    if (config_.estimator == EstimatorKind::Joint) {
-        const CellAnalyzer::Status& ca = cell_analyzer_.status();
-        raise(kWarnCellOutlier, ca.flagged_cell >= 0);
-        status_.outlier_cell = ca.flagged_cell;
-        status_.cell_finding = ca.finding;
-    } else {
         const bool outlier = cs.worst_cell >= 0 && cs.outlier_samples >= wc.min_cell_outlier_samples &&
                              fabsf(cs.score[cs.worst_cell]) >= wc.cell_outlier_score;
         raise(kWarnCellOutlier, outlier);

@@ -123,17 +123,13 @@ float ExtendedModel::ocv_correction_v(float used_ah) const {
 float ExtendedModel::voltage_v(float used_ah, float current_a, float filtered_current_a) const {
     float current_eff_a = current_a;
     if (ext_.current_sensor.lead_s != 0.0f) current_eff_a += ext_.current_sensor.lead_s * current_slope_a_per_s_;
-    float v;
-    if (!ext_.temperature.enabled) {
-        v = base_.voltage_v(used_ah, current_eff_a, filtered_current_a);
-    } else {
-        // The base formula (see tremblay.h) with the temperature-adjusted E0, R, K and Q.
-        const float q = q_ah_;
-        const float it = clampf(used_ah, 0.0f, q * (1.0f - TremblayModel::kMinRemainingFraction));
-        const float polarisation = k_v_ * (q / (q - it));
-        v = e0_v_ - r_ohm_ * current_eff_a - polarisation * filtered_current_a - polarisation * it +
-            base_.a_v() * expf(-base_.b_per_ah() * it);
-    }
+    // The base formula (see tremblay.h) with the temperature-adjusted E0, R, K and Q (the
+    // base model's own when the temperature dependence is off: the same float operations).
+    const float q = q_ah_;
+    const float it = clampf(used_ah, 0.0f, q * (1.0f - TremblayModel::kMinRemainingFraction));
+    const float polarisation = k_v_ * (q / (q - it));
+    float v = e0_v_ - r_ohm_ * current_eff_a - polarisation * filtered_current_a - polarisation * it +
+              base_.a_v() * expf(-base_.b_per_ah() * it);
     for (int k = 0; k < ext_.rc_count; ++k) v -= status_.rc_voltage_v[k];
     if (ext_.hysteresis.magnitude_v != 0.0f) v += status_.hysteresis_v;
     if (ext_.ocv.count >= 2) v += ocv_correction_v(used_ah);
@@ -141,9 +137,6 @@ float ExtendedModel::voltage_v(float used_ah, float current_a, float filtered_cu
 }
 
 float ExtendedModel::used_ah_at_voltage(float voltage_v, float current_a) const {
-    const bool plain = ext_.rc_count == 0 && !ext_.temperature.enabled && ext_.hysteresis.magnitude_v == 0.0f &&
-                       ext_.ocv.count < 2 && ext_.current_sensor.lead_s == 0.0f;
-    if (plain) return base_.used_ah_at_voltage(voltage_v, current_a);
     return invert_falling([&](float used_ah) { return this->voltage_v(used_ah, current_a, current_a); }, 0.0f,
                           q_ah_ * (1.0f - TremblayModel::kMinRemainingFraction), voltage_v);
 }
