@@ -44,12 +44,13 @@ void DifferenceResistanceEstimator::update(uint64_t time_us, float voltage_v, fl
     const float di = current_a - i_[pick];
     const float dv = voltage_v - v_[pick];
     if (fabsf(di) < config_.min_step_a) return;
-    // A pair that would outweigh the whole window and sits far from the resistance the window
-    // holds is a garbled reading, not the pack: one 100 A read with no sag, weighted by ΔI², had
-    // pulled R0 to a sixth. Only while the window holds enough to judge by: a skipped pair adds
-    // nothing, so once the window has forgotten below its bar the next pair counts, and a real
-    // change (or a wrong first estimate) is never locked out.
-    if (sxx_ >= config_.min_excitation_a2 && di * di > sxx_ &&
+    // A pair that would outweigh the whole window, or a hundred of its mean pairs (a step ten
+    // times its RMS step), and sits far from the resistance the window holds is a garbled
+    // reading, not the pack: one 100 A read with no sag, weighted by ΔI², had pulled R0 to a
+    // sixth; one 200 A read in a racing window, to 0.6. Only while the window holds enough to
+    // judge by: a skipped pair adds nothing, so once the window has forgotten below its bar
+    // the next pair counts, and a real change (or a wrong first estimate) is never locked out.
+    if (sxx_ >= config_.min_excitation_a2 && di * di * maxf(n_, 100.0f) > 100.0f * sxx_ &&
         fabsf(dv + status_.resistance_ohm * di) > 0.5f * status_.resistance_ohm * fabsf(di))
         return;
     sxx_ += di * di;
