@@ -70,6 +70,7 @@ public:
     bool conversion_ready() override;
     bool read_pack(PackReading& out) override;
     bool read_taps(TapReading& out) override;
+    bool has_taps() const override { return true; }
     // True once every row has been read. Looks one row ahead, so the app is not left
     // waiting out a conversion timeout after the last row.
     bool finished() {

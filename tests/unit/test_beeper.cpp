@@ -157,6 +157,7 @@ public:
     bool conversion_ready() override { return dead() ? true : inner_.conversion_ready(); }
     bool read_pack(fw::PackReading& out) override { return !dead() && inner_.read_pack(out); }
     bool read_taps(fw::TapReading& out) override { return !dead() && inner_.read_taps(out); }
+    bool has_taps() const override { return true; }
 
 private:
     bool dead() const { return static_cast<double>(clock_.now_us()) * 1e-6 > die_after_s_; }

@@ -32,6 +32,8 @@ public:
     virtual bool conversion_ready() = 0;
     virtual bool read_pack(PackReading& out) = 0;
     virtual bool read_taps(TapReading& out) = 0;
+    // False when begin() found no tap chip: its samples carry no cells, and that is no error.
+    virtual bool has_taps() const = 0;
 
 protected:
     ~Sensors() = default;  // never deleted through the interface: no heap, no virtual dtor

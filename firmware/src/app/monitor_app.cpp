@@ -95,6 +95,9 @@ void MonitorApp::open_sd_log() {
     }
     // A new file per boot: the first free number.
     for (unsigned i = 1; i <= 9999u; ++i) {
+        // Each look-up scans the directory: let the ESP8266's system run between them, or a
+        // card with hundreds of logs keeps setup() past its watchdog.
+        clock_.sleep_us(0);
         snprintf(state_.log_path, sizeof state_.log_path, "%s/log%04u.csv", kLogDir, i);
         if (storage_.exists(state_.log_path)) continue;
         if (storage_.open_log(state_.log_path) && storage_.append(header_.c_str(), header_.size())) {
@@ -266,13 +269,17 @@ void MonitorApp::silence_buzzer() {
 
 void MonitorApp::send_status_note() {
     const ReadingCounters c = readings_.counters();
-    telemetry::FixedText<160> t;
+    telemetry::FixedText<224> t;
     t.append("samples=");
     t.append_uint(state_.samples);
     t.append(" missed=");
     t.append_uint(c.missed);
     t.append(" timeouts=");
     t.append_uint(c.ready_timeouts);
+    t.append(" pack_errors=");
+    t.append_uint(c.pack_errors);
+    t.append(" tap_errors=");
+    t.append_uint(c.tap_errors);
     t.append(" sd=");
     t.append(state_.sd_ok ? state_.log_path : "off");
     t.append(" sd_errors=");

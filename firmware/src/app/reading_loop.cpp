@@ -21,7 +21,7 @@ ReadingLoop::Result ReadingLoop::next(Reading& out, uint32_t poll_us) {
     }
     out.time_us = timer_.stamp(now_us);
     out.taps_ok = sensors_.read_taps(out.taps);
-    if (!out.taps_ok) ++tap_errors_;
+    if (!out.taps_ok && sensors_.has_taps()) ++tap_errors_;
     return Result::Reading;
 }
 

@@ -21,7 +21,7 @@ struct ReadingCounters {
     uint32_t missed = 0;          // conversions skipped (the loop was late)
     uint32_t ready_timeouts = 0;  // no conversion for several periods: INA226 gone?
     uint32_t pack_errors = 0;     // I²C read of the INA226 failed
-    uint32_t tap_errors = 0;      // I²C read of the INA3221 failed (sample without cells)
+    uint32_t tap_errors = 0;      // INA3221 present, its reading failed or was not ready (sample without cells)
 };
 
 class ReadingLoop {

@@ -2,10 +2,7 @@
 
 #include <ESP8266WiFi.h>
 #include <Wire.h>
-#include <math.h>
 #include <string.h>
-
-#include "app/readings.h"
 
 namespace battsim {
 namespace fw {
@@ -19,54 +16,28 @@ bool i2c_present(uint8_t address) {
 
 }  // namespace
 
-bool InaSensors::begin() {
+void WireBus::begin() {
     Wire.begin(kSdaPin, kSclPin);
     Wire.setClock(400000);
-    if (!ina226_.init()) return false;
-    // 2116 µs shunt + 2116 µs bus conversions, averaged over 16: a reading every ~67.7 ms.
-    static_assert(kIna226ConversionUs == 2116 && kIna226Averages == 16, "INA226 settings and kIna226PeriodUs agree");
-    ina226_.setAverage(AVERAGE_16);
-    ina226_.setConversionTime(CONV_TIME_2116);
-    ina226_.setMeasureMode(CONTINUOUS);
-    ina226_.readAndClearFlags();
-
-    // Taps: bus voltages only (the shunt inputs are shorted), 1100 µs × 16 per channel.
-    static_assert(kIna3221ConversionUs == 1100 && kIna3221Averages == 16, "INA3221 settings as documented");
-    taps_present_ = i2c_present(INA3221_ADDR41_VCC);
-    if (taps_present_) {
-        ina3221_.begin(&Wire);
-        ina3221_.reset();
-        ina3221_.setShuntMeasDisable();
-        ina3221_.setBusMeasEnable();
-        ina3221_.setBusConversionTime(INA3221_REG_CONF_CT_1100US);
-        ina3221_.setAveragingMode(INA3221_REG_CONF_AVG_16);
-        ina3221_.setModeContinious();
-    }
-    return true;
 }
 
-bool InaSensors::conversion_ready() {
-    // Reading Mask/Enable returns the conversion-ready flag and clears it.
-    ina226_.readAndClearFlags();
-    return ina226_.convAlert;
+bool WireBus::write_register(uint8_t address, uint8_t reg, uint16_t value) {
+    Wire.beginTransmission(address);
+    Wire.write(reg);
+    Wire.write(static_cast<uint8_t>(value >> 8));
+    Wire.write(static_cast<uint8_t>(value & 0xFFu));
+    return Wire.endTransmission() == 0;
 }
 
-bool InaSensors::read_pack(PackReading& out) {
-    // The library scales the registers by their steps (1.25 mV, 2.5 µV); rounding undoes
-    // that exactly, as the steps are whole numbers of our units (125 and 25).
-    out.bus_10uv = static_cast<int32_t>(lroundf(ina226_.getBusVoltage_V() * static_cast<float>(kBusUnitsPerVolt)));
-    out.shunt_100nv =
-        static_cast<int32_t>(lroundf(ina226_.getShuntVoltage_mV() * static_cast<float>(kShuntUnitsPerMillivolt)));
-    return true;
-}
-
-bool InaSensors::read_taps(TapReading& out) {
-    if (!taps_present_) return false;
-    static const ina3221_ch_t kChannels[kTapChannels] = {INA3221_CH1, INA3221_CH2, INA3221_CH3};
-    for (int k = 0; k < kTapChannels; ++k) {
-        // 8 mV steps: whole millivolts.
-        out.tap_mv[k] = static_cast<int32_t>(lroundf(ina3221_.getVoltage(kChannels[k]) * 1000.0f));
-    }
+bool WireBus::read_register(uint8_t address, uint8_t reg, uint16_t& value) {
+    Wire.beginTransmission(address);
+    Wire.write(reg);
+    if (Wire.endTransmission() != 0) return false;  // no acknowledge: absent or bus fault
+    if (Wire.requestFrom(address, static_cast<uint8_t>(2)) != 2) return false;
+    const int high = Wire.read();
+    const int low = Wire.read();
+    if (high < 0 || low < 0) return false;
+    value = static_cast<uint16_t>((high << 8) | low);
     return true;
 }
 

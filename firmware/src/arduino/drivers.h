@@ -1,16 +1,15 @@
 // The real hardware behind the firmware's interface (app/hardware.h), on a NodeMCU
-// ESP8266: INA226 (pack bus and 200 A / 75 mV shunt) and INA3221 (balance taps) on I²C,
-// an SSD1306 128×64 OLED on the same bus, an SD card on SPI. This layer is kept thin:
-// configure the chips, turn library floats back into the integer readings, pass bytes.
+// ESP8266: INA226 (pack bus and 200 A / 75 mV shunt) and INA3221 (balance taps) on I²C
+// (their register-level driver is app/ina_sensors.h, on the Wire bus below), an SSD1306
+// 128×64 OLED on the same bus, an SD card on SPI. This layer is kept thin: pass bytes.
 // Wiring: docs/firmware.md.
 #pragma once
 #include <Arduino.h>
-#include <INA226_WE.h>
-#include <INA3221.h>
 #include <SdFat.h>
 #include <U8g2lib.h>
 
 #include "app/hardware.h"
+#include "app/ina_sensors.h"
 
 namespace battsim {
 namespace fw {
@@ -19,20 +18,14 @@ namespace fw {
 constexpr uint8_t kSdaPin = D2;
 constexpr uint8_t kSclPin = D1;
 constexpr uint8_t kSdChipSelect = D8;
-constexpr uint8_t kIna226Address = 0x40;  // A0, A1 to GND
 constexpr uint8_t kOledAddress = 0x3C;
 
-class InaSensors : public Sensors {
+// The ESP8266 core's Wire at 400 kHz; a read is good only when both bytes arrived.
+class WireBus : public I2cBus {
 public:
-    bool begin() override;
-    bool conversion_ready() override;
-    bool read_pack(PackReading& out) override;
-    bool read_taps(TapReading& out) override;
-
-private:
-    INA226_WE ina226_{kIna226Address};
-    INA3221 ina3221_{INA3221_ADDR41_VCC};  // A0 to VCC: 0x41, clear of the INA226
-    bool taps_present_ = false;
+    void begin();
+    bool write_register(uint8_t address, uint8_t reg, uint16_t value) override;
+    bool read_register(uint8_t address, uint8_t reg, uint16_t& value) override;
 };
 
 class ArduinoClock : public Clock {

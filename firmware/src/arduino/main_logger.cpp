@@ -8,7 +8,8 @@
 
 namespace {
 
-battsim::fw::InaSensors g_sensors;
+battsim::fw::WireBus g_bus;
+battsim::fw::InaSensors g_sensors(g_bus);
 battsim::fw::ArduinoClock g_clock;
 battsim::fw::OledDisplay g_display;
 battsim::fw::UartPort g_serial;
@@ -19,11 +20,14 @@ battsim::fw::LoggerApp g_app(g_sensors, g_clock, g_display, g_serial);
 void setup() {
     Serial.begin(BATTSIM_BAUD);
     battsim::fw::radio_off();
-    // Shunt calibration and cell count come from the same exported config as the monitor.
-    constexpr battsim::core::MonitorConfig kConfig = battsim_generated::monitor_config();
+    g_bus.begin();
+    // Shunt calibration and cell count come from the same exported config as the monitor
+    // (the two fields as constants: the whole MonitorConfig is 928 B of stack).
+    constexpr int kCells = battsim_generated::monitor_config().cells_in_series;
+    constexpr battsim::core::ShuntCalibration kShunt = battsim_generated::monitor_config().shunt;
     battsim::fw::LoggerAppConfig config;
-    config.cells_in_series = kConfig.cells_in_series;
-    config.shunt = kConfig.shunt;
+    config.cells_in_series = kCells;
+    config.shunt = kShunt;
     config.display = BATTSIM_OLED_OUT != 0;
     g_app.begin(config);
 }

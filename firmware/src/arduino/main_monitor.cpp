@@ -8,7 +8,8 @@
 
 namespace {
 
-battsim::fw::InaSensors g_sensors;
+battsim::fw::WireBus g_bus;
+battsim::fw::InaSensors g_sensors(g_bus);
 battsim::fw::ArduinoClock g_clock;
 battsim::fw::SdStorage g_storage;
 battsim::fw::OledDisplay g_display;
@@ -24,6 +25,7 @@ void setup() {
     Serial.begin(BATTSIM_BAUD);
     Serial1.begin(BATTSIM_MAVLINK_BAUD);
     battsim::fw::radio_off();
+    g_bus.begin();
     battsim::fw::MonitorAppConfig config;
     config.monitor = battsim_generated::monitor_config();
     config.outputs.uart = BATTSIM_UART_OUT != 0;

@@ -1,0 +1,206 @@
+// The register-level INA226/INA3221 driver against a fake I²C bus holding the two chips'
+// registers: configuration words, identification, scaling and every failed read, with the
+// expected values worked out by hand from TI's data sheets (SBOS547, SBOS576).
+#include <map>
+#include <utility>
+#include <vector>
+
+#include "app/ina_sensors.h"
+#include "app/reading_loop.h"
+#include "mock_hardware.h"
+#include "test_firmware_support.h"
+
+using namespace battsim;
+
+namespace {
+
+// Registers per address; a read of a register listed in `fail` (register 0xFF there: any
+// register of that address) fails, as a missing acknowledge or a short read does on the wire.
+struct FakeBus : fw::I2cBus {
+    std::map<std::pair<uint8_t, uint8_t>, uint16_t> regs;
+    std::vector<std::pair<uint8_t, uint8_t>> fail;
+    std::vector<std::pair<uint8_t, uint16_t>> config_writes;  // (address, value) written to register 0
+    // The INA226 clears its ready flag when Mask/Enable is read; the INA3221 likewise.
+    bool write_register(uint8_t address, uint8_t reg, uint16_t value) override {
+        if (!regs.count({address, fw::ina::kRegDieId})) return false;  // nobody there
+        regs[{address, reg}] = value;
+        if (reg == fw::ina::kRegConfig) config_writes.push_back({address, value});
+        return true;
+    }
+    bool read_register(uint8_t address, uint8_t reg, uint16_t& value) override {
+        for (const auto& f : fail)
+            if (f.first == address && (f.second == reg || f.second == 0xFF)) return false;
+        const auto it = regs.find({address, reg});
+        if (it == regs.end()) return false;
+        value = it->second;
+        if (reg == fw::ina::kIna226RegMaskEnable && address == 0x40) it->second &= ~fw::ina::kIna226ConversionReady;
+        if (reg == fw::ina::kIna3221RegMaskEnable && address == 0x41) it->second &= ~fw::ina::kIna3221ConversionReady;
+        return true;
+    }
+    void add_chip(uint8_t address, uint16_t die) {
+        regs[{address, fw::ina::kRegManufacturerId}] = 0x5449;
+        regs[{address, fw::ina::kRegDieId}] = die;
+        regs[{address, fw::ina::kRegConfig}] = 0;
+    }
+};
+
+}  // namespace
+
+TEST_CASE("INA driver: the configuration words are the data sheets' fields", "[firmware]") {
+    // INA226: bit 14 (reads 1) | AVG 010 (16) | VBUSCT 101 (2.116 ms) | VSHCT 101 | MODE 111
+    // = 0100 0101 0110 1111.
+    CHECK(fw::ina::kIna226Config == 0x456F);
+    // INA226 period from those fields: 2 conversions × 2116 µs × 16 averages (readings.h).
+    CHECK(fw::kIna226PeriodUs == 2u * 2116u * 16u);
+    // INA3221: channels 1–3 on (14:12 = 111) | AVG 010 | VBUSCT 100 (1.1 ms) | VSHCT 100 |
+    // MODE 010 (bus, single-shot) = 0111 0101 0010 0010; its three channels take
+    // 3 × 16 × 1.1 ms = 52.8 ms, inside one INA226 period.
+    CHECK(fw::ina::kIna3221Config == 0x7522);
+    CHECK(3u * fw::kIna3221Averages * fw::kIna3221ConversionUs < fw::kIna226PeriodUs);
+}
+
+TEST_CASE("INA driver: begin identifies both chips and configures them", "[firmware]") {
+    FakeBus bus;
+    bus.add_chip(0x40, 0x2260);
+    bus.add_chip(0x41, 0x3220);
+    fw::InaSensors s(bus);
+    REQUIRE(s.begin());
+    CHECK(s.has_taps());
+    REQUIRE(bus.config_writes.size() == 2);
+    CHECK(bus.config_writes[0] == std::make_pair(uint8_t{0x40}, uint16_t{0x456F}));
+    CHECK(bus.config_writes[1] == std::make_pair(uint8_t{0x41}, uint16_t{0x7522}));  // the first tap conversion
+
+    SECTION("no tap chip: the pack alone, and no tap errors counted") {
+        FakeBus pack_only;
+        pack_only.add_chip(0x40, 0x2260);
+        fw::InaSensors p(pack_only);
+        REQUIRE(p.begin());
+        CHECK_FALSE(p.has_taps());
+        fw::TapReading t;
+        CHECK_FALSE(p.read_taps(t));
+        pack_only.regs[{0x40, fw::ina::kIna226RegMaskEnable}] = fw::ina::kIna226ConversionReady;
+        pack_only.regs[{0x40, fw::ina::kIna226RegBus}] = 13328;
+        pack_only.regs[{0x40, fw::ina::kIna226RegShunt}] = 268;
+        fw::host::MockClock clock;
+        fw::ReadingLoop loop(p, clock);
+        fw::Reading r;
+        REQUIRE(loop.next(r) == fw::ReadingLoop::Result::Reading);
+        CHECK_FALSE(r.taps_ok);
+        CHECK(loop.counters().tap_errors == 0);
+    }
+    SECTION("an INA3221 strapped to the INA226's address is no pack sensor") {
+        FakeBus clash;
+        clash.add_chip(0x40, 0x3220);
+        fw::InaSensors c(clash);
+        CHECK_FALSE(c.begin());
+        CHECK(clash.config_writes.empty());
+    }
+    SECTION("another maker's chip, or none, at the pack address") {
+        FakeBus other;
+        other.add_chip(0x40, 0x2260);
+        other.regs[{0x40, fw::ina::kRegManufacturerId}] = 0x4D41;
+        fw::InaSensors o(other);
+        CHECK_FALSE(o.begin());
+        FakeBus none;
+        fw::InaSensors n(none);
+        CHECK_FALSE(n.begin());
+    }
+    SECTION("a configuration that does not read back is refused") {
+        FakeBus flaky;
+        flaky.add_chip(0x40, 0x2260);
+        flaky.fail.push_back({0x40, fw::ina::kRegConfig});
+        fw::InaSensors f(flaky);
+        CHECK_FALSE(f.begin());
+    }
+}
+
+TEST_CASE("INA driver: registers become readings in the firmware's exact units", "[firmware]") {
+    FakeBus bus;
+    bus.add_chip(0x40, 0x2260);
+    bus.add_chip(0x41, 0x3220);
+    fw::InaSensors s(bus);
+    REQUIRE(s.begin());
+
+    // Ready flag: bit 3 of Mask/Enable, cleared by the read.
+    CHECK_FALSE(s.conversion_ready());
+    bus.regs[{0x40, fw::ina::kIna226RegMaskEnable}] = 0x0408;  // CNVR and CVRF set
+    CHECK(s.conversion_ready());
+    CHECK_FALSE(s.conversion_ready());
+
+    // Bus 13328 × 1.25 mV = 16.66 V = 1,666,000 × 10 µV; shunt 268 × 2.5 µV = 0.67 mV =
+    // 6,700 × 0.1 µV; a negative shunt word (0xFF00 = −256) is −0.64 mV = −6,400.
+    bus.regs[{0x40, fw::ina::kIna226RegBus}] = 13328;
+    bus.regs[{0x40, fw::ina::kIna226RegShunt}] = 268;
+    fw::PackReading p;
+    REQUIRE(s.read_pack(p));
+    CHECK(p.bus_10uv == 1666000);
+    CHECK(p.shunt_100nv == 6700);
+    bus.regs[{0x40, fw::ina::kIna226RegShunt}] = 0xFF00;
+    REQUIRE(s.read_pack(p));
+    CHECK(p.shunt_100nv == -6400);
+    // The extremes: full-scale shunt ±81.92 mV, bus 40.96 V less one step.
+    bus.regs[{0x40, fw::ina::kIna226RegShunt}] = 0x8000;
+    bus.regs[{0x40, fw::ina::kIna226RegBus}] = 0x7FFF;
+    REQUIRE(s.read_pack(p));
+    CHECK(p.shunt_100nv == -819200);
+    CHECK(p.bus_10uv == 32767 * 125);
+    // Bit 15 of the bus register is always 0: set, the word was garbled on the bus.
+    bus.regs[{0x40, fw::ina::kIna226RegBus}] = 0x8000 | 13328;
+    CHECK_FALSE(s.read_pack(p));
+
+    // Taps: bits 15:3 in 8 mV steps, so 0x1A08 (6664) is 833 × 8 = 6664 mV; 0x3410 =
+    // 1666 × 8 = 13,328 mV; a negative word 0xFFF8 is −8 mV; low bits are not data.
+    bus.regs[{0x41, 0x02}] = 0x0D00;  // 3328 mV
+    bus.regs[{0x41, 0x04}] = 0x1A08 | 0x7;
+    bus.regs[{0x41, 0x06}] = 0xFFF8;
+    fw::TapReading t;
+    CHECK_FALSE(s.read_taps(t));  // conversion not done: no cells this sample
+    const size_t writes = bus.config_writes.size();
+    CHECK(writes == 3);  // ... and the next conversion started anyway
+    bus.regs[{0x41, fw::ina::kIna3221RegMaskEnable}] = fw::ina::kIna3221ConversionReady;
+    REQUIRE(s.read_taps(t));
+    CHECK(t.tap_mv[0] == 3328);
+    CHECK(t.tap_mv[1] == 6664);
+    CHECK(t.tap_mv[2] == -8);
+    CHECK(bus.config_writes.size() == writes + 1);
+    CHECK(bus.config_writes.back() == std::make_pair(uint8_t{0x41}, uint16_t{0x7522}));
+}
+
+TEST_CASE("INA driver: a failed register read is a failed reading, never a zero", "[firmware]") {
+    FakeBus bus;
+    bus.add_chip(0x40, 0x2260);
+    bus.add_chip(0x41, 0x3220);
+    fw::InaSensors s(bus);
+    REQUIRE(s.begin());
+    bus.regs[{0x40, fw::ina::kIna226RegBus}] = 13328;
+    bus.regs[{0x40, fw::ina::kIna226RegShunt}] = 268;
+    bus.regs[{0x41, 0x02}] = 0x0D00;
+    bus.regs[{0x41, 0x04}] = 0x1A00;
+    bus.regs[{0x41, 0x06}] = 0x2700;
+    fw::host::MockClock clock;
+    fw::ReadingLoop loop(s, clock);
+    fw::Reading r;
+    auto ready = [&bus] {
+        bus.regs[{0x40, fw::ina::kIna226RegMaskEnable}] = fw::ina::kIna226ConversionReady;
+        bus.regs[{0x41, fw::ina::kIna3221RegMaskEnable}] = fw::ina::kIna3221ConversionReady;
+    };
+    ready();
+    REQUIRE(loop.next(r) == fw::ReadingLoop::Result::Reading);
+    CHECK(r.taps_ok);
+    CHECK(r.pack.bus_10uv == 1666000);
+
+    bus.fail.push_back({0x41, 0x04});  // one tap channel's read fails
+    ready();
+    REQUIRE(loop.next(r) == fw::ReadingLoop::Result::Reading);
+    CHECK_FALSE(r.taps_ok);
+    CHECK(loop.counters().tap_errors == 1);
+
+    bus.fail = {{0x40, fw::ina::kIna226RegShunt}};  // the pack's shunt read fails
+    ready();
+    CHECK(loop.next(r) == fw::ReadingLoop::Result::PackError);
+    CHECK(loop.counters().pack_errors == 1);
+
+    bus.fail = {{0x40, 0xFF}};  // the INA226 is gone: its flag never reads, the loop times out
+    CHECK(loop.next(r) == fw::ReadingLoop::Result::Timeout);
+    CHECK(loop.counters().ready_timeouts == 1);
+}
