@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """One garbled current reading in a real or bundled log, replayed with the joint estimator:
-prints the first fifth's resistance, the capacity at the end and the warnings, clean and
-glitched, for the two cases docs/estimator.md (thirty-sixth session) says the resistance
-gate does not catch: a glitch before the resistance window reaches its bar (1 s after the
-take-off of logs/example-4s.csv) and one in a racing window (flight 30, 100 s in).
+prints the first fifth's resistance, the resistance and capacity at the end and the warnings,
+clean and glitched, for the two cases the thirty-sixth session's resistance gate did not
+catch (docs/estimator.md): a glitch before the resistance window reaches its bar (1 s after
+the take-off of logs/example-4s.csv; still not caught) and one in a racing window (flight 30,
+100 s in; caught since the thirty-seventh session by the bar against the window's mean pair).
 
     python3 scripts/glitch-check.py [BATTSIM] [DATA_DIR]
 """
