@@ -172,6 +172,43 @@ TEST_CASE("Difference resistance: a garbled reading in a busy racing window is s
     CHECK(e.status().resistance_ohm == Approx(0.020).epsilon(0.03));
 }
 
+TEST_CASE("Difference resistance: a garbled reading before the window holds its bar is judged by the configured R", "[joint][truth]") {
+    // A take-off to 40 A and throttle steps of ±10 A on a 20 mΩ pack configured at 20 mΩ; one
+    // reading garbled to 100 A a second after the take-off, the voltage untouched.
+    // The window is still below its bar (400 A²), so there is no estimate to judge by: the
+    // configured R is the reference, one-sided. Without that bar R0 read 1.7 mΩ at 8 s and
+    // 6.5 mΩ at 20 s (clean 20.0 mΩ at both).
+    auto fly = [](double r_ohm, double configured_ohm, int glitch_k) {
+        DifferenceResistanceEstimator::Config c;
+        c.initial_resistance_ohm = static_cast<float>(configured_ohm);
+        DifferenceResistanceEstimator e;
+        e.configure(c);
+        Lcg rng;
+        std::vector<float> r_at;
+        for (int k = 0; k < 300; ++k) {  // 30 s at 10 Hz; take-off at 2 s
+            const double t = 0.1 * k;
+            // A take-off ramp over 3 s (steps of 1.3 A: the window stays below its bar), then
+            // throttle steps of 20 A every second.
+            const double flown_a = t < 2.0 ? 0.5 : t < 5.0 ? 0.5 + 13.0 * (t - 2.0) : 40.0 + (std::fmod(t, 2.0) < 1.0 ? 10.0 : -10.0);
+            const double i = k == glitch_k ? 100.0 : flown_a + 0.2 * rng.next();
+            const double v = 16.0 - r_ohm * flown_a + 0.002 * rng.next();
+            e.update(static_cast<uint64_t>(std::llround(t * 1e6)), static_cast<float>(v), static_cast<float>(i));
+            if (k == 80 || k == 200) r_at.push_back(e.status().resistance_ohm);
+        }
+        return r_at;
+    };
+    const std::vector<float> clean = fly(0.020, 0.020, -1), glitched = fly(0.020, 0.020, 30);
+    INFO("R0 at 8 s and 20 s: glitched " << glitched[0] << ", " << glitched[1] << "; clean " << clean[0] << ", " << clean[1]);
+    CHECK(glitched[0] == Approx(clean[0]).epsilon(0.02));
+    CHECK(glitched[1] == Approx(clean[1]).epsilon(0.02));
+    // One-sided: a pack at twice its rating is measured from the take-off's first pair, as
+    // without the bar, and one at half its rating as well (it sags 2.5 times the bar's fifth).
+    const std::vector<float> aged = fly(0.040, 0.020, -1), better = fly(0.010, 0.020, -1);
+    INFO("aged " << aged[0] << ", better " << better[0]);
+    CHECK(aged[0] == Approx(0.040).epsilon(0.03));
+    CHECK(better[0] == Approx(0.010).epsilon(0.03));
+}
+
 TEST_CASE("Difference resistance: a warming pack's falling resistance, window mean and trend", "[joint][truth]") {
     // R0 falls linearly from 0.020 to 0.014 ohm over 120 s of racing (a pack warming from
     // cold). The 60 s window's mean lags by tens of seconds; the trend fit reads now.
