@@ -3,8 +3,8 @@
 prints the first fifth's resistance, the resistance and capacity at the end and the warnings,
 clean and glitched, for the two cases the thirty-sixth session's resistance gate did not
 catch (docs/estimator.md): a glitch before the resistance window reaches its bar (1 s after
-the take-off of logs/example-4s.csv; still not caught) and one in a racing window (flight 30,
-100 s in; caught since the thirty-seventh session by the bar against the window's mean pair).
+the take-off of logs/example-4s.csv) and one in a racing window (flight 30, 100 s in). Both
+are caught since the thirty-seventh session: the glitched lines should read as the clean ones.
 
     python3 scripts/glitch-check.py [BATTSIM] [DATA_DIR]
 """
