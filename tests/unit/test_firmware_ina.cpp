@@ -44,6 +44,16 @@ struct FakeBus : fw::I2cBus {
     }
 };
 
+// The monitor's board: the INA226 at 0x40, the INA3221 at 0x41.
+struct Board {
+    FakeBus bus;
+    fw::InaSensors sensors{bus};
+    Board() {
+        bus.add_chip(0x40, 0x2260);
+        bus.add_chip(0x41, 0x3220);
+    }
+};
+
 }  // namespace
 
 TEST_CASE("INA driver: the configuration words are the data sheets' fields", "[firmware]") {
@@ -60,10 +70,9 @@ TEST_CASE("INA driver: the configuration words are the data sheets' fields", "[f
 }
 
 TEST_CASE("INA driver: begin identifies both chips and configures them", "[firmware]") {
-    FakeBus bus;
-    bus.add_chip(0x40, 0x2260);
-    bus.add_chip(0x41, 0x3220);
-    fw::InaSensors s(bus);
+    Board board;
+    FakeBus& bus = board.bus;
+    fw::InaSensors& s = board.sensors;
     REQUIRE(s.begin());
     CHECK(s.has_taps());
     REQUIRE(bus.config_writes.size() == 2);
@@ -115,10 +124,9 @@ TEST_CASE("INA driver: begin identifies both chips and configures them", "[firmw
 }
 
 TEST_CASE("INA driver: registers become readings in the firmware's exact units", "[firmware]") {
-    FakeBus bus;
-    bus.add_chip(0x40, 0x2260);
-    bus.add_chip(0x41, 0x3220);
-    fw::InaSensors s(bus);
+    Board board;
+    FakeBus& bus = board.bus;
+    fw::InaSensors& s = board.sensors;
     REQUIRE(s.begin());
 
     // Ready flag: bit 3 of Mask/Enable, cleared by the read.
@@ -148,8 +156,8 @@ TEST_CASE("INA driver: registers become readings in the firmware's exact units",
     bus.regs[{0x40, fw::ina::kIna226RegBus}] = 0x8000 | 13328;
     CHECK_FALSE(s.read_pack(p));
 
-    // Taps: bits 15:3 in 8 mV steps, so 0x1A08 (6664) is 833 × 8 = 6664 mV; 0x3410 =
-    // 1666 × 8 = 13,328 mV; a negative word 0xFFF8 is −8 mV; low bits are not data.
+    // Taps: bits 15:3 in 8 mV steps, so 0x0D00 (3328) is 416 × 8 = 3328 mV and 0x1A08 (6664)
+    // is 833 × 8 = 6664 mV; a negative word 0xFFF8 is −1 × 8 = −8 mV; the low bits are not data.
     bus.regs[{0x41, 0x02}] = 0x0D00;  // 3328 mV
     bus.regs[{0x41, 0x04}] = 0x1A08 | 0x7;
     bus.regs[{0x41, 0x06}] = 0xFFF8;
@@ -167,10 +175,9 @@ TEST_CASE("INA driver: registers become readings in the firmware's exact units",
 }
 
 TEST_CASE("INA driver: a failed register read is a failed reading, never a zero", "[firmware]") {
-    FakeBus bus;
-    bus.add_chip(0x40, 0x2260);
-    bus.add_chip(0x41, 0x3220);
-    fw::InaSensors s(bus);
+    Board board;
+    FakeBus& bus = board.bus;
+    fw::InaSensors& s = board.sensors;
     REQUIRE(s.begin());
     bus.regs[{0x40, fw::ina::kIna226RegBus}] = 13328;
     bus.regs[{0x40, fw::ina::kIna226RegShunt}] = 268;
