@@ -120,6 +120,29 @@ TEST_CASE("INA driver: begin identifies both chips and configures them", "[firmw
         flaky.fail.push_back({0x40, fw::ina::kRegConfig});
         fw::InaSensors f(flaky);
         CHECK_FALSE(f.begin());
+        // ... and one that reads back another word (a write the chip did not take).
+        struct Stubborn : FakeBus {
+            bool write_register(uint8_t address, uint8_t reg, uint16_t value) override {
+                return FakeBus::write_register(address, reg, reg == fw::ina::kRegConfig ? 0x4127 : value);
+            }
+        } stubborn;
+        stubborn.add_chip(0x40, 0x2260);
+        fw::InaSensors g(stubborn);
+        CHECK_FALSE(g.begin());
+    }
+    SECTION("a tap chip that answers late is found again") {
+        FakeBus late;
+        late.add_chip(0x40, 0x2260);
+        fw::InaSensors l(late);
+        REQUIRE(l.begin());
+        REQUIRE_FALSE(l.has_taps());
+        late.add_chip(0x41, 0x3220);
+        fw::TapReading t;
+        for (int k = 1; k < fw::InaSensors::kTapRetryReadings; ++k) CHECK_FALSE(l.read_taps(t));
+        CHECK_FALSE(l.has_taps());
+        CHECK_FALSE(l.read_taps(t));  // the retry: found and started, no reading yet
+        CHECK(l.has_taps());
+        CHECK(late.config_writes.back() == std::make_pair(uint8_t{0x41}, uint16_t{0x7522}));
     }
 }
 
@@ -162,16 +185,21 @@ TEST_CASE("INA driver: registers become readings in the firmware's exact units",
     bus.regs[{0x41, 0x04}] = 0x1A08 | 0x7;
     bus.regs[{0x41, 0x06}] = 0xFFF8;
     fw::TapReading t;
-    CHECK_FALSE(s.read_taps(t));  // conversion not done: no cells this sample
-    const size_t writes = bus.config_writes.size();
-    CHECK(writes == 3);  // ... and the next conversion started anyway
+    bus.regs[{0x41, fw::ina::kIna3221RegMaskEnable}] = 0;  // the chip answers: still converting
+    CHECK_FALSE(s.read_taps(t));                           // no cells this sample
+    CHECK(bus.config_writes.size() == 2);                  // ... and the conversion is left to finish
+    CHECK_FALSE(s.read_taps(t));                           // unfinished twice: lost, so restarted
+    CHECK(bus.config_writes.size() == 3);
     bus.regs[{0x41, fw::ina::kIna3221RegMaskEnable}] = fw::ina::kIna3221ConversionReady;
     REQUIRE(s.read_taps(t));
     CHECK(t.tap_mv[0] == 3328);
     CHECK(t.tap_mv[1] == 6664);
     CHECK(t.tap_mv[2] == -8);
-    CHECK(bus.config_writes.size() == writes + 1);
+    CHECK(bus.config_writes.size() == 4);  // each reading starts the next conversion
     CHECK(bus.config_writes.back() == std::make_pair(uint8_t{0x41}, uint16_t{0x7522}));
+    // The ready flag is what counts, not the data registers: cleared by the read, the next
+    // call finds it unset and reads no taps.
+    CHECK_FALSE(s.read_taps(t));
 }
 
 TEST_CASE("INA driver: a failed register read is a failed reading, never a zero", "[firmware]") {

@@ -440,7 +440,7 @@ TEST_CASE("firmware outputs switch on and off from the serial line", "[firmware]
     CHECK(uart.csv_lines.size() == 1 + 200);
     CHECK(uart.corrupt == 0);
     CHECK(fw.uart.find("# samples=200 ") != std::string::npos);
-    CHECK(fw.uart.find(" timeouts=0 pack_errors=0 tap_errors=0 sd=") != std::string::npos);
+    CHECK(fw.uart.find(" timeouts=0 pack_errors=0 tap_errors=0 taps=yes sd=") != std::string::npos);
     CHECK(fw.uart.find("# unknown command") != std::string::npos);
     CHECK_FALSE(fw.state.outputs.display);
     CHECK(fw.state.outputs.sd);

@@ -18,9 +18,16 @@ bool InaSensors::begin() {
         !bus_.read_register(ina226_, ina::kRegConfig, config) || config != ina::kIna226Config)
         return false;
     // The first tap conversion starts now; each tap reading starts the next one.
+    start_taps();
+    return true;
+}
+
+bool InaSensors::start_taps() {
+    tap_retry_ = 0;
+    tap_pending_ = false;
     taps_present_ = identify(ina3221_, ina::kDieIna3221) &&
                     bus_.write_register(ina3221_, ina::kRegConfig, ina::kIna3221Config);
-    return true;
+    return taps_present_;
 }
 
 bool InaSensors::conversion_ready() {
@@ -40,10 +47,24 @@ bool InaSensors::read_pack(PackReading& out) {
 }
 
 bool InaSensors::read_taps(TapReading& out) {
-    if (!taps_present_) return false;
+    if (!taps_present_) {
+        if (++tap_retry_ >= kTapRetryReadings) start_taps();  // plugged in, or a boot-time glitch
+        return false;
+    }
     uint16_t flags = 0;
-    bool ok = bus_.read_register(ina3221_, ina::kIna3221RegMaskEnable, flags) &&
-              (flags & ina::kIna3221ConversionReady) != 0;
+    if (!bus_.read_register(ina3221_, ina::kIna3221RegMaskEnable, flags)) {
+        bus_.write_register(ina3221_, ina::kRegConfig, ina::kIna3221Config);  // for the next reading
+        return false;
+    }
+    if ((flags & ina::kIna3221ConversionReady) == 0) {
+        // Still converting (a reading that came early): let it finish. Unfinished twice in a
+        // row, it was lost (the chip reset): start another.
+        if (tap_pending_) bus_.write_register(ina3221_, ina::kRegConfig, ina::kIna3221Config);
+        tap_pending_ = !tap_pending_;
+        return false;
+    }
+    tap_pending_ = false;
+    bool ok = true;
     for (int k = 0; ok && k < kTapChannels; ++k) {
         uint16_t raw = 0;
         ok = bus_.read_register(ina3221_, ina::kIna3221RegBus[k], raw);

@@ -10,6 +10,7 @@
 #include <stdint.h>
 
 #include "app/hardware.h"
+#include "app/readings.h"
 
 namespace battsim {
 namespace fw {
@@ -49,6 +50,17 @@ constexpr uint8_t kIna3221RegBus[3] = {0x02, 0x04, 0x06};  // bits 15:3, signed,
 constexpr uint8_t kIna3221RegMaskEnable = 0x0F;             // bit 0: conversion ready
 constexpr uint16_t kIna3221ConversionReady = 1u << 0;
 constexpr uint16_t kIna3221Config = (0x7u << 12) | (0x2u << 9) | (0x4u << 6) | (0x4u << 3) | 0x2u;  // 0x7522
+
+// The fields decoded back, against the timing constants the firmware's reading loop and
+// docs use (readings.h): averaging code 010 = 16, conversion code 101 = 2116 µs, 100 = 1100 µs.
+constexpr uint32_t kAveragesByCode[8] = {1, 4, 16, 64, 128, 256, 512, 1024};
+constexpr uint32_t kConversionUsByCode[8] = {140, 204, 332, 588, 1100, 2116, 4156, 8244};
+static_assert(kAveragesByCode[(kIna226Config >> 9) & 7u] == kIna226Averages, "INA226 averaging and kIna226Averages");
+static_assert(kConversionUsByCode[(kIna226Config >> 6) & 7u] == kIna226ConversionUs &&
+                  kConversionUsByCode[(kIna226Config >> 3) & 7u] == kIna226ConversionUs,
+              "INA226 conversion times and kIna226ConversionUs");
+static_assert(kAveragesByCode[(kIna3221Config >> 9) & 7u] == kIna3221Averages, "INA3221 averaging");
+static_assert(kConversionUsByCode[(kIna3221Config >> 6) & 7u] == kIna3221ConversionUs, "INA3221 conversion time");
 }  // namespace ina
 
 class InaSensors : public Sensors {
@@ -62,18 +74,25 @@ public:
     bool begin() override;
     bool conversion_ready() override;
     bool read_pack(PackReading& out) override;
-    // The taps converted since the last call (each call starts the next conversion); false
-    // on a failed read or a conversion not yet done, so the sample goes without cells.
+    // The taps converted since the last call, which then starts the next conversion; false
+    // on a failed read or a conversion not yet done (the sample goes without cells). An
+    // unfinished conversion is left to finish, and restarted only if it is still unfinished
+    // at the next call (a chip reset, or a lost start). Without a tap chip, it is looked for
+    // again every kTapRetryReadings calls.
     bool read_taps(TapReading& out) override;
     bool has_taps() const override { return taps_present_; }
+    static constexpr uint16_t kTapRetryReadings = 128;  // ~9 s at 67.7 ms
 
 private:
     bool identify(uint8_t address, uint16_t die_id);
+    bool start_taps();
 
     I2cBus& bus_;
     uint8_t ina226_;
     uint8_t ina3221_;
     bool taps_present_ = false;
+    bool tap_pending_ = false;  // the last call found the conversion unfinished
+    uint16_t tap_retry_ = 0;
 };
 
 }  // namespace fw

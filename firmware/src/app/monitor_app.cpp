@@ -280,6 +280,7 @@ void MonitorApp::send_status_note() {
     t.append_uint(c.pack_errors);
     t.append(" tap_errors=");
     t.append_uint(c.tap_errors);
+    t.append(sensors_.has_taps() ? " taps=yes" : " taps=none");
     t.append(" sd=");
     t.append(state_.sd_ok ? state_.log_path : "off");
     t.append(" sd_errors=");
