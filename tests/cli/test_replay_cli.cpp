@@ -690,3 +690,42 @@ TEST_CASE("replay --plot draws the replay as SVG, and rejects other names", "[cl
     CHECK(unwritable.exit_code == 5);
     CHECK(unwritable.err.find(dir + "/none/replay.png") != std::string::npos);
 }
+
+TEST_CASE("replay says when the current scatters enough to pull the hover resistance low", "[cli]") {
+    // The simulated healthy hover, with ±200 mA of uniform noise on every current reading (σ
+    // 0.115 A): on 0.2 A hover steps the capacity had read 27 % low with false warnings
+    // (scripts/current-noise-check.py). The note gives the scatter, read off the ground.
+    const std::string dir = clitest::temp_dir();
+    const std::string clean = dir + "/hover.csv";
+    REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/4s-hover-healthy.json") + " -o " + q(clean)).exit_code == 0);
+    std::istringstream in(clitest::read_file(clean));
+    std::string line, noisy;
+    uint32_t lcg = 12345u;
+    while (std::getline(in, line)) {  // raw format: field 7 is current_ma
+        std::vector<std::string> f;
+        std::stringstream ls(line);
+        for (std::string x; std::getline(ls, x, ',');) f.push_back(x);
+        lcg = lcg * 1664525u + 1013904223u;
+        const double u = static_cast<double>(lcg >> 8) / 8388608.0 - 1.0;
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.2f", std::stod(f.at(6)) + 200.0 * u);
+        f[6] = buf;
+        for (size_t k = 0; k < f.size(); ++k) noisy += (k ? "," : "") + f[k];
+        noisy += line.back() == ',' ? ",\n" : "\n";
+    }
+    clitest::write_file(dir + "/noisy.csv", noisy);
+    const std::string config = q(kSource + "/configs/sim-4s.json");
+    auto scatter_note = [&](const std::string& log, const std::string& extra) {
+        const auto j = clitest::run_json("replay " + q(log) + " -c " + config + extra + " --json");
+        for (const auto& n : j["input"]["notes"])
+            if (n.get<std::string>().find("the current scatters") == 0) return n.get<std::string>();
+        return std::string();
+    };
+    const std::string note = scatter_note(dir + "/noisy.csv", " --estimator joint");
+    INFO(note);
+    CHECK(note.rfind("the current scatters by about 0.1", 0) == 0);
+    CHECK(note.find("paired from 0.2 A steps") != std::string::npos);
+    CHECK(note.find("set \"joint\": {\"hover_resistance_min_step_a\": 1}") != std::string::npos);
+    CHECK(scatter_note(clean, " --estimator joint").empty());
+    CHECK(scatter_note(dir + "/noisy.csv", " --estimator reference").empty());  // no hover resistance there
+}
