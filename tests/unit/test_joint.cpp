@@ -238,6 +238,30 @@ TEST_CASE("Difference resistance: current-sensor noise does not let the garbled-
     }
 }
 
+TEST_CASE("Difference resistance: a climb's first pairs are judged by the configured R until the fit stands", "[joint][truth]") {
+    // The hover estimator's settings (lag 0.13 s, 0.2 A steps, a 10 A² bar) on a 20 mΩ pack
+    // configured at 60 mΩ: a steady 20 A hover with a 45 A climb every 30 s. The climb's first
+    // pair alone passes the bar; judged then against half of R, which is still the configured
+    // 60 mΩ, every climb's pairs (20 mΩ) were skipped, and R stayed at 60 mΩ for about 300 s.
+    // Until the fit stands on three pairs the configured R's 0.15 is the floor.
+    const DifferenceResistanceEstimator::Config hover = JointEstimator::Config{}.hover_resistance;
+    for (double rate_hz : {10.0, 5.0}) {
+        DifferenceResistanceEstimator::Config c = hover;
+        c.initial_resistance_ohm = 0.060f;
+        DifferenceResistanceEstimator e;
+        e.configure(c);
+        Lcg rng;
+        for (int k = 0; k <= static_cast<int>(90.0 * rate_hz); ++k) {
+            const double t = k / rate_hz;
+            const double i = std::fmod(t, 30.0) >= 25.0 ? 45.0 : 20.0;
+            const double v = 16.0 - 0.020 * i + 0.002 * rng.next();
+            e.update(static_cast<uint64_t>(std::llround(t * 1e6)), static_cast<float>(v), static_cast<float>(i));
+        }
+        INFO(rate_hz << " Hz: R0 after 90 s " << e.status().resistance_ohm);
+        CHECK(e.status().resistance_ohm == Approx(0.020).epsilon(0.05));
+    }
+}
+
 TEST_CASE("Difference resistance: a warming pack's falling resistance, window mean and trend", "[joint][truth]") {
     // R0 falls linearly from 0.020 to 0.014 ohm over 120 s of racing (a pack warming from
     // cold). The 60 s window's mean lags by tens of seconds; the trend fit reads now.

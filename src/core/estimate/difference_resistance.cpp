@@ -47,17 +47,16 @@ void DifferenceResistanceEstimator::update(uint64_t time_us, float voltage_v, fl
     // A garbled reading, not the pack: a heavy pair that shows far less sag than the pack's
     // resistance (one 100 A read with no sag, weighted by ΔI², had pulled R0 to a sixth; one
     // 200 A read in a racing window, to 0.6; one 1 s after a take-off, the first fifth's R0
-    // to a quarter). While the window holds its bar, heavy is a pair that would outweigh the
-    // whole window or a hundred of its mean pairs (a step ten times its RMS step), and "far
-    // less" under half the window's R. Before, heavy is a pair that alone would fill the
-    // window, and far less under a fifth of the configured R. A skipped pair adds nothing, so
-    // a window that forgets falls below its bar and its next pair is judged by the configured
-    // R; and the test is one-sided: a pack above its rating, or a wrong first estimate, is
-    // never locked out.
+    // to a quarter). While the fit stands (the window holds its bar and three pairs), heavy is
+    // a pair that would outweigh the whole window or a hundred of its mean pairs (a step ten
+    // times its RMS step), and "far less" under half the window's R. Before, heavy is a pair
+    // that alone would fill the window, and far less under 0.15 of the configured R. A skipped
+    // pair adds nothing, so a window that forgets falls back to the configured R; and the test
+    // is one-sided: a pack above its rating, or a wrong first estimate, is never locked out.
     const float di2 = di * di;
-    const bool judged = sxx_ >= config_.min_excitation_a2;
+    const bool judged = sxx_ >= config_.min_excitation_a2 && n_ >= 3.0f;  // as the fit below counts
     const bool heavy = judged ? di2 * maxf(n_, 100.0f) > 100.0f * sxx_ : di2 >= config_.min_excitation_a2;
-    const float sag_floor_ohm = judged ? 0.5f * status_.resistance_ohm : 0.2f * config_.initial_resistance_ohm;
+    const float sag_floor_ohm = judged ? 0.5f * status_.resistance_ohm : 0.15f * config_.initial_resistance_ohm;
     if (heavy && -dv * di < sag_floor_ohm * di2) return;
     sxx_ += di * di;
     sxy_ += di * dv;
