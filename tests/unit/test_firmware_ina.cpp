@@ -27,7 +27,9 @@ struct FakeBus : fw::I2cBus {
         if (reg == fw::ina::kRegConfig) config_writes.push_back({address, value});
         return true;
     }
+    int id_reads = 0;  // reads of the manufacturer ID at 0x41 (the tap chip's probe)
     bool read_register(uint8_t address, uint8_t reg, uint16_t& value) override {
+        if (address == 0x41 && reg == fw::ina::kRegManufacturerId) ++id_reads;
         for (const auto& f : fail)
             if (f.first == address && (f.second == reg || f.second == 0xFF)) return false;
         const auto it = regs.find({address, reg});
@@ -144,6 +146,21 @@ TEST_CASE("INA driver: begin identifies both chips and configures them", "[firmw
         CHECK(l.has_taps());
         CHECK(late.config_writes.back() == std::make_pair(uint8_t{0x41}, uint16_t{0x7522}));
     }
+    SECTION("a tap chip still missing is looked for once every 128 readings, not at every one") {
+        FakeBus missing;
+        missing.add_chip(0x40, 0x2260);
+        fw::InaSensors m(missing);
+        REQUIRE(m.begin());
+        fw::TapReading t;
+        missing.id_reads = 0;  // begin()'s own probe
+        int probes = 0;
+        for (int k = 0; k < 3 * fw::InaSensors::kTapRetryReadings; ++k) {
+            CHECK_FALSE(m.read_taps(t));
+            probes += missing.id_reads;  // a probe reads the (absent) chip's ID first
+            missing.id_reads = 0;
+        }
+        CHECK(probes == 3);
+    }
 }
 
 TEST_CASE("INA driver: registers become readings in the firmware's exact units", "[firmware]") {
@@ -198,8 +215,35 @@ TEST_CASE("INA driver: registers become readings in the firmware's exact units",
     CHECK(bus.config_writes.size() == 4);  // each reading starts the next conversion
     CHECK(bus.config_writes.back() == std::make_pair(uint8_t{0x41}, uint16_t{0x7522}));
     // The ready flag is what counts, not the data registers: cleared by the read, the next
-    // call finds it unset and reads no taps.
+    // call finds it unset and reads no taps, and leaves the conversion it started to finish.
     CHECK_FALSE(s.read_taps(t));
+    CHECK(bus.config_writes.size() == 4);
+    bus.regs[{0x41, fw::ina::kIna3221RegMaskEnable}] = fw::ina::kIna3221ConversionReady;
+    REQUIRE(s.read_taps(t));  // finished: read, and the next started
+    CHECK(bus.config_writes.size() == 5);
+    CHECK_FALSE(s.read_taps(t));  // unfinished once after a good reading: still left alone
+    CHECK(bus.config_writes.size() == 5);
+    CHECK_FALSE(s.read_taps(t));  // twice: restarted ...
+    CHECK(bus.config_writes.size() == 6);
+    CHECK_FALSE(s.read_taps(t));  // ... and the restart is given its reading to finish
+    CHECK(bus.config_writes.size() == 6);
+    CHECK_FALSE(s.read_taps(t));
+    CHECK(bus.config_writes.size() == 7);
+    // A failed read of the ready flag restarts the conversion (the chip may have reset).
+    bus.fail = {{0x41, fw::ina::kIna3221RegMaskEnable}};
+    CHECK_FALSE(s.read_taps(t));
+    CHECK(bus.config_writes.size() == 8);
+    bus.fail.clear();
+
+    // The INA226 reset to its defaults by a brown-out is configured again within 256 readings.
+    bus.regs[{0x40, fw::ina::kRegConfig}] = 0x4127;
+    bus.regs[{0x40, fw::ina::kIna226RegBus}] = 13328;
+    const size_t before = bus.config_writes.size();
+    for (int k = 0; k < fw::InaSensors::kConfigCheckReadings; ++k) REQUIRE(s.read_pack(p));
+    REQUIRE(bus.config_writes.size() == before + 1);
+    CHECK(bus.config_writes.back() == std::make_pair(uint8_t{0x40}, uint16_t{0x456F}));
+    for (int k = 0; k < fw::InaSensors::kConfigCheckReadings; ++k) REQUIRE(s.read_pack(p));
+    CHECK(bus.config_writes.size() == before + 1);  // configured: read back, not written
 }
 
 TEST_CASE("INA driver: a failed register read is a failed reading, never a zero", "[firmware]") {

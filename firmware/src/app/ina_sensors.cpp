@@ -11,6 +11,7 @@ bool InaSensors::identify(uint8_t address, uint16_t die_id) {
 
 bool InaSensors::begin() {
     taps_present_ = false;
+    config_check_ = 0;
     if (!identify(ina226_, ina::kDieIna226)) return false;
     // Writing the configuration also restarts the averaging and clears the ready flag.
     uint16_t config = 0;
@@ -36,6 +37,12 @@ bool InaSensors::conversion_ready() {
 }
 
 bool InaSensors::read_pack(PackReading& out) {
+    if (++config_check_ >= kConfigCheckReadings) {
+        config_check_ = 0;
+        uint16_t config = 0;
+        if (bus_.read_register(ina226_, ina::kRegConfig, config) && config != ina::kIna226Config)
+            bus_.write_register(ina226_, ina::kRegConfig, ina::kIna226Config);
+    }
     uint16_t shunt = 0, bus = 0;
     if (!bus_.read_register(ina226_, ina::kIna226RegShunt, shunt) || !bus_.read_register(ina226_, ina::kIna226RegBus, bus))
         return false;

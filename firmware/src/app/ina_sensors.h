@@ -82,6 +82,10 @@ public:
     bool read_taps(TapReading& out) override;
     bool has_taps() const override { return taps_present_; }
     static constexpr uint16_t kTapRetryReadings = 128;  // ~9 s at 67.7 ms
+    // Every this many pack readings the INA226's configuration is read back and written
+    // again if it differs: a brown-out resets the chip to its defaults (a reading every
+    // 2.2 ms, unaveraged), which no timeout would notice.
+    static constexpr uint16_t kConfigCheckReadings = 256;  // ~17 s
 
 private:
     bool identify(uint8_t address, uint16_t die_id);
@@ -93,6 +97,7 @@ private:
     bool taps_present_ = false;
     bool tap_pending_ = false;  // the last call found the conversion unfinished
     uint16_t tap_retry_ = 0;
+    uint16_t config_check_ = 0;
 };
 
 }  // namespace fw

@@ -20,8 +20,9 @@ ReadingLoop::Result ReadingLoop::next(Reading& out, uint32_t poll_us) {
         return Result::PackError;
     }
     out.time_us = timer_.stamp(now_us);
+    const bool taps_expected = sensors_.has_taps();  // before the call: a chip found by it has no reading yet
     out.taps_ok = sensors_.read_taps(out.taps);
-    if (!out.taps_ok && sensors_.has_taps()) ++tap_errors_;
+    if (!out.taps_ok && taps_expected) ++tap_errors_;
     return Result::Reading;
 }
 
