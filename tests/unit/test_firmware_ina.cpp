@@ -46,10 +46,21 @@ struct FakeBus : fw::I2cBus {
     }
 };
 
-// The monitor's board: the INA226 at 0x40, the INA3221 at 0x41.
+// A board with the INA226 alone (0x40), begun.
+struct PackOnly {
+    FakeBus bus;
+    fw::InaSensors s{bus};
+    PackOnly() {
+        bus.add_chip(0x40, 0x2260);
+        REQUIRE(s.begin());
+        REQUIRE_FALSE(s.has_taps());
+    }
+};
+
+// The monitor's board: the INA226 at 0x40, the INA3221 at 0x41 (a fixture: `bus`, `s`).
 struct Board {
     FakeBus bus;
-    fw::InaSensors sensors{bus};
+    fw::InaSensors s{bus};
     Board() {
         bus.add_chip(0x40, 0x2260);
         bus.add_chip(0x41, 0x3220);
@@ -71,10 +82,7 @@ TEST_CASE("INA driver: the configuration words are the data sheets' fields", "[f
     CHECK(3u * fw::kIna3221Averages * fw::kIna3221ConversionUs < fw::kIna226PeriodUs);
 }
 
-TEST_CASE("INA driver: begin identifies both chips and configures them", "[firmware]") {
-    Board board;
-    FakeBus& bus = board.bus;
-    fw::InaSensors& s = board.sensors;
+TEST_CASE_METHOD(Board, "INA driver: begin identifies both chips and configures them", "[firmware]") {
     REQUIRE(s.begin());
     CHECK(s.has_taps());
     REQUIRE(bus.config_writes.size() == 2);
@@ -82,11 +90,9 @@ TEST_CASE("INA driver: begin identifies both chips and configures them", "[firmw
     CHECK(bus.config_writes[1] == std::make_pair(uint8_t{0x41}, uint16_t{0x7522}));  // the first tap conversion
 
     SECTION("no tap chip: the pack alone, and no tap errors counted") {
-        FakeBus pack_only;
-        pack_only.add_chip(0x40, 0x2260);
-        fw::InaSensors p(pack_only);
-        REQUIRE(p.begin());
-        CHECK_FALSE(p.has_taps());
+        PackOnly board_p;
+        FakeBus& pack_only = board_p.bus;
+        fw::InaSensors& p = board_p.s;
         fw::TapReading t;
         CHECK_FALSE(p.read_taps(t));
         pack_only.regs[{0x40, fw::ina::kIna226RegMaskEnable}] = fw::ina::kIna226ConversionReady;
@@ -133,11 +139,9 @@ TEST_CASE("INA driver: begin identifies both chips and configures them", "[firmw
         CHECK_FALSE(g.begin());
     }
     SECTION("a tap chip that answers late is found again") {
-        FakeBus late;
-        late.add_chip(0x40, 0x2260);
-        fw::InaSensors l(late);
-        REQUIRE(l.begin());
-        REQUIRE_FALSE(l.has_taps());
+        PackOnly board_l;
+        FakeBus& late = board_l.bus;
+        fw::InaSensors& l = board_l.s;
         late.add_chip(0x41, 0x3220);
         fw::TapReading t;
         for (int k = 1; k < fw::InaSensors::kTapRetryReadings; ++k) CHECK_FALSE(l.read_taps(t));
@@ -147,10 +151,9 @@ TEST_CASE("INA driver: begin identifies both chips and configures them", "[firmw
         CHECK(late.config_writes.back() == std::make_pair(uint8_t{0x41}, uint16_t{0x7522}));
     }
     SECTION("a tap chip still missing is looked for once every 128 readings, not at every one") {
-        FakeBus missing;
-        missing.add_chip(0x40, 0x2260);
-        fw::InaSensors m(missing);
-        REQUIRE(m.begin());
+        PackOnly board_m;
+        FakeBus& missing = board_m.bus;
+        fw::InaSensors& m = board_m.s;
         fw::TapReading t;
         missing.id_reads = 0;  // begin()'s own probe
         int probes = 0;
@@ -163,10 +166,7 @@ TEST_CASE("INA driver: begin identifies both chips and configures them", "[firmw
     }
 }
 
-TEST_CASE("INA driver: registers become readings in the firmware's exact units", "[firmware]") {
-    Board board;
-    FakeBus& bus = board.bus;
-    fw::InaSensors& s = board.sensors;
+TEST_CASE_METHOD(Board, "INA driver: registers become readings in the firmware's exact units", "[firmware]") {
     REQUIRE(s.begin());
 
     // Ready flag: bit 3 of Mask/Enable, cleared by the read.
@@ -246,10 +246,7 @@ TEST_CASE("INA driver: registers become readings in the firmware's exact units",
     CHECK(bus.config_writes.size() == before + 1);  // configured: read back, not written
 }
 
-TEST_CASE("INA driver: a failed register read is a failed reading, never a zero", "[firmware]") {
-    Board board;
-    FakeBus& bus = board.bus;
-    fw::InaSensors& s = board.sensors;
+TEST_CASE_METHOD(Board, "INA driver: a failed register read is a failed reading, never a zero", "[firmware]") {
     REQUIRE(s.begin());
     bus.regs[{0x40, fw::ina::kIna226RegBus}] = 13328;
     bus.regs[{0x40, fw::ina::kIna226RegShunt}] = 268;
@@ -259,7 +256,7 @@ TEST_CASE("INA driver: a failed register read is a failed reading, never a zero"
     fw::host::MockClock clock;
     fw::ReadingLoop loop(s, clock);
     fw::Reading r;
-    auto ready = [&bus] {
+    auto ready = [this] {
         bus.regs[{0x40, fw::ina::kIna226RegMaskEnable}] = fw::ina::kIna226ConversionReady;
         bus.regs[{0x41, fw::ina::kIna3221RegMaskEnable}] = fw::ina::kIna3221ConversionReady;
     };
