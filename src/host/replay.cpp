@@ -61,7 +61,7 @@ public:
             min_a_ = std::min(min_a_, current_a);
             max_a_ = std::max(max_a_, current_a);
             // On the ground (both readings under the take-off current) a step is the sensor's
-            // scatter, not the load's: the first kMaxIntervals, for its median.
+            // scatter, not the load's: the first kMaxIntervals, for the scatter note below.
             if (have_current_ && std::fabs(current_a) < ground_a_ && std::fabs(last_a_) < ground_a_ &&
                 ground_steps_a_.size() < kMaxIntervals)
                 ground_steps_a_.push_back(std::fabs(current_a - last_a_));
