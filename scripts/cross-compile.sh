@@ -91,6 +91,16 @@ EOF
   # shellcheck disable=SC2086
   "$cxx" $flags -c "$out/config_check.cpp" -o "$out/config_check.o"
   echo "exported config $header: compiles for xtensa as a constant expression"
+  # The Arduino layer, compiled (not linked) against our declarations of the library APIs
+  # it calls (firmware/host/arduino-api/README.md), with this config header.
+  mkdir -p "$out/arduino"
+  for src in "$root"/firmware/src/arduino/*.cpp; do
+    # shellcheck disable=SC2086
+    "$cxx" $flags -Werror -I"$root/firmware/host/arduino-api" -I"$(cd "$(dirname "$header")" && pwd)" \
+      -c "$src" -o "$out/arduino/$(basename "$src" .cpp).o" || { echo "cross-compile: FAILED $src" >&2; exit 1; }
+  done
+  echo "firmware Arduino layer (src/arduino, against firmware/host/arduino-api): compiles for xtensa," \
+    "text $("$size_tool" -t "$out"/arduino/*.o | tail -n 1 | awk '{print $1}') B before the libraries"
 fi
 
 totals() {  # totals ARCHIVE -> "text data bss"
