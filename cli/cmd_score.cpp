@@ -34,15 +34,18 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("-o,--output", a->output, "Write the table (or JSON) to this file instead of standard output");
     sub.add_option("-j,--jobs", a->jobs, "Flights scored in parallel (default or 0: the machine's cores); the output does not depend on it")
         ->check(CLI::Range(0, 1024));
-    sub.add_option("--logs", a->logs_dir, "Read each flight's log from DIR/NAME.csv (written by `battsim simulate --out-dir`) instead of simulating it in memory");
+    sub.add_option("--logs", a->logs_dir,
+                   "Read each flight's log from DIR/NAME.csv (.bin, .ulg for those formats; written by `battsim simulate "
+                   "--out-dir`) instead of simulating it in memory");
     sub.add_option("--copies", a->copies,
                    "Fly the suite this many times: as written, then with other seeds (gusts, cell spreads, sensor "
                    "noise; copy k adds 7919 k to each seed); figures pool every copy, with the copies' range beside them")
         ->check(CLI::Range(1, 100));
     sub.add_option("--log-format", a->log_format,
-                   "Fly every scenario with this log format instead of its own: raw (4 cells only), csv, or edgetx "
-                   "(a radio's telemetry log, as `battsim simulate --format`)")
-        ->check(CLI::IsMember({"raw", "csv", "edgetx"}));
+                   "Fly every scenario with this log format instead of its own: raw (4 cells only), csv, edgetx "
+                   "(a radio's telemetry log), dataflash (an ArduPilot .bin log) or ulog (a PX4 .ulg log), as "
+                   "`battsim simulate --format`")
+        ->check(CLI::IsMember({"raw", "csv", "edgetx", "dataflash", "ulog"}));
     sub.add_option("--columns", a->columns, "Estimator columns to run, comma-separated (default: all but the diagnostic solve-truth)");
     return [a]() -> int {
         std::vector<std::string> paths = a->paths;
@@ -54,17 +57,7 @@ std::function<int()> setup(CLI::App& sub) {
             std::cerr << "battsim score: " << e.what() << "\n";
             return kExitConfigError;
         }
-        std::vector<host::NamedPath> inputs;
-        for (const host::sim::Scenario& s : scenarios) {
-            inputs.push_back({"a scenario", s.source_path});
-            if (!a->logs_dir.empty()) inputs.push_back({"--logs' " + s.name + ".csv", a->logs_dir + "/" + s.name + ".csv"});
-        }
-        if (int rc = check_outputs("battsim score", inputs, {text_output("-o/--output", a->output)})) return rc;
-        {
-            std::vector<host::NamedPath> files;
-            for (const host::sim::Scenario& s : scenarios) files.push_back({"a scenario", s.source_path});
-            if (int rc = check_logs_once("battsim score", files)) return rc;
-        }
+        // The format first: it names the --logs files' extension.
         for (host::sim::Scenario& s : scenarios) {
             if (a->log_format.empty()) continue;
             const std::string problem = host::sim::log_format_problem(a->log_format, s.pack.cells);
@@ -73,6 +66,18 @@ std::function<int()> setup(CLI::App& sub) {
                 return kExitUsage;
             }
             s.log_format = a->log_format;
+        }
+        std::vector<host::NamedPath> inputs;
+        for (const host::sim::Scenario& s : scenarios) {
+            inputs.push_back({"a scenario", s.source_path});
+            const std::string log = s.name + host::sim::sim_log_extension(host::sim::log_format_of(s));
+            if (!a->logs_dir.empty()) inputs.push_back({"--logs' " + log, a->logs_dir + "/" + log});
+        }
+        if (int rc = check_outputs("battsim score", inputs, {text_output("-o/--output", a->output)})) return rc;
+        {
+            std::vector<host::NamedPath> files;
+            for (const host::sim::Scenario& s : scenarios) files.push_back({"a scenario", s.source_path});
+            if (int rc = check_logs_once("battsim score", files)) return rc;
         }
         std::vector<host::score::EstimatorColumn> columns;
         auto all = host::score::standard_columns();

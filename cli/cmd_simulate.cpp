@@ -36,11 +36,13 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("SCENARIO", a->scenarios, "Scenario JSON files, or directories of them")->required();
     sub.add_option("-o,--output", a->output, "Log file to write (one scenario only)");
     sub.add_option("--truth", a->truth, "Truth JSON to write (default: the log's name with .truth.json)");
-    sub.add_option("--out-dir", a->out_dir, "Write NAME.csv and NAME.truth.json here for every scenario");
+    sub.add_option("--out-dir", a->out_dir,
+                   "Write NAME.csv (NAME.bin for dataflash, NAME.ulg for ulog) and NAME.truth.json here for every scenario");
     sub.add_option("--seed", a->seed, "Override the scenario's seed");
     sub.add_option("--format", a->format,
-                   "Override the log format: raw (4 cells only), csv, or edgetx (a radio's telemetry log: pack "
-                   "voltage and current in 0.1 V and 0.1 A steps every log.interval_s, no cells)");
+                   "Override the log format: raw (4 cells only), csv, edgetx (a radio's telemetry log: pack "
+                   "voltage and current in 0.1 V and 0.1 A steps every log.interval_s, no cells), dataflash (an "
+                   "ArduPilot .bin log: BAT and BCL at 10 Hz) or ulog (a PX4 .ulg log: battery_status at 5 Hz)");
     sub.add_option("--cutoff-v-per-cell", a->cutoff, "Override the truth's loaded cutoff voltage per cell (default: the monitor config's min_flight_voltage_v per cell)");
     return [a]() -> int {
         if (a->output.empty() == a->out_dir.empty()) {
@@ -79,6 +81,16 @@ std::function<int()> setup(CLI::App& sub) {
                       << " given; use --out-dir\n";
             return kExitUsage;
         }
+        // The format first: it names the --out-dir logs' extension.
+        for (host::sim::Scenario& s : scenarios) {
+            if (a->format.empty()) continue;
+            const std::string problem = host::sim::log_format_problem(a->format, s.pack.cells);
+            if (!problem.empty()) {
+                std::cerr << "battsim simulate: --format: " << s.source_path << ": " << problem << "\n";
+                return kExitUsage;
+            }
+            s.log_format = a->format;
+        }
         // Where each scenario's log and truth go, checked against the scenarios and each other
         // before any is flown (two scenarios of one name in --out-dir, say).
         std::vector<std::pair<std::string, std::string>> targets;
@@ -86,7 +98,8 @@ std::function<int()> setup(CLI::App& sub) {
         add_named(inputs, "a scenario", files);
         for (const host::sim::Scenario& s : scenarios) {
             if (!a->out_dir.empty()) {
-                targets.emplace_back(a->out_dir + "/" + s.name + ".csv", a->out_dir + "/" + s.name + ".truth.json");
+                targets.emplace_back(a->out_dir + "/" + s.name + host::sim::sim_log_extension(host::sim::log_format_of(s)),
+                                     a->out_dir + "/" + s.name + ".truth.json");
                 outputs.push_back({"the log of " + s.name, targets.back().first});
                 outputs.push_back({"the truth of " + s.name, targets.back().second});
             } else {
@@ -108,14 +121,6 @@ std::function<int()> setup(CLI::App& sub) {
         for (size_t k = 0; k < scenarios.size(); ++k) {
             host::sim::Scenario& s = scenarios[k];
             if (!a->seed.empty()) s.seed = seed;
-            if (!a->format.empty()) {
-                const std::string problem = host::sim::log_format_problem(a->format, s.pack.cells);
-                if (!problem.empty()) {
-                    std::cerr << "battsim simulate: --format: " << s.source_path << ": " << problem << "\n";
-                    return kExitUsage;
-                }
-                s.log_format = a->format;
-            }
             if (!std::isnan(a->cutoff)) s.cutoff_v_per_cell = a->cutoff;
             host::sim::SimulationResult r;
             try {

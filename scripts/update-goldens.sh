@@ -22,11 +22,14 @@ for f in 29 30 32 34; do
       --summary "$out/$f.json")
 done
 # The scoreboards: every column on both simulated suites, the last-cell set, the
-# rest-polarisation stress suite and the tuning suite through a radio log (scenario paths
+# rest-polarisation stress suite and the tuning suite through a radio log, an ArduPilot and a
+# PX4 log (scenario paths
 # are relative to the repo).
 mkdir -p "$root/tests/golden/score"
 for suite in scenarios scenarios-holdout scenarios-last-cell scenarios-rest-polarisation; do
   (cd "$root" && "$bin" score --json -j2 "configs/$suite" -o "tests/golden/score/$suite.json")
 done
-(cd "$root" && "$bin" score --json -j2 --log-format edgetx configs/scenarios -o tests/golden/score/scenarios-edgetx.json)
+for format in edgetx dataflash ulog; do
+  (cd "$root" && "$bin" score --json -j2 --log-format $format configs/scenarios -o tests/golden/score/scenarios-$format.json)
+done
 echo "goldens written under $root/tests/golden/"

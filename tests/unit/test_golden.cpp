@@ -56,19 +56,25 @@ TEST_CASE("Golden summaries of the predictive-bms flights", "[golden][data]") {
 // The scoreboard as change indication: every estimator's numbers on both simulated suites,
 // the last-cell set (a weak cell read across the positive lead), the rest-polarisation
 // stress suite (the real packs' polarisation time constants) and the tuning suite flown
-// through a radio's telemetry log (the reader's wall clock, the 0.1 V steps).
+// through a radio's telemetry log (the reader's wall clock, the 0.1 V steps) and through an
+// ArduPilot and a PX4 log (the binary writers and readers, 10 and 5 Hz).
 // A change is either a bug or an intended change of the numbers (scripts/update-goldens.sh;
 // say in the commit what moved and why).
 TEST_CASE("Golden scoreboards of the simulated suites", "[golden]") {
     for (const std::string golden :
-         {"scenarios", "scenarios-holdout", "scenarios-last-cell", "scenarios-rest-polarisation", "scenarios-edgetx"}) {
-        const bool radio = golden == "scenarios-edgetx";
-        const std::string suite = radio ? "scenarios" : golden;
+         {"scenarios", "scenarios-holdout", "scenarios-last-cell", "scenarios-rest-polarisation", "scenarios-edgetx",
+          "scenarios-dataflash", "scenarios-ulog"}) {
+        // scenarios-FORMAT: the tuning suite flown through that log format.
+        const std::string format = golden == "scenarios-edgetx" ? "edgetx"
+                                   : golden == "scenarios-dataflash" ? "dataflash"
+                                   : golden == "scenarios-ulog" ? "ulog"
+                                                                  : "";
+        const std::string suite = format.empty() ? golden : "scenarios";
         const std::string dir = std::string(BATTSIM_SOURCE_DIR) + "/configs/" + suite;
         std::vector<sim::Scenario> scenarios;
         for (const std::string& f : sim::find_scenario_files({dir})) {
             scenarios.push_back(sim::load_scenario(f));
-            if (radio) scenarios.back().log_format = "edgetx";  // as `battsim score --log-format edgetx`
+            if (!format.empty()) scenarios.back().log_format = format;  // as `battsim score --log-format FORMAT`
         }
         score::ScoreOptions so;
         so.jobs = 2;

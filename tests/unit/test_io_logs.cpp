@@ -430,6 +430,24 @@ TEST_CASE("DataFlash binary: BAT with BCL cells and temperature, other instances
     CHECK(any_note(r, "instances other than 0"));
 }
 
+TEST_CASE("DataFlash binary: a BCL row after its BAT row (ArduPilot's order) belongs to that BAT row", "[io-logs]") {
+    // ArduPilot writes each battery update as BAT, then BCL with the same TimeUS: the cells
+    // of a BAT row are in the BCL after it, not in the one before (an update older).
+    LogTempDir d;
+    const std::string bytes = df_bat_fmt() + df_bcl_fmt() + df_bat(1000000, 0, 16.4f, 3.0f) +
+                              df_bcl(1000000, {4100, 4110, 4090, 4100}) + df_bat(1100000, 0, 16.0f, 9.0f) +
+                              df_bcl(1100000, {4000, 4010, 3990, 4000}) + df_bat(1200000, 0, 15.9f, 9.5f);
+    const auto r = read_all(Kind::DfBinary, d.write("order.bin", bytes));
+    REQUIRE(r.samples.size() == 3);
+    CHECK(r.samples[0].cell_count == 4);
+    CHECK(r.samples[0].cell_voltage_v[1] == Approx(4.11));
+    CHECK(r.samples[1].cell_voltage_v[1] == Approx(4.01));
+    // No BCL of its own: the latest cells stand, as before.
+    CHECK(r.samples[2].cell_count == 4);
+    CHECK(r.samples[2].cell_voltage_v[1] == Approx(4.01));
+    CHECK(r.notes.empty());
+}
+
 TEST_CASE("DataFlash binary malformed: file truncated mid-message keeps what came before", "[io-logs]") {
     LogTempDir d;
     std::string bytes = df_three_curr() + df_curr(1300, 1647, 150);

@@ -59,7 +59,7 @@ TEST_CASE("battsim simulate: usage and scenario errors", "[cli][sim]") {
     const auto xml = run("simulate " + q(d.at("a.json")) + " -o " + q(d.at("x.csv")) + " --format xml");
     CHECK(xml.exit_code == 2);
     CHECK(xml.err == "battsim simulate: --format: " + d.at("a.json") +
-                         ": expected \"auto\", \"raw\", \"csv\" or \"edgetx\", found \"xml\"\n");
+                         ": expected \"auto\", \"raw\", \"csv\", \"edgetx\", \"dataflash\" or \"ulog\", found \"xml\"\n");
     const auto missing = run("simulate " + q(d.at("none.json")) + " -o " + q(d.at("x.csv")));
     CHECK(missing.exit_code == 4);
     CHECK(missing.err.find(d.at("none.json") + ": no such scenario file or directory") != std::string::npos);
@@ -75,6 +75,38 @@ TEST_CASE("battsim simulate: usage and scenario errors", "[cli][sim]") {
     INFO(all.err);
     REQUIRE(all.exit_code == 0);
     for (const char* f : {"a.csv", "a.truth.json", "b.csv", "b.truth.json"}) CHECK_FALSE(clitest::read_file(out.at(f)).empty());
+}
+
+TEST_CASE("battsim simulate --format dataflash|ulog writes an autopilot's log that replay and score --logs read", "[cli][sim]") {
+    Dir d, out;
+    clitest::write_file(d.at("a.json"), scenario_json("a", 1));
+    for (const char* format : {"dataflash", "ulog"}) {
+        const std::string f = format;
+        const std::string ext = f == "dataflash" ? ".bin" : ".ulg";
+        INFO(f);
+        const auto r = run("simulate " + q(d.at("a.json")) + " --format " + f + " --out-dir " + q(out.path));
+        INFO(r.err);
+        REQUIRE(r.exit_code == 0);
+        CHECK(r.out.find("-> " + out.at("a" + ext)) != std::string::npos);
+        const nlohmann::json truth = nlohmann::json::parse(clitest::read_file(out.at("a.truth.json")));
+        CHECK(truth["log"]["format"] == f);
+        const nlohmann::json summary = clitest::run_json("replay " + q(out.at("a" + ext)) + " -c " +
+                                                         q(std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-modified.json") + " --json");
+        CHECK(summary["input"]["format"] == (f == "dataflash" ? "dataflash-bin" : "ulog"));
+        CHECK(summary["input"]["cells"] == 4);
+        CHECK(summary["input"]["has_temperature"] == true);
+        CHECK(summary["input"]["notes"].empty());
+        CHECK(summary["samples"]["total"] == truth["log"]["rows"]);
+        // score --logs finds NAME.bin / NAME.ulg and flies the same flight as in memory.
+        const nlohmann::json from_file = clitest::run_json("score " + q(d.at("a.json")) + " --log-format " + f + " --logs " +
+                                                           q(out.path) + " --columns joint --json");
+        const nlohmann::json in_memory = clitest::run_json("score " + q(d.at("a.json")) + " --log-format " + f + " --columns joint --json");
+        CHECK(from_file["flights"][0]["estimators"] == in_memory["flights"][0]["estimators"]);
+        CHECK(from_file["flights"][0]["notes"] == in_memory["flights"][0]["notes"]);  // no "differs from" note
+    }
+    const auto missing = run("score " + q(d.at("a.json")) + " --log-format ulog --logs " + q(d.path));
+    CHECK(missing.exit_code == 3);
+    CHECK(missing.err.find(d.at("a.ulg") + ": cannot open file") != std::string::npos);
 }
 
 TEST_CASE("battsim score prints a table or JSON and checks its arguments", "[cli][score]") {

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -231,6 +232,54 @@ TEST_CASE("Radio log: one row per log interval, 0.1 V and 0.1 A steps, read back
     CHECK(reader->info().notes.size() == 1);  // the "columns read as" note, nothing skipped
     // The truth is the same flight whatever the log's format.
     CHECK(r.truth.total_flight_time_s == full.truth.total_flight_time_s);
+}
+
+TEST_CASE("Autopilot logs: ArduPilot DataFlash and PX4 ULog read back as the CSV log's rows", "[sim][sensor]") {
+    // Each binary log holds the CSV log's readings, thinned to the autopilot's logging
+    // interval: every sample read back must be a CSV row at the same time with the same
+    // values (the cells in whole mV in DataFlash's BCL). In DataFlash each BAT row's cells
+    // come in the BCL row written after it, as ArduPilot writes them: read with the
+    // previous update's cells, the cells would miss the pack voltage by up to a current step.
+    const SimulationResult full = simulate(scenario(R"({"log": {"format": "csv"}})"));
+    const testsupport::TempDir dir("autopilot");
+    std::unique_ptr<SampleReader> csv = open_reader(dir.write("full.csv", full.log_text), ReaderOptions());
+    std::vector<battsim::core::Sample> rows;
+    battsim::core::Sample s;
+    while (csv->next(s)) rows.push_back(s);
+    for (const auto& [format, kind, extension, interval_us, cell_tolerance_v] :
+         {std::make_tuple("dataflash", SimLogFormat::DataFlash, ".bin", 100000, 0.0005),
+          std::make_tuple("ulog", SimLogFormat::ULog, ".ulg", 200000, 0.0)}) {
+        INFO(format);
+        const SimulationResult r = simulate(scenario(std::string(R"({"log": {"format": ")") + format + "\"}}"));
+        REQUIRE(r.format == kind);
+        CHECK(truth_to_json(r)["log"]["format"] == format);
+        CHECK(std::string(sim_log_extension(kind)) == extension);
+        std::unique_ptr<SampleReader> reader = open_reader(dir.write(std::string("log") + extension, r.log_text), ReaderOptions());
+        CHECK(reader->info().format == (kind == SimLogFormat::DataFlash ? LogFormat::DataflashBinary : LogFormat::Ulog));
+        size_t k = 0, n = 0;
+        uint64_t last_us = 0;
+        while (reader->next(s)) {
+            while (k < rows.size() && rows[k].time_us < s.time_us) ++k;
+            REQUIRE(k < rows.size());
+            REQUIRE(rows[k].time_us == s.time_us);
+            CHECK(s.voltage_v == rows[k].voltage_v);
+            CHECK(s.current_a == rows[k].current_a);
+            CHECK(s.temperature_c == rows[k].temperature_c);
+            REQUIRE(s.cell_count == 4);
+            for (int c = 0; c < 4; ++c) CHECK(s.cell_voltage_v[c] == Approx(rows[k].cell_voltage_v[c]).margin(cell_tolerance_v + 1e-6));
+            // The first reading at or after each interval's mark: one an interval, none
+            // where the logger stalled (up to 0.35 s).
+            if (n > 0) {
+                CHECK(s.time_us / interval_us > last_us / interval_us);
+                CHECK(s.time_us - last_us <= 450000u);
+            }
+            last_us = s.time_us;
+            ++n;
+        }
+        CHECK(static_cast<long>(n) == r.truth.rows);
+        CHECK(reader->info().notes.empty());
+        CHECK(r.truth.total_flight_time_s == full.truth.total_flight_time_s);
+    }
 }
 
 TEST_CASE("Sensor faults are visible in the log and leave the truth alone", "[sim][sensor]") {

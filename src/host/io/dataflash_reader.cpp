@@ -1013,12 +1013,23 @@ public:
         long line;
         core::Sample sample;
         double t_us;
+        // A battery row waits for the next message: ArduPilot writes each update's BAT and then
+        // its BCL with the same TimeUS, so the cells that belong to a BAT row come after it.
         while (src_->next(f, r, where, line)) {
             if (step(*f, *r, where, line, sample, t_us)) {
-                order_->offer(sample, t_us, where);
-                if (order_->pop(out)) return true;
+                flush_pending();
+                pending_ = sample;
+                pending_t_us_ = t_us;
+                pending_where_ = where;
+                pending_stamp_us_ = row_stamp_us_;
+            } else if (cells_stamp_us_ >= 0 && pending_ && cells_stamp_us_ == pending_stamp_us_) {
+                pending_->cell_count = static_cast<uint8_t>(cell_count_);
+                std::copy(cells_, cells_ + core::kMaxCells, pending_->cell_voltage_v);
             }
+            cells_stamp_us_ = -1;
+            if (order_->pop(out)) return true;
         }
+        flush_pending();
         order_->finish();
         done_ = true;
         if (beyond_cells_ > 0)
@@ -1037,6 +1048,18 @@ public:
     void add_note(const std::string& text) { info_.notes.push_back(text); }
 
 private:
+    void flush_pending() {
+        if (!pending_) return;
+        order_->offer(*pending_, pending_t_us_, pending_where_);
+        pending_.reset();
+    }
+    // The row's own time stamp in µs as logged (-1: none), to pair a BCL row with its BAT row.
+    static double own_stamp_us(const DfFormat& f, const FieldReader& r) {
+        double t;
+        if (f.boot_time < 0 || !r.number(f.boot_time, t) || !std::isfinite(t)) return -1;
+        return t * f.boot_time_to_us;
+    }
+
     // PARM row: keeps the first finite value of each name.
     void parameter(const DfFormat& f, const FieldReader& r, const std::string& where) {
         const std::string name = r.text(f.parm_name);
@@ -1100,6 +1123,7 @@ private:
             float cells[core::kMaxCells] = {};
             cell_count_ = read_cells(f, r, cells, beyond);
             std::copy(cells, cells + core::kMaxCells, cells_);
+            cells_stamp_us_ = own_stamp_us(f, r);
             if (beyond) ++beyond_cells_;
             return false;
         }
@@ -1107,6 +1131,7 @@ private:
         double inst;
         if (!read_instance(f, r, inst) || inst != 0) return false;
         ++rows_;
+        row_stamp_us_ = own_stamp_us(f, r);
         // Time first: a row dropped below still occupies its slot in an inferred spacing.
         if (f.boot_time >= 0) {
             if (!r.number(f.boot_time, t) || !std::isfinite(t)) {
@@ -1177,6 +1202,12 @@ private:
     long untimed_ = 0;
     long rows_ = 0;
     std::optional<TimeOrder> order_;  // made once the plan names the battery message
+    std::optional<core::Sample> pending_;  // the latest battery row, until the message after it
+    double pending_t_us_ = 0;
+    std::string pending_where_;
+    double pending_stamp_us_ = -1;
+    double row_stamp_us_ = -1;    // own time stamp of the battery row step() just read
+    double cells_stamp_us_ = -1;  // own time stamp of the BCL row step() just read, else -1
     bool done_ = false;
     std::string first_drop_;
 };

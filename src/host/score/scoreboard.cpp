@@ -153,7 +153,10 @@ ColumnFlight judge(const std::vector<Estimate>& est, const sim::SimulationResult
 // Reads a log with the standard readers, exactly as `battsim replay` would.
 std::vector<core::Sample> read_samples(const std::string& path, const sim::SimulationResult& sim) {
     ReaderOptions ro;
-    ro.format = sim.format == sim::SimLogFormat::Raw ? LogFormat::RawPbms : LogFormat::Csv;
+    ro.format = sim.format == sim::SimLogFormat::Raw         ? LogFormat::RawPbms
+                : sim.format == sim::SimLogFormat::DataFlash ? LogFormat::DataflashBinary
+                : sim.format == sim::SimLogFormat::ULog      ? LogFormat::Ulog
+                                                              : LogFormat::Csv;
     ro.shunt = sim.scenario.config.monitor.shunt;
     std::unique_ptr<SampleReader> reader = open_reader(path, ro);
     std::vector<core::Sample> out;
@@ -417,7 +420,7 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& suite, const std::
                     out << simr.log_text;
                     if (!out) throw std::runtime_error(path + ": cannot write the temporary log");
                 } else {
-                    path = options.logs_dir + "/" + simr.scenario.name + ".csv";
+                    path = options.logs_dir + "/" + simr.scenario.name + sim::sim_log_extension(simr.format);
                 }
                 std::vector<core::Sample> samples;
                 try {

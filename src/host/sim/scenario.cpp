@@ -142,8 +142,9 @@ void resolve_defaults(Scenario& s) {
 }
 
 std::string log_format_problem(const std::string& format, int cells) {
-    if (format != "auto" && format != "raw" && format != "csv" && format != "edgetx")
-        return "expected \"auto\", \"raw\", \"csv\" or \"edgetx\", found \"" + format + "\"";
+    if (format != "auto" && format != "raw" && format != "csv" && format != "edgetx" && format != "dataflash" &&
+        format != "ulog")
+        return "expected \"auto\", \"raw\", \"csv\", \"edgetx\", \"dataflash\" or \"ulog\", found \"" + format + "\"";
     if (format == "raw" && cells != 4)
         return "the raw logger format has exactly 4 cells; use \"csv\" for " + std::to_string(cells) + " cells";
     return std::string();
@@ -153,6 +154,8 @@ SimLogFormat log_format_of(const Scenario& s) {
     if (s.log_format == "raw") return SimLogFormat::Raw;
     if (s.log_format == "csv") return SimLogFormat::Csv;
     if (s.log_format == "edgetx") return SimLogFormat::Radio;
+    if (s.log_format == "dataflash") return SimLogFormat::DataFlash;
+    if (s.log_format == "ulog") return SimLogFormat::ULog;
     return s.pack.cells == 4 ? SimLogFormat::Raw : SimLogFormat::Csv;
 }
 

@@ -47,6 +47,21 @@ void append_fixed(std::string& out, int64_t value, int decimals) {
 
 }  // namespace
 
+const char* sim_log_format_name(SimLogFormat f) {
+    switch (f) {
+        case SimLogFormat::Raw: return "raw";
+        case SimLogFormat::Csv: return "csv";
+        case SimLogFormat::Radio: return "edgetx";
+        case SimLogFormat::DataFlash: return "dataflash";
+        case SimLogFormat::ULog: return "ulog";
+    }
+    return "csv";
+}
+
+const char* sim_log_extension(SimLogFormat f) {
+    return f == SimLogFormat::DataFlash ? ".bin" : f == SimLogFormat::ULog ? ".ulg" : ".csv";
+}
+
 float firmware_current_ma(int32_t shunt_count, const core::ShuntCalibration& shunt) {
     const float shunt_mv = static_cast<float>(shunt_count) * 0.0025f;
     return core::current_ma_from_shunt_mv(shunt_mv, shunt);
@@ -283,6 +298,20 @@ void format_record(SimLogFormat f, int cells, const core::ShuntCalibration& shun
         append_fixed(out, r.temperature_dc, 1);
         out += '\n';
     }
+}
+
+RecordValues record_values(int cells, const core::ShuntCalibration& shunt, const LogRecord& r) {
+    RecordValues v;
+    v.voltage_v = r.bus_count * kBusLsbV;
+    double prev = 0;
+    for (int c = 0; c < cells; ++c) {
+        const double tap = c + 1 < cells ? r.tap_count[c] * kTapLsbV : v.voltage_v;
+        v.cell_v[c] = tap - prev;
+        prev = tap;
+    }
+    v.current_a = static_cast<double>(std::llround(static_cast<double>(firmware_current_ma(r.shunt_count, shunt)))) / 1000.0;
+    v.temperature_c = r.temperature_dc / 10.0;
+    return v;
 }
 
 uint8_t nameable_fault_causes(const SensorFaults& faults) {

@@ -166,10 +166,24 @@ private:
 // Radio: an EdgeTX radio's telemetry log (Date, Time, RxBt(V), Curr(A)): the pack voltage
 // and current in the 0.1 V and 0.1 A steps of the Crossfire battery sensor, one row per
 // log interval (the rows are thinned by the caller), no cells.
-enum class SimLogFormat { Raw, Csv, Radio };
+// DataFlash and ULog: an autopilot's binary log (autopilot_log.h), written by the caller.
+enum class SimLogFormat { Raw, Csv, Radio, DataFlash, ULog };
+// The format's name as scenarios and the commands' --format give it, and its file extension.
+const char* sim_log_format_name(SimLogFormat f);
+const char* sim_log_extension(SimLogFormat f);
 std::string format_header(SimLogFormat f, int cells);
 void format_record(SimLogFormat f, int cells, const core::ShuntCalibration& shunt, const LogRecord& r,
                    std::string& out);
+
+// A row's readings in volts, amperes and °C, as the CSV log gives them (the current in whole
+// mA): what the binary autopilot logs carry.
+struct RecordValues {
+    double voltage_v = 0;
+    double current_a = 0;
+    double cell_v[kMaxCells] = {};
+    double temperature_c = 0;
+};
+RecordValues record_values(int cells, const core::ShuntCalibration& shunt, const LogRecord& r);
 
 // The current the firmware computes from a shunt count, in mA, in float exactly as the
 // ESP8266 does.

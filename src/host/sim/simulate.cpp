@@ -5,6 +5,7 @@
 
 #include "host/config_json.h"
 #include "host/io/atomic_file.h"
+#include "host/sim/autopilot_log.h"
 #include "host/sim/det_math.h"
 
 namespace battsim {
@@ -336,18 +337,29 @@ SimulationResult simulate(const Scenario& scenario, const SimulateOptions& optio
     tr.sensor_stats = sensor.stats();
     tr.rows = 0;
 
-    // The log text.
-    res.log_text = format_header(res.format, s.pack.cells);
+    // The log text (bytes, for the autopilots' binary logs).
+    const bool autopilot = res.format == SimLogFormat::DataFlash || res.format == SimLogFormat::ULog;
+    const AutopilotLog autopilot_kind = res.format == SimLogFormat::ULog ? AutopilotLog::ULog : AutopilotLog::DataFlash;
+    AutopilotLogWriter autopilot_log(autopilot_kind, s.pack.cells);
+    res.log_text = autopilot ? autopilot_log.header() : format_header(res.format, s.pack.cells);
     res.log_text.reserve(records.size() * (res.format == SimLogFormat::Raw ? 48 : 80));
-    // A radio logs on its own timer: the first reading at or after each interval's start.
-    const int64_t interval_ms = static_cast<int64_t>(std::llround(s.log_interval_s * 1000.0));
+    // A radio or an autopilot logs on its own timer: the first reading at or after each
+    // interval's start.
+    const bool thinned = autopilot || res.format == SimLogFormat::Radio;
+    const double interval_s = autopilot ? autopilot_log_interval_s(autopilot_kind) : s.log_interval_s;
+    const int64_t interval_ms = static_cast<int64_t>(std::llround(interval_s * 1000.0));
     int64_t next_ms = 0;
     for (const LogRecord& r : records) {
-        if (res.format == SimLogFormat::Radio) {
+        if (thinned) {
             if (r.time_ms < next_ms) continue;
             next_ms = (r.time_ms / interval_ms + 1) * interval_ms;
         }
-        format_record(res.format, s.pack.cells, s.sensor.shunt, r, res.log_text);
+        if (autopilot) {
+            const RecordValues v = record_values(s.pack.cells, s.sensor.shunt, r);
+            autopilot_log.append(res.log_text, r.time_ms * 1000, v.voltage_v, v.current_a, v.cell_v, v.temperature_c);
+        } else {
+            format_record(res.format, s.pack.cells, s.sensor.shunt, r, res.log_text);
+        }
         ++tr.rows;
     }
     return res;
@@ -362,7 +374,7 @@ json truth_to_json(const SimulationResult& r) {
     j["battsim_version"] = BATTSIM_VERSION;
     j["scenario"] = scenario_to_json(s);
     j["monitor_config"] = config_to_json(s.config);
-    j["log"] = {{"format", r.format == SimLogFormat::Raw ? "raw" : r.format == SimLogFormat::Csv ? "csv" : "edgetx"},
+    j["log"] = {{"format", sim_log_format_name(r.format)},
                 {"rows", t.rows}};
     json cells = json::array();
     for (int c = 0; c < t.plant.cells; ++c) {
