@@ -38,6 +38,7 @@ public:
             const double tenths = 10.0 * static_cast<double>(s.voltage_v);
             coarse_ = coarse_ && std::fabs(tenths - std::round(tenths)) < 2e-3;
             if (voltages_ == 0) first_v_ = s.voltage_v;
+            last_v_ = s.voltage_v;
             varied_ = varied_ || s.voltage_v != first_v_;
             ++voltages_;
         }
@@ -46,6 +47,8 @@ public:
             // The first kMaxIntervals: their median is the log's usual interval, and a replay's
             // memory stays flat however long the log (every interval had been kept).
             if (intervals_s_.size() < kMaxIntervals) intervals_s_.push_back(step_s);
+            // The log's own count, whether or not the monitor counted (it starts at a rest).
+            if (std::isfinite(s.current_a)) net_mah_ += static_cast<double>(s.current_a) * step_s / 3.6;
             if (step_s > longest_s_) {
                 longest_s_ = step_s;
                 longest_at_s_ = static_cast<double>(last_us_ - first_us_) * 1e-6;
@@ -90,6 +93,18 @@ public:
                                      "this log counts discharge as negative, replay it with --negative-discharge "
                                      "(manifest: \"negative_is_discharge\": true)",
                           takeoff_a, min_a_);
+            out.push_back(buf);
+        } else if (net_mah_ < -kSignMinMah && last_v_ < kSignMinFall * first_v_) {
+            // A log that does reach the take-off current the wrong way round (regeneration,
+            // a brief reverse reading) but whose count runs backwards while the pack empties.
+            std::snprintf(buf, sizeof buf,
+                          negated_ ? "the charge counted over the log is %.0f mAh (negative) while the pack voltage fell "
+                                     "from %.3g to %.3g V, with --negative-discharge: if this log counts discharge as "
+                                     "positive, replay it without (manifest: \"negative_is_discharge\": false)"
+                                   : "the charge counted over the log is %.0f mAh (negative) while the pack voltage fell "
+                                     "from %.3g to %.3g V: if this log counts discharge as negative, replay it with "
+                                     "--negative-discharge (manifest: \"negative_is_discharge\": true)",
+                          net_mah_, static_cast<double>(first_v_), static_cast<double>(last_v_));
             out.push_back(buf);
         }
         // Battery logs are written a few times a second to once every few seconds.
@@ -178,6 +193,9 @@ public:
 
 private:
     static constexpr double kSlowestIntervalS = 10.0;
+    // A count this far below zero while the voltage fell by over 1 %: not a sensor's offset.
+    static constexpr double kSignMinMah = 10.0;
+    static constexpr float kSignMinFall = 0.99f;
     static constexpr double kFastestIntervalS = 1e-3;  // a flight controller's blackbox at most
     static constexpr double kShortestSpanS = 10.0;
     static constexpr long kCoarseMinSamples = 20;
@@ -189,10 +207,11 @@ private:
     static constexpr double kNoiseShareOfStep = 0.25;
     bool negated_;  // --negative-discharge given
     bool coarse_ = true, varied_ = false;
-    float first_v_ = 0.0f;
+    float first_v_ = 0.0f, last_v_ = 0.0f;
     long voltages_ = 0;
     std::vector<double> intervals_s_;
     uint64_t first_us_ = 0, last_us_ = 0;
+    double net_mah_ = 0.0;  // current × interval over the log, as read
     double longest_s_ = 0.0, longest_at_s_ = 0.0, longest_mah_ = 0.0;  // the longest interval, where, its charge
     double ground_a_;
     bool have_current_ = false;

@@ -238,6 +238,23 @@ TEST_CASE("replay notes a current of the other sign and a time column in millise
     REQUIRE(wrong.size() == 1);
     CHECK(wrong[0] == "the current never reaches the take-off threshold (1 A) but falls to -20 A with --negative-discharge: "
                       "if this log counts discharge as positive, replay it without (manifest: \"negative_is_discharge\": false)");
+    // Regeneration peaks that do reach the take-off current (a car's drive cycle, a brake):
+    // the count runs backwards while the voltage falls, and that is said too.
+    std::string regen = "time_s,voltage_v,current_a\n";
+    for (int k = 0; k < 600; ++k) {
+        const double v = 16.5 - 0.002 * k;  // 1.2 V down over 40 s
+        const std::string a = k % 50 == 0 ? "3" : "-10";
+        regen += std::to_string(0.63 + 0.067 * k) + "," + std::to_string(v) + "," + a + "\n";
+    }
+    clitest::write_file(dir + "/regen.csv", regen);
+    const auto rg = notes("regen.csv", "");
+    REQUIRE(rg.size() == 1);
+    CHECK_THAT(rg[0].get<std::string>(),
+               Catch::StartsWith("the charge counted over the log is -") &&
+                   Catch::EndsWith("mAh (negative) while the pack voltage fell from 16.5 to 15.3 V: if this log counts "
+                                   "discharge as negative, replay it with --negative-discharge (manifest: "
+                                   "\"negative_is_discharge\": true)"));
+    CHECK(notes("regen.csv", " --negative-discharge").empty());
     // On a log of another format the option is said to be ignored, not dropped without a word
     // (a note, not a refusal: a manifest's CSV defaults reach its .bin logs too).
     auto raw = run("replay " + q(kSource + "/logs/example-4s.csv") + " -c " + q(kConfig) + " --negative-discharge --json");
