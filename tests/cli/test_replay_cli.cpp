@@ -334,6 +334,15 @@ TEST_CASE("replay reads a radio's telemetry log and says what its 0.1 V steps an
     REQUIRE(fa["input"]["notes"].size() == 1);
     CHECK(fa["input"]["notes"][0] == "samples averaged over 9 ms windows: 20000 read into 4000");
     CHECK(fa["samples"]["total"] == 4000);
+    // A window longer than the reference logger's 68 ms merges samples across current steps:
+    // said, with the window a fast log needs.
+    const auto fl = clitest::run_json("replay " + q(dir + "/fast.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
+                                      " --estimator joint --average-ms 200 --json");
+    REQUIRE(fl["input"]["notes"].size() == 2);
+    CHECK(fl["input"]["notes"][1] ==
+          "--average-ms 200: windows longer than the reference logger's 68 ms merge the samples either side of a current "
+          "step, and the joint estimator's resistance reads high and its capacity low (README, \"Input formats\"); "
+          "averaging is for fast logs: 9 ms suffices");
     CHECK(run("replay " + q(dir + "/fast.csv") + " --average-ms -1").exit_code == 2);
     // 0 is no window either (it had passed silently as "no averaging").
     const auto zero = run("replay " + q(dir + "/fast.csv") + " --average-ms 0");
