@@ -122,6 +122,11 @@ std::function<int()> setup(CLI::App& sub) {
         for (const auto& note : summary.value("config_notes", nlohmann::json::array()))
             std::cerr << "battsim replay: note: " << note.get<std::string>() << "\n";
         host::LoadedConfig corrected = opt.config;
+        // The config written is the file's with the corrections: --estimator chose this run's
+        // estimator, not the file's (written, it had switched every later replay of the file).
+        if (!a->input.estimator.empty())
+            corrected.monitor.estimator =
+                (a->input.config.empty() ? host::builtin_config() : host::load_config_file(a->input.config)).monitor.estimator;
         // Given at all (a zero or negative count is refused below, not taken as "none").
         const bool check = charged->count() > 0;
         if (check) {

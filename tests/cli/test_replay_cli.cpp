@@ -572,6 +572,12 @@ TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes
                                          " --estimator joint" + charged + " --json");
     CHECK(again["charger_check"]["fault"] == false);
     CHECK(again["charger_check"]["ratio"].get<double>() == Approx(1.0).epsilon(0.002));
+    // The file's estimator, not this run's --estimator: replayed without the option it is
+    // still the file's (reference) estimator.
+    const auto fixed = nlohmann::json::parse(clitest::read_file(dir + "/fixed.json"));
+    CHECK(fixed["estimator"] == "reference");
+    CHECK(clitest::run_json("replay " + q(dir + "/g.csv") + " -c " + q(dir + "/fixed.json") + " --json")["estimator"] ==
+          "reference");
     // A clean sensor on a healthy pack is within the bar.
     REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/4s-racing-healthy-a.json") + " -o " + q(dir + "/h.csv")).exit_code == 0);
     const auto ht = nlohmann::json::parse(clitest::read_file(dir + "/h.truth.json"));
