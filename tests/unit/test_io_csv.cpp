@@ -351,11 +351,11 @@ TEST_CASE("bad input: unit of a mapped column cannot be inferred", "[io]") {
     opt.columns.current = "battery_current";
     opt.columns.current_scale_to_a = 1.0;
     CHECK(read_error(p, opt) == p + ":1:1: cannot tell the unit of time column \"time\": expected a name ending in "
-                                    "_s, _ms or _us (or (s), (ms), (us)), or a time scale (seconds per unit)");
+                                    "_s, _ms or _us (or (s), (ms), (us)), or give the unit: --time-unit s, ms or us (manifest: columns.time_unit or time_unit)");
     opt.columns.time_scale_to_s = 1.0;
     opt.columns.current_scale_to_a = 0.0;
     CHECK(read_error(p, opt) == p + ":1:3: cannot tell the unit of current column \"battery_current\": expected a "
-                                    "name ending in _a or _ma (or (a), (ma)), or a current scale (amps per unit)");
+                                    "name ending in _a or _ma (or (a), (ma)), or give the unit: --current-unit A or mA (manifest: columns.current_unit or current_unit)");
     opt.columns.current_scale_to_a = 1.0;
     opt.columns.time_scale_to_s = -1.0;
     CHECK(read_error(p, opt) == p + ": time scale must be a positive number of seconds per unit, got -1");

@@ -756,7 +756,7 @@ private:
         } else {
             throw InputError(info_.path, header_line_, time_col_ + 1,
                              "cannot tell the unit of time column \"" + names_[static_cast<std::size_t>(time_col_)] +
-                                 "\": expected a name ending in _s, _ms or _us (or (s), (ms), (us)), or a time scale (seconds per unit)");
+                                 "\": expected a name ending in _s, _ms or _us (or (s), (ms), (us)), or give the unit: --time-unit s, ms or us (manifest: columns.time_unit or time_unit)");
         }
 
         // Voltage (volts unless the name ends in _mv).
@@ -797,7 +797,7 @@ private:
                 throw InputError(info_.path, header_line_, current_col_ + 1,
                                  "cannot tell the unit of current column \"" +
                                      names_[static_cast<std::size_t>(current_col_)] +
-                                     "\": expected a name ending in _a or _ma (or (a), (ma)), or a current scale (amps per unit)");
+                                     "\": expected a name ending in _a or _ma (or (a), (ma)), or give the unit: --current-unit A or mA (manifest: columns.current_unit or current_unit)");
             }
             if (m.current_negative_is_discharge) current_scale_ = -current_scale_;
         }
