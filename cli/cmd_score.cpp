@@ -58,14 +58,10 @@ std::function<int()> setup(CLI::App& sub) {
             return kExitConfigError;
         }
         // The format first: it names the --logs files' extension.
-        for (host::sim::Scenario& s : scenarios) {
-            if (a->log_format.empty()) continue;
-            const std::string problem = host::sim::log_format_problem(a->log_format, s.pack.cells);
-            if (!problem.empty()) {
-                std::cerr << "battsim score: --log-format: " << s.source_path << ": " << problem << "\n";
-                return kExitUsage;
-            }
-            s.log_format = a->log_format;
+        const std::string format_problem = host::sim::override_log_format(scenarios, a->log_format);
+        if (!format_problem.empty()) {
+            std::cerr << "battsim score: --log-format: " << format_problem << "\n";
+            return kExitUsage;
         }
         std::vector<host::NamedPath> inputs;
         for (const host::sim::Scenario& s : scenarios) {

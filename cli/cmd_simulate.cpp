@@ -82,14 +82,10 @@ std::function<int()> setup(CLI::App& sub) {
             return kExitUsage;
         }
         // The format first: it names the --out-dir logs' extension.
-        for (host::sim::Scenario& s : scenarios) {
-            if (a->format.empty()) continue;
-            const std::string problem = host::sim::log_format_problem(a->format, s.pack.cells);
-            if (!problem.empty()) {
-                std::cerr << "battsim simulate: --format: " << s.source_path << ": " << problem << "\n";
-                return kExitUsage;
-            }
-            s.log_format = a->format;
+        const std::string format_problem = host::sim::override_log_format(scenarios, a->format);
+        if (!format_problem.empty()) {
+            std::cerr << "battsim simulate: --format: " << format_problem << "\n";
+            return kExitUsage;
         }
         // Where each scenario's log and truth go, checked against the scenarios and each other
         // before any is flown (two scenarios of one name in --out-dir, say).

@@ -150,6 +150,16 @@ std::string log_format_problem(const std::string& format, int cells) {
     return std::string();
 }
 
+std::string override_log_format(std::vector<Scenario>& scenarios, const std::string& format) {
+    if (format.empty()) return std::string();
+    for (const Scenario& s : scenarios) {
+        const std::string problem = log_format_problem(format, s.pack.cells);
+        if (!problem.empty()) return s.source_path + ": " + problem;
+    }
+    for (Scenario& s : scenarios) s.log_format = format;
+    return std::string();
+}
+
 SimLogFormat log_format_of(const Scenario& s) {
     if (s.log_format == "raw") return SimLogFormat::Raw;
     if (s.log_format == "csv") return SimLogFormat::Csv;

@@ -107,6 +107,9 @@ SimLogFormat log_format_of(const Scenario& s);
 // be auto, raw, csv or edgetx, and the raw logger's rows hold exactly 4 cells. The scenario
 // files and the commands that override the format (simulate, score) ask this one question.
 std::string log_format_problem(const std::string& format, int cells);
+// A command's override: every scenario's log format set to `format` (none when empty). "" when
+// all take it, else "PATH: why" for the first that cannot (and none is changed).
+std::string override_log_format(std::vector<Scenario>& scenarios, const std::string& format);
 
 }  // namespace sim
 }  // namespace host
