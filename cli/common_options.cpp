@@ -366,6 +366,8 @@ void print_brief(const nlohmann::json& s, std::ostream& out) {
         const double span_s = s["samples"].value("rejected_span_s", 0.0);
         if (pack_kept_out && span_s > 0.0)
             out << "; " << fixed(span_s, 1) << " s between valid samples, its charge counted at the current after it";
+        // A current column in mA read as A reads a thousand times high: the unit before the pack.
+        if (rejected.contains("current_high")) out << "; a current in mA read as amperes (give --current-unit mA)?";
         out << (pack_kept_out ? "; does the config match this pack?\n" : "; a loose balance lead, or a config for another cell count?\n");
     }
     const auto& f = s["flight"];

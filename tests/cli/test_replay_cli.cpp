@@ -130,6 +130,16 @@ TEST_CASE("replay says how many samples the config's sensor limits kept out, and
     const auto brief = clitest::run(args);
     REQUIRE(brief.exit_code == 0);
     CHECK_THAT(brief.out, Catch::Contains("kept out by the config's sensor limits: 150 pack_voltage_high (sensor.max_pack_voltage_v)"));
+    CHECK_THAT(brief.out, !Catch::Contains("--current-unit mA"));
+    // A current column in mA read as amperes reads a thousand times high: the unit is named.
+    std::string ma = "time_s,voltage_v,current_x\n";
+    for (int k = 0; k < 300; ++k)
+        ma += std::to_string(0.63 + 0.067 * k) + ",16.5," + (k > 100 ? "20000" : "300") + "\n";
+    clitest::write_file(dir + "/ma.csv", ma);
+    const auto ma_brief = clitest::run("replay " + q(dir + "/ma.csv") + " -c " + q(kConfig) + " --current-col current_x --current-unit A");
+    REQUIRE(ma_brief.exit_code == 0);
+    CHECK_THAT(ma_brief.out, Catch::Contains("current_high (sensor.max_current_a); a current in mA read as amperes (give "
+                                             "--current-unit mA)?; does the config match this pack?"));
     // Nothing kept out: an empty object, and no such line.
     const auto clean = clitest::run_json("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --json");
     CHECK(clean["samples"]["rejected"] == nlohmann::json::object());
