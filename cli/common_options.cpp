@@ -342,6 +342,19 @@ void print_flight_brief(const nlohmann::json& s, std::ostream& out) {
     out << "\n";
     const auto& at20 = f["remaining_time_s"]["at20"];
     out << "  remaining time 20 % into the flight: " << (at20.is_number() ? fixed(at20, 1) + " s" : "not known yet") << "\n";
+    // The battery states a ground station shows (not warnings): a remaining time of 0 s beside
+    // "warnings: none" had read as a contradiction.
+    const auto began = [&](const char* key) -> std::string {
+        const auto& t = f["remaining_time_s"].value(key, nlohmann::json());
+        if (!t.is_number()) return std::string();
+        return fixed(t, 1) + " s (" + fixed(t.get<double>() - f["start_s"].get<double>(), 1) + " s into the flight)";
+    };
+    const std::string low = began("low_from_s"), critical = began("critical_from_s");
+    if (!low.empty()) {
+        out << "  battery state (telemetry.low_time_s, critical_time_s): LOW from " << low;
+        if (!critical.empty()) out << ", CRITICAL from " << critical;
+        out << "\n";
+    }
 }
 }  // namespace
 

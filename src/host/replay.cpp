@@ -254,6 +254,7 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     monitor->configure(options.config.monitor);
     SummaryAccumulator summary;
     summary.set_landed_below_a(options.config.monitor.flying.min_flying_current_a);
+    summary.set_battery_state_times(options.config.telemetry.low_time_s, options.config.telemetry.critical_time_s);
     std::unique_ptr<SeriesWriter> series;
     int series_cells = 0;
 

@@ -114,6 +114,26 @@ TEST_CASE("replay of a log whose every sample is kept out says so, not 'no fligh
     CHECK(j["duration_s"].is_null());  // no valid sample spans no time (it had read 0.0 s)
 }
 
+TEST_CASE("replay says when the battery states LOW and CRITICAL began, which are no warnings", "[cli][data]") {
+    // ArduCopter's underpowered.log read with the built-in 1.55 Ah config: the remaining time
+    // is below 20 s from the take-off on, and no health warning says so.
+    const std::string log = std::string(BATTSIM_DATA_DIR) + "/ardupilot/underpowered.log";
+    const auto j = clitest::run_json("replay " + q(log) + " --json");
+    const auto& r = j["flight"]["remaining_time_s"];
+    REQUIRE(r["low_from_s"].is_number());
+    REQUIRE(r["critical_from_s"].is_number());
+    CHECK(r["low_from_s"].get<double>() <= r["critical_from_s"].get<double>());
+    CHECK(r["critical_from_s"].get<double>() >= j["flight"]["start_s"].get<double>());
+    CHECK_THAT(clitest::run("replay " + q(log)).out,
+               Catch::Contains("  battery state (telemetry.low_time_s, critical_time_s): LOW from ") &&
+                   Catch::Contains(", CRITICAL from "));
+    // The example flight lands with minutes to spare: null, and no such line.
+    const auto ex = clitest::run_json("replay " + q(kSource + "/logs/example-4s.csv") + " -c " +
+                                      q(kSource + "/configs/sim-4s.json") + " --estimator joint --json");
+    CHECK(ex["flight"]["remaining_time_s"]["low_from_s"].is_null());
+    CHECK(ex["flight"]["remaining_time_s"]["critical_from_s"].is_null());
+}
+
 TEST_CASE("replay says how many samples the config's sensor limits kept out, and why", "[cli]") {
     // A 4S log (16.5 V at rest) against limits for a 3S pack: the rest is above
     // max_pack_voltage_v, the loaded 15.9 V is not.

@@ -180,6 +180,16 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
         push(open_);
         open_count_ = 0;
     }
+    if (s.flying && s.time_valid) {
+        if (!low_seen_ && s.remaining_time_s < low_time_s_) {
+            low_seen_ = true;
+            low_from_us_ = s.time_us;
+        }
+        if (!critical_seen_ && s.remaining_time_s < critical_time_s_) {
+            critical_seen_ = true;
+            critical_from_us_ = s.time_us;
+        }
+    }
     if (s.flying) {
         flight_last_us_ = s.time_us;
         at_last_flying_ = running_;
@@ -285,6 +295,10 @@ json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
             {"ah", round_sig((last_flying_.consumed_mah - first_flying_.consumed_mah) * 1e-3)},
             {"wh", round_sig((last_flying_.consumed_mwh - first_flying_.consumed_mwh) * 1e-3)}};
         flight["remaining_time_s"] = {{"at10", remaining_at(0.1)}, {"at20", remaining_at(0.2)}, {"at50", remaining_at(0.5)}};
+        // In log time, as the warnings' first_time_s; null: never in flight.
+        const auto began = [](bool seen, uint64_t us) { return seen ? json(round_sig(us * 1e-6, 9)) : json(nullptr); };
+        flight["remaining_time_s"]["low_from_s"] = began(low_seen_, low_from_us_);
+        flight["remaining_time_s"]["critical_from_s"] = began(critical_seen_, critical_from_us_);
         flight["total_time_s"] = {{"final", last_flying_.time_valid ? json(round_sig(last_flying_.total_time_s)) : json(nullptr)}};
         json scores = json::array();
         for (int c = 0; c < cells && c < core::kMaxCells; ++c) scores.push_back(round_sig(last_flying_.cell_score[c], 4));

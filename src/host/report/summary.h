@@ -46,6 +46,12 @@ public:
     // The current below which a pack is on the ground: a log that ends within the landing
     // hold (its last sample down, the flight not yet ended) has landed all the same.
     void set_landed_below_a(float current_a) { landed_below_a_ = current_a; }
+    // The telemetry's LOW and CRITICAL battery states (remaining flight time below these):
+    // when each began in flight, which a ground station hears but the warnings do not list.
+    void set_battery_state_times(float low_time_s, float critical_time_s) {
+        low_time_s_ = low_time_s;
+        critical_time_s_ = critical_time_s;
+    }
 
     struct Totals {
         double n = 0;
@@ -95,6 +101,9 @@ private:
     Totals running_;        // from the first flying sample
     Totals at_last_flying_; // snapshot of running_ at the last flying sample
     float rest_capacity_ah_ = 0.0f;  // the latest from a rest after the flight (0 = none)
+    float low_time_s_ = -1.0f, critical_time_s_ = -1.0f;  // -1: not set
+    bool low_seen_ = false, critical_seen_ = false;
+    uint64_t low_from_us_ = 0, critical_from_us_ = 0;
     float max_pack_deficit_ = 0.0f;  // the most the pack counted of a weak cell, in flight
     core::MonitorStatus first_flying_, last_flying_, last_;
     core::MonitorStatus latest_;  // any sample, valid or not: warnings and fault counts
