@@ -124,9 +124,15 @@ std::function<int()> setup(CLI::App& sub) {
         host::LoadedConfig corrected = opt.config;
         // The config written is the file's with the corrections: --estimator chose this run's
         // estimator, not the file's (written, it had switched every later replay of the file).
-        if (!a->input.estimator.empty())
-            corrected.monitor.estimator =
-                (a->input.config.empty() ? host::builtin_config() : host::load_config_file(a->input.config)).monitor.estimator;
+        if (!a->input.estimator.empty()) {
+            try {
+                corrected.monitor.estimator =
+                    (a->input.config.empty() ? host::builtin_config() : host::load_config_file(a->input.config)).monitor.estimator;
+            } catch (const host::ConfigError& e) {  // changed since it was read at the start
+                std::cerr << "battsim replay: config: " << e.what() << "\n";
+                return kExitConfigError;
+            }
+        }
         // Given at all (a zero or negative count is refused below, not taken as "none").
         const bool check = charged->count() > 0;
         if (check) {

@@ -93,10 +93,12 @@ EOF
   echo "exported config $header: compiles for xtensa as a constant expression"
   # The Arduino layer, compiled (not linked) against our declarations of the library APIs
   # it calls (firmware/host/arduino-api/README.md), with this config header.
+  # The layer includes the header as battsim_config.h, whatever this one is called.
   mkdir -p "$out/arduino"
+  cp "$header" "$out/arduino/battsim_config.h"
   for src in "$root"/firmware/src/arduino/*.cpp; do
     # shellcheck disable=SC2086
-    "$cxx" $flags -Werror -I"$root/firmware/host/arduino-api" -I"$(cd "$(dirname "$header")" && pwd)" \
+    "$cxx" $flags -Werror -I"$root/firmware/host/arduino-api" -I"$out/arduino" \
       -c "$src" -o "$out/arduino/$(basename "$src" .cpp).o" || { echo "cross-compile: FAILED $src" >&2; exit 1; }
   done
   echo "firmware Arduino layer (src/arduino, against firmware/host/arduino-api): compiles for xtensa," \

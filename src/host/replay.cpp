@@ -47,8 +47,10 @@ public:
             // The first kMaxIntervals: their median is the log's usual interval, and a replay's
             // memory stays flat however long the log (every interval had been kept).
             if (intervals_s_.size() < kMaxIntervals) intervals_s_.push_back(step_s);
-            // The log's own count, whether or not the monitor counted (it starts at a rest).
-            if (std::isfinite(s.current_a)) net_mah_ += static_cast<double>(s.current_a) * step_s / 3.6;
+            // The log's own count at loaded currents, whether or not the monitor counted (it
+            // starts at a rest).
+            if (std::isfinite(s.current_a) && std::fabs(s.current_a) >= ground_a_)
+                loaded_mah_ += static_cast<double>(s.current_a) * step_s / 3.6;
             if (step_s > longest_s_) {
                 longest_s_ = step_s;
                 longest_at_s_ = static_cast<double>(last_us_ - first_us_) * 1e-6;
@@ -79,33 +81,36 @@ public:
         double prior_ohm = 0.0;  // what it uses when it measures none
         double hover_min_step_a = 0.0;  // the smallest step its hover estimate pairs (0: not the joint estimator)
     };
-    std::vector<std::string> notes(bool flew, double takeoff_a, const Lags& lags, double window_s) const {
+    // `csv`: the log is a headered CSV (the only format --negative-discharge flips); `merged`:
+    // the --average-ms windows held more than one sample on average.
+    std::vector<std::string> notes(bool flew, double takeoff_a, const Lags& lags, double window_s, bool csv,
+                                   bool merged) const {
         const double fastest_s = lags.fastest_s;
         std::vector<std::string> out;
         char buf[512];
+        // What to do about the other sign: the option flips headered CSV logs only; the
+        // readers of the other formats take the sign as the autopilot or logger wrote it.
+        const std::string remedy =
+            !csv ? std::string(": this log's current sensor counts discharge as negative (--negative-discharge flips "
+                               "headered CSV logs only: set the sensor's sign where it is logged, or export the log to CSV)")
+            : negated_ ? std::string(" with --negative-discharge: if this log counts discharge as positive, replay it "
+                                     "without (manifest: \"negative_is_discharge\": false)")
+                       : std::string(": if this log counts discharge as negative, replay it with --negative-discharge "
+                                     "(manifest: \"negative_is_discharge\": true)");
         if (!flew && max_a_ < takeoff_a && min_a_ <= -takeoff_a) {
-            // With the option already given, the log counts discharge as positive.
-            std::snprintf(buf, sizeof buf,
-                          negated_ ? "the current never reaches the take-off threshold (%.3g A) but falls to %.3g A with "
-                                     "--negative-discharge: if this log counts discharge as positive, replay it without "
-                                     "(manifest: \"negative_is_discharge\": false)"
-                                   : "the current never reaches the take-off threshold (%.3g A) but falls to %.3g A: if "
-                                     "this log counts discharge as negative, replay it with --negative-discharge "
-                                     "(manifest: \"negative_is_discharge\": true)",
+            std::snprintf(buf, sizeof buf, "the current never reaches the take-off threshold (%.3g A) but falls to %.3g A",
                           takeoff_a, min_a_);
-            out.push_back(buf);
-        } else if (net_mah_ < -kSignMinMah && last_v_ < kSignMinFall * first_v_) {
+            out.push_back(buf + remedy);
+        } else if (loaded_mah_ < -kSignMinMah && last_v_ < kSignMinFall * first_v_) {
             // A log that does reach the take-off current the wrong way round (regeneration,
-            // a brief reverse reading) but whose count runs backwards while the pack empties.
+            // a brief reverse reading) but whose loaded count runs backwards while the pack
+            // empties. Counted only at take-off currents: a charger's taper and the rest after
+            // it (a correctly signed log) count little and the voltage falls a few tenths.
             std::snprintf(buf, sizeof buf,
-                          negated_ ? "the charge counted over the log is %.0f mAh (negative) while the pack voltage fell "
-                                     "from %.3g to %.3g V, with --negative-discharge: if this log counts discharge as "
-                                     "positive, replay it without (manifest: \"negative_is_discharge\": false)"
-                                   : "the charge counted over the log is %.0f mAh (negative) while the pack voltage fell "
-                                     "from %.3g to %.3g V: if this log counts discharge as negative, replay it with "
-                                     "--negative-discharge (manifest: \"negative_is_discharge\": true)",
-                          net_mah_, static_cast<double>(first_v_), static_cast<double>(last_v_));
-            out.push_back(buf);
+                          "the charge counted at currents beyond the take-off threshold is %.0f mAh (negative) while "
+                          "the pack voltage fell from %.3g to %.3g V",
+                          loaded_mah_, static_cast<double>(first_v_), static_cast<double>(last_v_));
+            out.push_back(buf + remedy);
         }
         // Battery logs are written a few times a second to once every few seconds.
         const double dt_s = median(intervals_s_);
@@ -143,16 +148,18 @@ public:
                           core::DifferenceResistanceEstimator::kHistory, fastest_s * 1e3, std::ceil(fastest_s * 1e3));
             out.push_back(buf);
         }
-        // Windows longer than the reference logger's own interval merge the samples either
-        // side of a current step, so each pair the resistance takes straddles part of the
-        // polarisation: on the dissertation's flights 200 ms windows read R0 6-9 % high and
-        // the capacity up to 14 % low (README, "Input formats").
-        if (lags.hover_min_step_a > 0.0 && window_s > kLongestWindowS) {
+        // Windows that merge samples into intervals longer than the reference logger's own
+        // join the readings either side of a current step, so each pair the resistance takes
+        // straddles part of the polarisation: on the dissertation's flights 200 ms windows
+        // read R0 6-9 % high and the capacity up to 14 % low (README, "Input formats"). A
+        // window no longer than the log's own interval merges nothing and is not said.
+        if (lags.hover_min_step_a > 0.0 && merged && dt_s > kLongestMergedIntervalS) {
             std::snprintf(buf, sizeof buf,
-                          "--average-ms %.0f: windows longer than the reference logger's %.0f ms merge the samples "
-                          "either side of a current step, and the joint estimator's resistance reads high and its "
-                          "capacity low (README, \"Input formats\"); averaging is for fast logs: %.0f ms suffices",
-                          window_s * 1e3, kLongestWindowS * 1e3, std::ceil(std::max(fastest_s, 1e-3) * 1e3));
+                          "--average-ms %.0f merges the samples into %.0f ms intervals (median), longer than the "
+                          "reference logger's 68 ms: readings either side of a current step are averaged together, and "
+                          "the joint estimator's resistance reads high and its capacity low (README, \"Input formats\"); "
+                          "averaging is for fast logs: %.0f ms suffices",
+                          window_s * 1e3, dt_s * 1e3, std::ceil(std::max(fastest_s, 1e-3) * 1e3));
             out.push_back(buf);
         }
         // A clock that jumps (a logging gap, or two sessions in one file): the monitor counts
@@ -205,10 +212,10 @@ public:
 
 private:
     static constexpr double kSlowestIntervalS = 10.0;
-    static constexpr double kLongestWindowS = 0.068;  // the reference logger's 67.7 ms
-    // A count this far below zero while the voltage fell by over 1 %: not a sensor's offset.
+    static constexpr double kLongestMergedIntervalS = 0.075;  // the reference logger's 67.7 ms and its jitter
+    // A loaded count this far below zero while the voltage fell by over 3 %.
     static constexpr double kSignMinMah = 10.0;
-    static constexpr float kSignMinFall = 0.99f;
+    static constexpr float kSignMinFall = 0.97f;
     static constexpr double kFastestIntervalS = 1e-3;  // a flight controller's blackbox at most
     static constexpr double kShortestSpanS = 10.0;
     static constexpr long kCoarseMinSamples = 20;
@@ -224,7 +231,7 @@ private:
     long voltages_ = 0;
     std::vector<double> intervals_s_;
     uint64_t first_us_ = 0, last_us_ = 0;
-    double net_mah_ = 0.0;  // current × interval over the log, as read
+    double loaded_mah_ = 0.0;  // current × interval at currents beyond the take-off threshold, as read
     double longest_s_ = 0.0, longest_at_s_ = 0.0, longest_mah_ = 0.0;  // the longest interval, where, its charge
     double ground_a_;
     bool have_current_ = false;
@@ -321,8 +328,10 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
         lags.prior_ohm = options.config.monitor.battery.internal_resistance_ohm;
         lags.hover_min_step_a = jc.hover_resistance.min_step_a;
     }
+    const bool merged = info.averaged_in > info.averaged_out + info.averaged_out / 5;  // over 1.2 a window
     for (const std::string& n : shape.notes(flew, options.config.monitor.flying.min_flying_current_a, lags,
-                                              static_cast<double>(options.reader.average_us) * 1e-6))
+                                              static_cast<double>(options.reader.average_us) * 1e-6,
+                                              info.format == LogFormat::Csv, merged))
         input_notes.push_back(n);
     j["input"] = {{"path", path}, {"format", to_string(info.format)}, {"cells", info.cell_count},
                   {"has_temperature", info.has_temperature}, {"notes", input_notes}};

@@ -280,11 +280,21 @@ TEST_CASE("replay notes a current of the other sign and a time column in millise
     const auto rg = notes("regen.csv", "");
     REQUIRE(rg.size() == 1);
     CHECK_THAT(rg[0].get<std::string>(),
-               Catch::StartsWith("the charge counted over the log is -") &&
+               Catch::StartsWith("the charge counted at currents beyond the take-off threshold is -") &&
                    Catch::EndsWith("mAh (negative) while the pack voltage fell from 16.5 to 15.3 V: if this log counts "
                                    "discharge as negative, replay it with --negative-discharge (manifest: "
                                    "\"negative_is_discharge\": true)"));
     CHECK(notes("regen.csv", " --negative-discharge").empty());
+    // A correctly signed log of a charger's taper (-0.9 to -0.2 A at 16.8 V) and the rest
+    // after it (16.6 V): below the take-off current nothing is counted, and nothing is said.
+    std::string taper = "time_s,voltage_v,current_a\n";
+    for (int k = 0; k < 1200; ++k) {
+        const bool charging = k < 600;
+        const double a = charging ? -0.9 + 0.7 * k / 600.0 : 0.0, v = charging ? 16.8 : 16.8 - 0.2 * (k - 600) / 600.0;
+        taper += std::to_string(k) + "," + std::to_string(v) + "," + std::to_string(a) + "\n";
+    }
+    clitest::write_file(dir + "/taper.csv", taper);
+    CHECK(notes("taper.csv", "").empty());
     // On a log of another format the option is said to be ignored, not dropped without a word
     // (a note, not a refusal: a manifest's CSV defaults reach its .bin logs too).
     auto raw = run("replay " + q(kSource + "/logs/example-4s.csv") + " -c " + q(kConfig) + " --negative-discharge --json");
@@ -370,9 +380,9 @@ TEST_CASE("replay reads a radio's telemetry log and says what its 0.1 V steps an
                                       " --estimator joint --average-ms 200 --json");
     REQUIRE(fl["input"]["notes"].size() == 2);
     CHECK(fl["input"]["notes"][1] ==
-          "--average-ms 200: windows longer than the reference logger's 68 ms merge the samples either side of a current "
-          "step, and the joint estimator's resistance reads high and its capacity low (README, \"Input formats\"); "
-          "averaging is for fast logs: 9 ms suffices");
+          "--average-ms 200 merges the samples into 200 ms intervals (median), longer than the reference logger's 68 ms: "
+          "readings either side of a current step are averaged together, and the joint estimator's resistance reads high "
+          "and its capacity low (README, \"Input formats\"); averaging is for fast logs: 9 ms suffices");
     CHECK(run("replay " + q(dir + "/fast.csv") + " --average-ms -1").exit_code == 2);
     // 0 is no window either (it had passed silently as "no averaging").
     const auto zero = run("replay " + q(dir + "/fast.csv") + " --average-ms 0");

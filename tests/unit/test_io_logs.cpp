@@ -448,6 +448,18 @@ TEST_CASE("DataFlash binary: a BCL row after its BAT row (ArduPilot's order) bel
     CHECK(r.notes.empty());
 }
 
+TEST_CASE("DataFlash binary: a voltage-only battery monitor's NaN current is read as 0 A and said", "[io-logs]") {
+    LogTempDir d;
+    const std::string bytes = df_bat_fmt() + df_bat(1000000, 0, 16.4f, std::nanf("")) + df_bat(1100000, 0, 16.3f, std::nanf("")) +
+                              df_bat(1200000, 0, 16.2f, 2.5f);
+    const auto r = read_all(Kind::DfBinary, d.write("vonly.bin", bytes));
+    REQUIRE(r.samples.size() == 3);
+    CHECK(r.samples[0].current_a == 0.0f);
+    CHECK(r.samples[1].voltage_v == Approx(16.3));
+    CHECK(r.samples[2].current_a == Approx(2.5));
+    CHECK(any_note(r, "BAT.Curr is NaN (the battery monitor measures no current) in 2 of 3 rows: read as 0 A"));
+}
+
 TEST_CASE("DataFlash binary malformed: file truncated mid-message keeps what came before", "[io-logs]") {
     LogTempDir d;
     std::string bytes = df_three_curr() + df_curr(1300, 1647, 150);

@@ -264,7 +264,8 @@ TEST_CASE("Autopilot logs: ArduPilot DataFlash and PX4 ULog read back as the CSV
             REQUIRE(rows[k].time_us == s.time_us);
             CHECK(s.voltage_v == rows[k].voltage_v);
             CHECK(s.current_a == rows[k].current_a);
-            CHECK(s.temperature_c == rows[k].temperature_c);
+            // DataFlash's centi-degrees are truncated, as ArduPilot's cast does: 19.9 reads 19.89.
+            CHECK(s.temperature_c == Approx(rows[k].temperature_c).margin(kind == SimLogFormat::DataFlash ? 0.0101 : 0.0));
             REQUIRE(s.cell_count == 4);
             for (int c = 0; c < 4; ++c) CHECK(s.cell_voltage_v[c] == Approx(rows[k].cell_voltage_v[c]).margin(cell_tolerance_v + 1e-6));
             // The first reading at or after each interval's mark: one an interval, none

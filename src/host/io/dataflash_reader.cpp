@@ -1036,6 +1036,10 @@ public:
             notes_.add("cells", "BCL reports more than " + std::to_string(core::kMaxCells) + " cells in " +
                                     std::to_string(beyond_cells_) + " rows; cells beyond " +
                                     std::to_string(core::kMaxCells) + " are dropped");
+        if (unknown_current_ > 0)
+            info_.notes.push_back(plan_.battery + ".Curr is NaN (the battery monitor measures no current) in " +
+                                  std::to_string(unknown_current_) + " of " + std::to_string(rows_) +
+                                  " rows: read as 0 A, so those samples carry the voltage alone");
         notes_.finish();
         if (order_->accepted() == 0)
             throw InputError(path_, 0, 0, "no usable " + plan_.battery + " rows: all " + std::to_string(rows_) +
@@ -1164,6 +1168,13 @@ private:
             return false;
         }
         volt *= battery_scale(f, f.volt);
+        // ArduPilot logs Curr (and CurrTot) as NaN when its battery monitor measures no
+        // current (a voltage-only monitor): the voltage is still good, so the row is kept at
+        // 0 A and the count said, as the ULog reader does with PX4's -1.
+        if (std::isnan(curr)) {
+            curr = 0.0;
+            ++unknown_current_;
+        }
         curr *= battery_scale(f, f.curr);
         if (!std::isfinite(volt) || volt < 0 || volt > 1000) {
             drop("bad-value", where + ": " + f.name + ".Volt = " + fixed(volt, 3) +
@@ -1201,6 +1212,7 @@ private:
     long beyond_cells_ = 0;
     long untimed_ = 0;
     long rows_ = 0;
+    long unknown_current_ = 0;  // battery rows whose Curr is NaN, read as 0 A
     std::optional<TimeOrder> order_;  // made once the plan names the battery message
     std::optional<core::Sample> pending_;  // the latest battery row, until the message after it
     double pending_t_us_ = 0;

@@ -193,6 +193,8 @@ public:
 
     const SourceInfo& info() const override {
         info_ = inner_->info();
+        info_.averaged_in = samples_in_;
+        info_.averaged_out = samples_out_;
         char buf[160];
         std::snprintf(buf, sizeof buf, "samples averaged over %.6g ms windows: %ld read into %ld",
                       static_cast<double>(window_us_) * 1e-3, samples_in_, samples_out_);

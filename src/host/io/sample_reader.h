@@ -84,6 +84,8 @@ struct SourceInfo {
     // messages), in the order first seen, each with its first value. Empty for CSV and raw
     // logs. Complete once next() has returned false.
     std::vector<std::pair<std::string, double>> parameters;
+    // With --average-ms: the samples read and the averaged samples made of them (0: none).
+    long averaged_in = 0, averaged_out = 0;
 };
 
 // The first recorded value of `name` among `info.parameters`; NaN when the log has none.

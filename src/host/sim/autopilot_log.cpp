@@ -49,6 +49,12 @@ void df_fmt(std::string& out, uint8_t id, uint8_t length, const char* name, cons
     put_text(out, columns, 64);
 }
 
+// Neither format holds a cell below 0 V (a loose balance lead's reading, bus minus a floating
+// tap), and both end a pack's cells at the first 0: such a cell is written as 1 mV, which the
+// monitor keeps out as a cell fault as it does the CSV log's negative reading. 1 mV, not 0.5:
+// DataFlash's BCL counts whole millivolts. Above, BCL's 65.534 V is the end.
+double logged_cell_v(double v) { return std::min(std::max(v, 0.001), 65.534); }
+
 // --- ULog (the PX4 log format) -------------------------------------------------------------------
 constexpr int kUlogCells = 14;  // battery_status.voltage_cell_v[14] since PX4 1.13
 
@@ -68,7 +74,8 @@ std::string AutopilotLogWriter::header() const {
     std::string out;
     if (kind_ == AutopilotLog::DataFlash) {
         df_fmt(out, kFmtId, 89, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns");
-        df_fmt(out, kBatId, kBatLength, "BAT", "QBfffffcf", "TimeUS,Inst,Volt,VoltR,Curr,CurrTot,EnrgTot,Temp,Res");
+        // ArduPilot 4.0's layout and names (4.1 appends RemPct, 4.3 health and state of health).
+        df_fmt(out, kBatId, kBatLength, "BAT", "QBfffffcf", "TimeUS,Instance,Volt,VoltR,Curr,CurrTot,EnrgTot,Temp,Res");
         df_fmt(out, kBclId, kBclLength, "BCL", "QBfHHHHHHHHHHHH",
                "TimeUS,Instance,Volt,V1,V2,V3,V4,V5,V6,V7,V8,V9,V10,V11,V12");
         return out;
@@ -88,7 +95,7 @@ std::string AutopilotLogWriter::header() const {
     ulog_message(out, 'I', info);
     ulog_message(out, 'F',
                  "battery_status:uint64_t timestamp;float voltage_v;float current_a;float discharged_mah;"
-                 "float temperature;uint8_t cell_count;float[14] voltage_cell_v");
+                 "float temperature;uint8_t cell_count;float[14] voltage_cell_v;");
     std::string sub;
     put_uint(sub, 0, 1);  // multi_id
     put_uint(sub, 0, 2);  // msg_id
@@ -116,14 +123,15 @@ void AutopilotLogWriter::append(std::string& out, int64_t time_us, double voltag
         put_f32(out, current_a);
         put_f32(out, consumed_mah_);
         put_f32(out, consumed_wh_);
-        put_uint(out, static_cast<uint16_t>(static_cast<int16_t>(std::lround(temperature_c * 100.0))), 2);
+        // Centi-degrees, truncated as ArduPilot's cast does.
+        put_uint(out, static_cast<uint16_t>(static_cast<int16_t>(temperature_c * 100.0)), 2);
         put_f32(out, 0.0);  // Res: ArduPilot's own resistance estimate; not simulated
         df_head(out, kBclId);
         put_uint(out, static_cast<uint64_t>(time_us), 8);
         put_uint(out, 0, 1);
         put_f32(out, voltage_v);
         for (int c = 0; c < kBclCells; ++c)
-            put_uint(out, c < cells_ ? static_cast<uint64_t>(std::lround(cell_v[c] * 1000.0)) : 0u, 2);
+            put_uint(out, c < cells_ ? static_cast<uint64_t>(std::lround(logged_cell_v(cell_v[c]) * 1000.0)) : 0u, 2);
         return;
     }
     std::string d;
@@ -134,7 +142,7 @@ void AutopilotLogWriter::append(std::string& out, int64_t time_us, double voltag
     put_f32(d, consumed_mah_);
     put_f32(d, temperature_c);
     put_uint(d, static_cast<uint64_t>(cells_), 1);
-    for (int c = 0; c < kUlogCells; ++c) put_f32(d, c < cells_ ? cell_v[c] : 0.0);
+    for (int c = 0; c < kUlogCells; ++c) put_f32(d, c < cells_ ? logged_cell_v(cell_v[c]) : 0.0);
     ulog_message(out, 'D', d);
 }
 
