@@ -361,23 +361,24 @@ TEST_CASE("replay reads a radio's telemetry log and says what its 0.1 V steps an
         fast += row;
     }
     clitest::write_file(dir + "/fast.csv", fast);
-    const auto f = clitest::run_json("replay " + q(dir + "/fast.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
-                                     " --estimator joint --json");
+    const auto fast_replay = [&](const std::string& extra) {
+        return clitest::run_json("replay " + q(dir + "/fast.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
+                                 " --estimator joint" + extra + " --json");
+    };
+    const auto f = fast_replay("");
     REQUIRE(f["input"]["notes"].size() == 1);
     CHECK(f["input"]["notes"][0] ==
           "the samples are 2 ms apart (median): the joint estimator's resistance compares samples up to 0.13 s apart "
           "among its last 16, so below 8.67 ms it is measured late or never; give --average-ms 9 (manifest: "
           "average_ms)");
     // As told: averaged over 9 ms windows the note is gone and the averaging's own note says what it did.
-    const auto fa = clitest::run_json("replay " + q(dir + "/fast.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
-                                      " --estimator joint --average-ms 9 --json");
+    const auto fa = fast_replay(" --average-ms 9");
     REQUIRE(fa["input"]["notes"].size() == 1);
     CHECK(fa["input"]["notes"][0] == "samples averaged over 9 ms windows: 20000 read into 4000");
     CHECK(fa["samples"]["total"] == 4000);
     // A window longer than the reference logger's 68 ms merges samples across current steps:
     // said, with the window a fast log needs.
-    const auto fl = clitest::run_json("replay " + q(dir + "/fast.csv") + " -c " + q(kSource + "/configs/sim-4s.json") +
-                                      " --estimator joint --average-ms 200 --json");
+    const auto fl = fast_replay(" --average-ms 200");
     REQUIRE(fl["input"]["notes"].size() == 2);
     CHECK(fl["input"]["notes"][1] ==
           "--average-ms 200 merges the samples into 200 ms intervals (median), longer than the reference logger's 68 ms: "
