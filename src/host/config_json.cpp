@@ -258,6 +258,8 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("cell_capacity_significance_sigmas", ca.capacity_significance_sigmas, 0, 100);
         r.number("cell_pack_deficit_sigmas", ca.pack_deficit_sigmas, 0, 100);
         r.number("cell_min_charge_ah", ca.min_charge_ah, 0, kBig);
+        r.number("cell_resistance_min_step_a", ca.min_step_a, 0, kBig);
+        r.number("cell_resistance_min_excitation_a2", ca.min_excitation_a2, 0, kBig);
         r.number("cell_min_drift_v", ca.min_drift_v, 0, kBig);
         r.number("cell_slow_current_time_s", ca.slow_current_time_s, 0, kBig);
         r.number("cell_current_ridge_a2", ca.current_ridge_a2, 0, kBig);
@@ -418,6 +420,8 @@ json config_to_json(const LoadedConfig& c) {
             {"cell_capacity_significance_sigmas", m.cell_analysis.capacity_significance_sigmas},
             {"cell_pack_deficit_sigmas", m.cell_analysis.pack_deficit_sigmas},
             {"cell_min_charge_ah", m.cell_analysis.min_charge_ah},
+            {"cell_resistance_min_step_a", m.cell_analysis.min_step_a},
+            {"cell_resistance_min_excitation_a2", m.cell_analysis.min_excitation_a2},
             {"cell_min_drift_v", m.cell_analysis.min_drift_v},
             {"cell_slow_current_time_s", m.cell_analysis.slow_current_time_s},
             {"cell_current_ridge_a2", m.cell_analysis.current_ridge_a2},

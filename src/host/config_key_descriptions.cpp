@@ -149,6 +149,8 @@ const std::map<std::string, std::string>& config_key_descriptions() {
     {"joint.cell_capacity_significance_sigmas", "Standard errors a capacity deficit must clear to name a cell below twice `cell_capacity_deficit` (and always for the cell read across the lead): the drift's errors are not white."},
     {"joint.cell_pack_deficit_sigmas", "Before any cell is named, the pack's capacity and flight-time solves count the largest compared cell's deficit less this many standard errors (a series pack delivers what its weakest cell holds); 0: only a named cell's."},
     {"joint.cell_min_charge_ah", "Charge drawn (Ah) since the cell drift regression began before any capacity verdict."},
+    {"joint.cell_resistance_min_step_a", "Smallest current change (A) between a pair that enters the per-cell short-lag resistance fit."},
+    {"joint.cell_resistance_min_excitation_a2", "Sum of squared current steps (A²) before the per-cell short-lag resistances are compared (the default is about 20 s of racing throttle on the reference pack)."},
     {"joint.cell_min_drift_v", "No capacity verdict before a cell at the threshold would have drifted this much (V) over the data so far: on the flat middle of the curve what drifts is polarisation and noise."},
     {"joint.cell_slow_current_time_s", "Time constant (s) of the drift regression's slow low-passed current, which takes a cell's slow polarisation so that it is not read as capacity."},
     {"joint.cell_current_ridge_a2", "Ridge (A², as a sum of squared deviations) on the drift regression's current and polarisation-current coefficients, keeping it solvable when they barely vary (a hover)."},

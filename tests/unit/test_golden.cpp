@@ -55,15 +55,16 @@ TEST_CASE("Golden summaries of the predictive-bms flights", "[golden][data]") {
 
 // The scoreboard as change indication: every estimator's numbers on both simulated suites,
 // the last-cell set (a weak cell read across the positive lead), the rest-polarisation
-// stress suite (the real packs' polarisation time constants) and the tuning suite flown
+// stress suite (the real packs' polarisation time constants), the small craft on make-config's
+// packs (1S to 4S, 300 to 850 mAh) and the tuning suite flown
 // through a radio's telemetry log (the reader's wall clock, the 0.1 V steps) and through an
 // ArduPilot and a PX4 log (the binary writers and readers, 10 and 5 Hz).
 // A change is either a bug or an intended change of the numbers (scripts/update-goldens.sh;
 // say in the commit what moved and why).
 TEST_CASE("Golden scoreboards of the simulated suites", "[golden]") {
     for (const std::string golden :
-         {"scenarios", "scenarios-holdout", "scenarios-last-cell", "scenarios-rest-polarisation", "scenarios-edgetx",
-          "scenarios-dataflash", "scenarios-ulog"}) {
+         {"scenarios", "scenarios-holdout", "scenarios-last-cell", "scenarios-rest-polarisation", "scenarios-small",
+          "scenarios-edgetx", "scenarios-dataflash", "scenarios-ulog"}) {
         // scenarios-FORMAT: the tuning suite flown through that log format.
         const std::string format = golden == "scenarios-edgetx" ? "edgetx"
                                    : golden == "scenarios-dataflash" ? "dataflash"

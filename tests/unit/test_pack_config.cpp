@@ -71,6 +71,39 @@ TEST_CASE("make-config: capacity scales the charges, the curve's current and the
     CHECK(c.monitor.joint.ocv.points == 21);
 }
 
+TEST_CASE("make-config: a small pack's current thresholds shrink with it, not below its ground electronics", "[pack_config]") {
+    PackRating r;
+    r.cells = 1;
+    r.capacity_ah = 0.3;  // s = 0.3 / 1.55 = 0.19355
+    const json w = pack_config_json(r);
+    // Take-off bar: max(1 A × s, 3 W / 3.7 V) = max(0.194, 0.811); the ground's bar
+    // max(3 A × s, 1.25 × 0.811) = max(0.581, 1.01375).
+    CHECK(w["monitor"]["min_flying_current_a"].get<double>() == Approx(0.811));
+    CHECK(w["monitor"]["max_resting_current_a"].get<double>() == Approx(0.811));
+    CHECK(w["joint"]["rest_capacity_max_current_a"].get<double>() == Approx(0.811));
+    CHECK(w["joint"]["offset_learn_max_current_a"].get<double>() == Approx(1.014));
+    CHECK(w["joint"]["resistance_min_step_a"].get<double>() == Approx(0.097));            // 0.5 A × s
+    CHECK(w["joint"]["resistance_min_excitation_a2"].get<double>() == Approx(14.98));     // 400 A² × s²
+    CHECK(w["joint"]["cell_resistance_min_excitation_a2"].get<double>() == Approx(749.22));  // 20000 A² × s²
+    CHECK(w["joint"]["cell_min_charge_ah"].get<double>() == Approx(0.019));               // 0.1 Ah × s
+    r.cells = 3;
+    r.capacity_ah = 0.45;  // s = 0.29032; 3 W / 11.1 V = 0.270 is below 1 A × s
+    const json t = pack_config_json(r);
+    CHECK(t["monitor"]["min_flying_current_a"].get<double>() == Approx(0.29));
+    CHECK(t["joint"]["offset_learn_max_current_a"].get<double>() == Approx(0.871));
+    CHECK(t["joint"]["cell_step_min_a"].get<double>() == Approx(1.161));                  // 4 A × s
+    // The keys are read back into the core's config.
+    const LoadedConfig c = config_from_json(t, "test");
+    CHECK(c.monitor.joint.offset_learn_max_current_a == Approx(0.871f));
+    CHECK(c.monitor.cell_analysis.min_excitation_a2 == Approx(1685.74f).margin(0.01f));
+    // From the reference's size up, the core's own bars (the Matrice 100's 4.5 Ah fleet was measured with them).
+    r.capacity_ah = 1.55;
+    const json big = pack_config_json(r);
+    CHECK(big["monitor"]["min_flying_current_a"].get<double>() == 1.0);
+    CHECK_FALSE(big["joint"].contains("offset_learn_max_current_a"));
+    CHECK_FALSE(big["joint"].contains("resistance_min_excitation_a2"));
+}
+
 TEST_CASE("make-config: a rating out of range is refused with what was expected", "[pack_config]") {
     PackRating r;
     r.cells = 4;
