@@ -1,6 +1,8 @@
 // battsim: replay, evaluate and fit drone battery logs through the same core the
 // firmware runs.
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <iostream>
 #include <string>
 
@@ -53,7 +55,18 @@ int main(int argc, char** argv) {
     for (auto& a : actions) {
         if (a.first->parsed()) {
             try {
-                return a.second();
+                const int code = a.second();
+                // What went to standard output (a report, "-o -", --json) is an output like a
+                // file: a full disk or a closed pipe had exited 0 with the numbers lost.
+                errno = 0;
+                std::cout.flush();
+                if (!std::cout) {
+                    const int err = errno;
+                    std::cerr << "battsim " << a.first->get_name() << ": error: writing to standard output failed"
+                              << (err ? std::string(" (") + std::strerror(err) + ")" : std::string()) << "\n";
+                    return kExitOutputError;
+                }
+                return code;
             } catch (const std::exception& e) {
                 std::cerr << "battsim " << a.first->get_name() << ": error: " << e.what() << "\n";
                 return kExitFailure;

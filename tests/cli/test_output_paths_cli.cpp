@@ -88,6 +88,14 @@ TEST_CASE("outputs to devices are written straight: /dev/null, /dev/stdout, /dev
     const clitest::Result full = run("replay " + log + " --summary /dev/full");
     CHECK(full.exit_code == 5);
     CHECK_THAT(full.err, Catch::Contains("/dev/full: write failed"));
+    // Standard output on a full disk is a failed output too, whichever command wrote it.
+    for (const std::string& args : {"replay " + log + " --json", "replay " + log, "batch " + log + " -o -",
+                                    std::string("make-config --cells 4 --capacity-mah 1500")}) {
+        const clitest::Result r = run(args + " > /dev/full");
+        INFO(args);
+        CHECK(r.exit_code == 5);
+        CHECK_THAT(r.err, Catch::Contains("writing to standard output failed"));
+    }
 }
 
 TEST_CASE("an output naming an input or another output is refused before any work", "[cli][paths]") {
