@@ -30,10 +30,7 @@ constexpr double kMaxRealtimeWaitS = 2.0;  // --realtime: the longest wait for o
 class InputShape {
 public:
     InputShape(bool negated, double ground_a) : negated_(negated), ground_a_(ground_a) {}
-    // After the monitor's update: `consumed_mah` is its count then (the charge a gap adds is
-    // what it counted, with the config's current-sensor corrections, or nothing for a sample
-    // it kept out).
-    void add(const core::Sample& s, double consumed_mah) {
+    void add(const core::Sample& s) {
         if (std::isfinite(s.voltage_v) && s.voltage_v != 0.0f) {
             const double tenths = 10.0 * static_cast<double>(s.voltage_v);
             coarse_ = coarse_ && std::fabs(tenths - std::round(tenths)) < 2e-3;
@@ -54,12 +51,14 @@ public:
             if (step_s > longest_s_) {
                 longest_s_ = step_s;
                 longest_at_s_ = static_cast<double>(last_us_ - first_us_) * 1e-6;
-                longest_mah_ = consumed_mah - last_consumed_mah_;
+                // At the log's current after the gap: the monitor's own count over the step
+                // had also taken its first charge estimate when that came at the same sample
+                // (a ULog's 3600 s jump at 0 A read "4953 mAh counted over the gap").
+                longest_mah_ = std::isfinite(s.current_a) ? static_cast<double>(s.current_a) * step_s / 3.6 : 0.0;
             }
         }
         if (!have_) first_us_ = s.time_us;
         last_us_ = s.time_us;
-        last_consumed_mah_ = consumed_mah;
         have_ = true;
         if (std::isfinite(s.current_a)) {
             const double current_a = static_cast<double>(s.current_a);
@@ -167,8 +166,8 @@ public:
         if (dt_s > 0.0 && longest_s_ > kLongestGapS && longest_s_ > kGapMedians * dt_s) {
             std::snprintf(buf, sizeof buf,
                           "the log's clock jumps %.4g s at %.4g s into the log (a logging gap, or two sessions in one "
-                          "file): the monitor counted %.4g mAh over the gap (at the current after it) and a "
-                          "flight's time spans it; replay two sessions apart",
+                          "file): the monitor counts the charge over the gap at the currents either side (%.4g mAh at the "
+                          "current after it) and a flight's time spans it; replay two sessions apart",
                           longest_s_, longest_at_s_, std::isfinite(longest_mah_) ? longest_mah_ : 0.0);
             out.push_back(buf);
         }
@@ -237,7 +236,6 @@ private:
     bool have_current_ = false;
     double last_a_ = 0.0;
     std::vector<double> ground_steps_a_;  // |ΔI| between ground readings
-    double last_consumed_mah_ = 0.0;
     bool have_ = false;
     double min_a_ = INFINITY, max_a_ = -INFINITY;
 };
@@ -298,7 +296,7 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
             std::this_thread::sleep_until(due);
         }
         const core::MonitorStatus& status = monitor->update(sample);
-        shape.add(sample, static_cast<double>(status.consumed_mah));
+        shape.add(sample);
         if (std::isnan(facts.capacity_passed_s) && status.initialised && status.consumed_mah > capacity_mah)
             facts.capacity_passed_s = static_cast<double>(sample.time_us - t0_us) * 1e-6;
         summary.add(status);

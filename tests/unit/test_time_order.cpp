@@ -1,6 +1,7 @@
 // TimeOrder: a binary log's rows in time order; a corrupt time stamp dropped alone, a gap kept.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -106,13 +107,17 @@ TEST_CASE("TimeOrder: a real gap is kept: the log goes on from it", "[io-logs][t
     const Run r = order(t);
     CHECK(r.times_s.size() == t.size());
     CHECK(r.notes.empty());
-    // ... and at the end of the log a held jump is a gap too.
-    const Run end = order({0.0, 0.1, 500.0});
-    CHECK(end.times_s == std::vector<double>{0.0, 0.1, 500.0});
+    // ... and at the end of the log a held jump is a gap too, when enough rows follow it to
+    // show one (or it is short enough to be one).
+    const Run end = order({0.0, 0.1, 500.0, 500.1, 500.2, 500.3});
+    CHECK(end.times_s == std::vector<double>{0.0, 0.1, 500.0, 500.1, 500.2, 500.3});
+    CHECK(end.notes.empty());
+    const Run short_end = order({0.0, 0.1, 20.0});
+    CHECK(short_end.times_s == std::vector<double>{0.0, 0.1, 20.0});
     // A row back before the last one kept, after a jump, is out of order, not the jump's undoing.
     std::vector<int> kept;
-    const Run back = order({10.0, 11.0, 100.0, 5.0, 100.5}, &kept);
-    CHECK(kept == std::vector<int>{0, 1, 2, 4});
+    const Run back = order({10.0, 11.0, 100.0, 5.0, 100.5, 100.6, 100.7}, &kept);
+    CHECK(kept == std::vector<int>{0, 1, 2, 4, 5, 6});
     REQUIRE(back.notes.size() == 1);
     CHECK(back.notes[0] == "backwards: row 3: CURR time 5.000000 s goes back before the previous row (11.000000 s); row dropped");
 }
@@ -123,4 +128,38 @@ TEST_CASE("TimeOrder: times no log can hold are dropped, not wrapped", "[io-logs
     REQUIRE(r.notes.size() == 2);
     CHECK_THAT(r.notes[0], Catch::StartsWith("bad-time: row 1: CURR time 18446744073709.55"));
     CHECK_THAT(r.notes[1], Catch::StartsWith("bad-time: row 2: CURR time -1.000000 s"));
+}
+
+TEST_CASE("TimeOrder: a corrupt stamp on the log's last rows is dropped, not taken for a gap", "[io-logs][time-order]") {
+    // A flipped bit in log171.bin's last CURR time had read as a 16,948 s flight.
+    std::vector<int> kept;
+    const Run r = order({10.0, 10.1, 10.2, 16787.4}, &kept);
+    CHECK(kept == std::vector<int>{0, 1, 2});
+    REQUIRE(r.notes.size() == 1);
+    CHECK(r.notes[0] ==
+          "glitch: row 3: CURR time 16787.400000 s jumps 16777.200 s ahead of the previous row (10.200000 s), and the "
+          "log ends within 1 row of it: too few to show a logging gap, so a corrupt time stamp; 1 row dropped");
+    CHECK(order({10.0, 10.1, 5000.0, 5000.1, 5000.2}).times_s.size() == 2);
+}
+
+TEST_CASE("TimeOrder: a corrupt stamp a few seconds ahead costs its own row", "[io-logs][time-order]") {
+    // Held from 30 s only, a stamp 20 s ahead had made every row of the next 20 s "go back".
+    std::vector<double> t;
+    for (int k = 0; k < 400; ++k) t.push_back(100.0 + 0.1 * k);
+    t[50] += 20.0;  // among the log's first rows, which are held too
+    t[250] += 20.0;
+    std::vector<int> kept;
+    const Run r = order(t, &kept);
+    CHECK(kept.size() == 398);
+    CHECK(std::find(kept.begin(), kept.end(), 50) == kept.end());
+    CHECK(std::find(kept.begin(), kept.end(), 250) == kept.end());
+    REQUIRE(r.notes.size() == 2);
+    CHECK_THAT(r.notes[0], Catch::EndsWith("a corrupt time stamp; 1 row dropped"));
+    CHECK_THAT(r.notes[1], Catch::EndsWith("a corrupt time stamp; 1 row dropped"));
+    // A logging gap of 2 s is kept whole.
+    std::vector<double> g;
+    for (int k = 0; k < 100; ++k) g.push_back(0.1 * k + (k >= 50 ? 2.0 : 0.0));
+    const Run gap = order(g);
+    CHECK(gap.times_s.size() == 100);
+    CHECK(gap.notes.empty());
 }
