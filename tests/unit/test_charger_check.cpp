@@ -68,3 +68,26 @@ TEST_CASE("Charger check: notes on a pack not full at the start and on an in-fli
     const json unsettled = {{"consumed", {{"ah", 1.0}}}, {"initial_state", nullptr}, {"warnings", json::array()}};
     CHECK(charger_check(unsettled, o)["counted_ah"].get<double>() == Approx(1.0));
 }
+
+TEST_CASE("Charger check: a gap between samples on the ground holds no gain back; one in flight and an offset do", "[report][charger]") {
+    ChargerCheckOptions o;
+    o.charged_ah = 1.0;
+    const auto fault = [](const char* cause, json flight_time_s) {
+        return json::array({json{{"name", "sensor_fault"}, {"cause", json::array({cause})}, {"flight_time_s", flight_time_s}}});
+    };
+    // log171.bin's one 2.1 s gap before the take-off had been reported as "raised in flight".
+    json c = charger_check(summary(1.1, 10.0, fault("sample_gap", nullptr)), o);
+    CHECK(c["suggested_current_gain"].get<double>() == Approx(1.0 / 1.09).epsilon(1e-5));
+    CHECK(c["notes"].empty());
+    c = charger_check(summary(1.1, 10.0, fault("sample_gap", 12.5)), o);
+    CHECK(c["suggested_current_gain"].is_null());
+    REQUIRE(c["notes"].size() == 1);
+    CHECK(c["notes"][0].get<std::string>().rfind("a sensor fault was raised (sample_gap;", 0) == 0);
+    c = charger_check(summary(1.1, 10.0, fault("current_offset", nullptr)), o);
+    CHECK(c["suggested_current_gain"].is_null());
+    CHECK(c["notes"][0].get<std::string>().rfind("a sensor fault was raised (current_offset;", 0) == 0);
+    // The start's deficit is judged against the charger's count, and the note says so.
+    c = charger_check(summary(1.2, 100.0), o);
+    CHECK(c["notes"][0].get<std::string>().find("100 mAh missing at the start, over 5 % of the charger's 1000 mAh") !=
+          std::string::npos);
+}
