@@ -72,6 +72,31 @@ TEST_CASE("battsim fit says when it did not settle, and what to try", "[fit][cli
     std::remove(log.c_str());
 }
 
+TEST_CASE("battsim fit names the parameters its logs barely determine", "[fit][cli]") {
+    // 20 s of flight: a 1.55 Ah pack's capacity cannot be read off 0.1 Ah drawn on the curve's
+    // flat part ("q = 0.031 ± 0.020 Ah" on 20 rows of a 3 Ah cell had passed without a word).
+    synth::Options o;
+    o.rest_s = 5;
+    o.flight_s = 20;
+    o.after_s = 0;
+    o.seed = 7;
+    const std::string log = synth::write_log("cli-loose", o);
+    const auto r = testsupport::run_program(BATTSIM_BINARY, "fit " + log + " -c " + kConfig);
+    CHECK(r.exit_code == 0);
+    INFO(r.out);
+    CHECK_THAT(r.out, Catch::Contains("barely determined by these logs (standard error over a third of the value):"));
+    // A long flight determines them.
+    o.rest_s = 20;
+    o.flight_s = 240;
+    o.after_s = 30;
+    const std::string full = synth::write_log("cli-determined", o);
+    const auto f = testsupport::run_program(BATTSIM_BINARY, "fit " + full + " -c " + kConfig);
+    INFO(f.out);
+    CHECK_THAT(f.out, !Catch::Contains("barely determined"));
+    std::remove(log.c_str());
+    std::remove(full.c_str());
+}
+
 TEST_CASE("battsim fit exit codes", "[fit][cli]") {
     synth::Options o;
     o.flight_s = 30;

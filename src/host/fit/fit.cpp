@@ -152,6 +152,18 @@ struct Slot {
     int log = -1;  // -1 = shared
 };
 
+// The median interval between the logs' valid samples (0 when they have none).
+double median_interval_s(const std::vector<Trace>& traces) {
+    std::vector<float> dt;
+    for (const Trace& t : traces) {
+        for (const TracePoint& p : t.points)
+            if (p.valid && p.dt_s > 0.0f) dt.push_back(p.dt_s);
+    }
+    if (dt.empty()) return 0.0;
+    std::nth_element(dt.begin(), dt.begin() + static_cast<long>(dt.size() / 2), dt.end());
+    return dt[dt.size() / 2];
+}
+
 class Problem {
 public:
     Problem(const std::vector<Trace>& traces, const std::vector<ModelSpec>& start, const FitOptions& o)
@@ -235,6 +247,15 @@ public:
             } else {
                 sl.def.lo = std::max(sl.def.lo, 3.0 / (0.99 * cap));
             }
+        }
+        // An RC branch relaxing within a few samples cannot be told from the ohmic resistance,
+        // and takes it over: the Panasonic cell's 10 Hz fit put 31 mOhm into a 0.18 s branch and
+        // left R at 0, and the monitor, whose resistance pairs samples 0.13 s and more apart,
+        // then read the cell as far more resistive than its config (high_resistance 2 s into
+        // the very log it was fitted to). So a branch is no faster than three usual intervals.
+        const double min_tau_s = 3.0 * median_interval_s(traces_);
+        for (Slot& sl : slots_) {
+            if (sl.def.kind == Kind::RcTau) sl.def.lo = std::max(sl.def.lo, std::min(min_tau_s, 0.5 * sl.def.hi));
         }
     }
 
