@@ -48,6 +48,8 @@ constexpr double kOcvCellV[] = {3.3271, 3.5607, 3.6542, 3.6925, 3.7166, 3.7358, 
                                 3.8302, 3.8503, 3.8749, 3.9009, 3.9296, 3.9605, 3.9951, 4.035,  4.0898, 4.1999};
 // A per-cell cutoff outside this is not one anybody flies to: a typo or another unit.
 constexpr double kCutoffMinV = 2.5, kCutoffMaxV = 3.9;
+// Where a charged or part-charged lithium cell rests, and the part of it a pack takes off from.
+constexpr double kRestMinCellV = 3.45, kTakeoffRestMinCellV = 3.6, kRestMaxCellV = 4.40;
 
 // Rounded so the file reads like a hand-written one and the same rating gives the same bytes.
 // v to a multiple of step, as the nearest double to its decimal text: 15.26, not the
@@ -79,19 +81,28 @@ bool first_positive(const SourceInfo& info, std::initializer_list<const char*> n
     return false;
 }
 
-}  // namespace
-
-int cells_from_resting_voltage(double voltage_v) {
-    if (!(voltage_v > 0.0) || !std::isfinite(voltage_v)) return 0;
+// The one count whose per-cell voltage lies in [min_cell_v, max_cell_v]; 0 when none or more.
+int only_count_between(double voltage_v, double min_cell_v, double max_cell_v) {
     int found = 0;
     for (int n = 1; n <= core::kMaxCells; ++n) {
         const double per_cell_v = voltage_v / n;
-        if (per_cell_v >= 3.45 && per_cell_v <= 4.40) {
+        if (per_cell_v >= min_cell_v && per_cell_v <= max_cell_v) {
             if (found != 0) return 0;  // two counts fit: the voltage cannot tell
             found = n;
         }
     }
     return found;
+}
+
+}  // namespace
+
+int cells_from_resting_voltage(double voltage_v) {
+    if (!(voltage_v > 0.0) || !std::isfinite(voltage_v)) return 0;
+    // A pack resting below 3.6 V per cell is nearly empty, and nobody takes off with one:
+    // a count that puts it there loses to one in the take-off band (the Matrice 100 at
+    // 24.22 V is 4.04 V per cell as 6S; as 7S, 3.46 V, it had made the count a tie).
+    if (const int n = only_count_between(voltage_v, kTakeoffRestMinCellV, kRestMaxCellV)) return n;
+    return only_count_between(voltage_v, kRestMinCellV, kRestMaxCellV);
 }
 
 json pack_config_json(const PackRating& r) {

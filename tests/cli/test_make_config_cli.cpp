@@ -111,3 +111,16 @@ TEST_CASE("battsim make-config reads an ArduPilot log's pack, and replay notes t
     CHECK(under_made["flight"]["resistance_ohm"]["mean"].get<double>() ==
           Approx(c3["battery"]["internal_resistance_ohm"].get<double>()).epsilon(1e-4));
 }
+
+TEST_CASE("battsim make-config counts a Matrice 100's cells from where it takes off", "[cli][make_config][data]") {
+    // 24.22 V at rest rests as 6S (4.04 V per cell) and 7S (3.46 V); only 6S is a charge to
+    // take off with. It had been a tie: "give --cells".
+    const std::string dir = clitest::temp_dir();
+    const std::string cfg = dir + "/m100.json";
+    const clitest::Result made = clitest::run("make-config --from-log " + q(kData + "/cmu-m100/flights/1.csv") +
+                                              " --capacity-mah 4500 -o " + q(cfg));
+    INFO(made.err);
+    REQUIRE(made.exit_code == 0);
+    CHECK_THAT(made.err, Catch::Contains("6 cells from the pack resting at 24.22 V (4.04 V per cell)"));
+    CHECK(json::parse(clitest::read_file(cfg))["battery"]["cells_in_series"] == 6);
+}

@@ -140,6 +140,10 @@ TEST_CASE("The cell count from how high a pack rests", "[pack_config]") {
     CHECK(cells_from_resting_voltage(22.8) == 6);  // 3.80 V; 4.56 V as 5S, 3.26 V as 7S
     CHECK(cells_from_resting_voltage(25.2) == 0);  // a full 6S pack (4.2 V) or a 7S one at 3.6 V
     CHECK(cells_from_resting_voltage(21.9) == 0);  // 3.65 V as 6S and 4.38 V as 5S: cannot tell
+    // Two counts rest in 3.45-4.40 V, but only one where a pack takes off from (3.6 V and up).
+    CHECK(cells_from_resting_voltage(24.22) == 6);  // CMU Matrice 100 flight 1: 4.04 V; 3.46 V as 7S
+    CHECK(cells_from_resting_voltage(17.5) == 4);   // 4.375 V; 3.50 V as 5S
+    CHECK(cells_from_resting_voltage(10.5) == 3);   // none takes off: 3.50 V as 3S, 2.63 V as 4S
     CHECK(cells_from_resting_voltage(2.0) == 0);
     CHECK(cells_from_resting_voltage(NAN) == 0);
 }
@@ -234,6 +238,14 @@ TEST_CASE("Replay notes a config for another pack than the log's autopilot flew"
                       "match this pack?");
     rest.resting_voltage_v = 14.99;
     CHECK(config_notes(m, rest).empty());
+    // A 6S Matrice 100 pack read as 7S: 3.46 V per cell rests, but no pack takes off from it.
+    battsim::core::MonitorConfig seven = m;
+    seven.cells_in_series = 7;
+    rest.resting_voltage_v = 24.22;
+    notes = config_notes(seven, rest);
+    REQUIRE(notes.size() == 1);
+    CHECK(notes[0] == "the pack rests at 24.22 V: 4.04 V per cell as 6 cells, 3.46 V as the config's 7: does the config "
+                      "match this pack?");
     LogFacts passed;
     passed.capacity_passed_s = 22.4;
     notes = config_notes(m, passed);
