@@ -34,6 +34,7 @@ TEST_CASE("make-config: the reference rating gives the committed configs' number
                 CHECK(made[section][it.key()].get<double>() == Approx(it.value().get<double>()).epsilon(1e-9));
             }
         CHECK(made["sensor"]["max_pack_voltage_v"].get<double>() == Approx(5.25 * cells));
+        CHECK(made["sensor"]["min_pack_voltage_v"].get<double>() == Approx(2.0 * cells));  // not the core's 1.0 V
         CHECK(made["joint"]["cutoff_delay_s"].get<double>() == 5.0);
         if (cells == 4) CHECK(made["joint"]["ocv_cell_voltage_v"] == ref["joint"]["ocv_cell_voltage_v"]);
         CHECK(made["estimator"] == "joint");
@@ -54,6 +55,8 @@ TEST_CASE("make-config: capacity scales the charges, the curve's current and the
     CHECK(b["internal_resistance_ohm"].get<double>() == Approx(0.00894).margin(1e-9));            // 6 × 5 mΩ / 3.3548
     CHECK(b["full_voltage_v"].get<double>() == Approx(25.2));
     CHECK(j["monitor"]["min_flight_voltage_v"].get<double>() == Approx(19.95));
+    // A glitched sample below 2.0 V per cell is kept out; one at 2.2 V had passed the 1.0 V default.
+    CHECK(j["sensor"]["min_pack_voltage_v"].get<double>() == Approx(12.0));
     CHECK(j["monitor"]["remembered_average_power_w"].get<double>() == Approx(1590.2).margin(0.05));  // 79 W × 6 × k
     // Given values win; the description says where they came from.
     r.resistance_ohm = 0.012;
@@ -68,6 +71,7 @@ TEST_CASE("make-config: capacity scales the charges, the curve's current and the
     // And the result is a config like any other.
     const LoadedConfig c = config_from_json(g, "test");
     CHECK(c.monitor.cells_in_series == 6);
+    CHECK(c.monitor.sensor.min_pack_voltage_v == Approx(12.0f));
     CHECK(c.monitor.joint.ocv.points == 21);
 }
 
