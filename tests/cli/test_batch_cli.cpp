@@ -162,6 +162,17 @@ TEST_CASE("batch: a log's notes are the table's notes column and said on stderr,
     CHECK(clean.err.find("note:") == std::string::npos);
 }
 
+TEST_CASE("batch: an empty directory's error row names it in the Markdown table, however it was written", "[cli][batch]") {
+    // Given as "DIR/" (a shell's completion) with a manifest's test label, the row's log cell
+    // had been empty and nothing in the row named the directory.
+    const std::string dir = temp_dir();
+    REQUIRE(::mkdir((dir + "/spring").c_str(), 0755) == 0);
+    clitest::write_file(dir + "/m.json", R"({"schema": "battsim.manifest", "version": 1, "logs": [{"path": "spring/", "test": "T7"}]})");
+    const auto r = run("batch -m " + q(dir + "/m.json") + " -c " + q(kConfig) + " --no-progress");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.out, Catch::Contains("| T7 | spring | – |") && Catch::Contains("error: directory holds no log files"));
+}
+
 TEST_CASE("batch: an output that cannot be written is said before the run; one that fails spares the others",
           "[cli][batch]") {
     const std::string dir = fleet_dir(2, false);

@@ -109,9 +109,14 @@ std::string md_cell(const std::string& s) {
 
 std::string text(const json& v) { return v.is_string() ? v.get<std::string>() : std::string(); }
 
+// The last component of `path`: a directory given as "DIR/" (a shell's completion) is named
+// "DIR" (its error row's log cell had been empty).
 std::string file_name(const std::string& path) {
-    const size_t slash = path.find_last_of('/');
-    return slash == std::string::npos ? path : path.substr(slash + 1);
+    const size_t end = path.find_last_not_of('/');
+    if (end == std::string::npos) return path;  // "/" or empty
+    const size_t slash = path.find_last_of('/', end);
+    const size_t from = slash == std::string::npos ? 0 : slash + 1;
+    return path.substr(from, end + 1 - from);
 }
 
 // A CSV field: numbers in their shortest exact form, arrays joined with `separator`, quoted
