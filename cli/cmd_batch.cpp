@@ -84,7 +84,11 @@ int run(const BatchArgs& a) {
     if (!a.out_dir.empty() || !a.compare.empty()) {
         const std::vector<std::string> dups = host::duplicate_stems(all);
         if (!dups.empty()) {
-            std::cerr << me << "--out and --compare name summaries <stem>.json, but these logs share a stem:\n";
+            // Only the options given: "--compare" had been named in a run without it.
+            const std::string given = !a.out_dir.empty() && !a.compare.empty() ? "--out and --compare name"
+                                      : !a.out_dir.empty()                      ? "--out names"
+                                                                                : "--compare names";
+            std::cerr << me << given << " summaries <stem>.json, but these logs share a stem:\n";
             for (const std::string& d : dups) std::cerr << "  " << d << "\n";
             return kExitUsage;
         }

@@ -173,6 +173,23 @@ TEST_CASE("batch: an empty directory's error row names it in the Markdown table,
     CHECK_THAT(r.out, Catch::Contains("| T7 | spring | – |") && Catch::Contains("error: directory holds no log files"));
 }
 
+TEST_CASE("batch: two logs of one stem are refused naming only the options given", "[cli][batch]") {
+    const std::string dir = fleet_dir(1, false);
+    REQUIRE(::mkdir((dir + "/b").c_str(), 0755) == 0);
+    clitest::write_file(dir + "/b/g1.csv", read_file(dir + "/g1.csv"));
+    const std::string logs = q(dir + "/g1.csv") + " " + q(dir + "/b/g1.csv") + " -c " + q(kConfig) + " --no-progress";
+    auto r = run("batch " + logs + " --out " + q(dir + "/out"));
+    CHECK(r.exit_code == 2);
+    // It had said "--out and --compare name summaries" without a --compare.
+    CHECK_THAT(r.err, Catch::StartsWith("battsim batch: --out names summaries <stem>.json, but these logs share a stem:\n"));
+    r = run("batch " + logs + " --compare " + q(dir));
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::StartsWith("battsim batch: --compare names summaries <stem>.json"));
+    r = run("batch " + logs + " --out " + q(dir + "/out") + " --compare " + q(dir));
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::StartsWith("battsim batch: --out and --compare name summaries <stem>.json"));
+}
+
 TEST_CASE("batch: an output that cannot be written is said before the run; one that fails spares the others",
           "[cli][batch]") {
     const std::string dir = fleet_dir(2, false);
