@@ -84,7 +84,11 @@ int run(const BatchArgs& a) {
     if (!a.out_dir.empty() || !a.compare.empty()) {
         const std::vector<std::string> dups = host::duplicate_stems(all);
         if (!dups.empty()) {
-            std::cerr << me << "--out and --compare name summaries <stem>.json, but these logs share a stem:\n";
+            // Only the options given: "--compare" had been named in a run without it.
+            const std::string given = !a.out_dir.empty() && !a.compare.empty() ? "--out and --compare name"
+                                      : !a.out_dir.empty()                      ? "--out names"
+                                                                                : "--compare names";
+            std::cerr << me << given << " summaries <stem>.json, but these logs share a stem:\n";
             for (const std::string& d : dups) std::cerr << "  " << d << "\n";
             return kExitUsage;
         }
@@ -113,7 +117,7 @@ int run(const BatchArgs& a) {
             outputs.push_back({"--out's " + it.stem + ".json", (fs::path(a.out_dir) / (it.stem + ".json")).string()});
     }
     if (int rc = check_outputs("battsim batch", inputs, outputs)) return rc;
-    // What each config makes unreliable, once per config: the table only counts notes, and a
+    // What each config makes unreliable, once per config (every row's notes repeat it): a
     // fleet replayed with the joint estimator and no OCV table reads plausible nonsense.
     std::map<std::string, size_t> noted;
     for (const host::BatchItem& it : items) {
@@ -147,14 +151,15 @@ int run(const BatchArgs& a) {
     const nlohmann::json table = host::make_table(std::move(result.rows), all.size(), digest, shard);
     for (const nlohmann::json& r : table["rows"])
         if (r["status"] != "ok") std::cerr << me << "failed: " << host::failed_row_text(r) << "\n";
-    // A config for another pack than the logs' (a 4S config on a 6S fleet) reads every row
-    // wrong while each says "ok": said, the first few in full.
+    // What replay would say of each log (a truncated file, a config for another pack than the
+    // log's: every row "ok" all the same), the first few in full: a 4S config on a 6S fleet
+    // says it of every log.
     constexpr size_t kLogNotesShown = 5;
     for (size_t k = 0; k < result.log_notes.size() && k < kLogNotesShown; ++k)
         std::cerr << me << "note: " << result.log_notes[k] << "\n";
     if (result.log_notes.size() > kLogNotesShown)
         std::cerr << me << "note: " << result.log_notes.size() - kLogNotesShown
-                  << " more such notes (each log's summary, --out DIR, has its config_notes)\n";
+                  << " more such notes (the notes column of the CSV and JSON tables, and each log's summary, --out DIR)\n";
     for (const std::string& u : result.unwritten) std::cerr << me << u << "\n";
     // Each output on its own: one that fails (a full disk) does not take the others with it.
     bool unwritten = false;

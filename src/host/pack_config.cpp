@@ -24,6 +24,11 @@ constexpr double kExponentialAh = 0.3, kNominalZoneAh = 1.5;  // at the referenc
 constexpr double kCellResistanceOhm = 0.005;                   // at the reference capacity
 constexpr double kCurveCurrentA = 7.0;                          // the curve's C-rate is kept
 constexpr double kVarianceV = 0.05, kAveragePowerW = 79.0, kMaxPackV = 5.25;
+// The lowest pack voltage per cell a reading can be true at: Li-ion is flown to 2.5 V per
+// cell, and sag under a punch goes briefly below (the dissertation's sad 4S pack reached
+// 2.65 V per cell under load). Below this a sample is a glitch, kept out of the estimators;
+// the core's fixed 1.0 V default had let a 2.2 V row on a 6S pack through.
+constexpr double kMinPackCellV = 2.0;
 constexpr double kCutoffDelayS = 5.0;
 constexpr double kGroundPowerW = 3.0;  // a small craft's electronics on the ground, at most
 // The estimators' current thresholds, as the core's defaults set them for the reference pack,
@@ -48,6 +53,8 @@ constexpr double kOcvCellV[] = {3.3271, 3.5607, 3.6542, 3.6925, 3.7166, 3.7358, 
                                 3.8302, 3.8503, 3.8749, 3.9009, 3.9296, 3.9605, 3.9951, 4.035,  4.0898, 4.1999};
 // A per-cell cutoff outside this is not one anybody flies to: a typo or another unit.
 constexpr double kCutoffMinV = 2.5, kCutoffMaxV = 3.9;
+// Where a charged or part-charged lithium cell rests, and the part of it a pack takes off from.
+constexpr double kRestMinCellV = 3.45, kTakeoffRestMinCellV = 3.6, kRestMaxCellV = 4.40;
 
 // Rounded so the file reads like a hand-written one and the same rating gives the same bytes.
 // v to a multiple of step, as the nearest double to its decimal text: 15.26, not the
@@ -79,19 +86,28 @@ bool first_positive(const SourceInfo& info, std::initializer_list<const char*> n
     return false;
 }
 
-}  // namespace
-
-int cells_from_resting_voltage(double voltage_v) {
-    if (!(voltage_v > 0.0) || !std::isfinite(voltage_v)) return 0;
+// The one count whose per-cell voltage lies in [min_cell_v, max_cell_v]; 0 when none or more.
+int only_count_between(double voltage_v, double min_cell_v, double max_cell_v) {
     int found = 0;
     for (int n = 1; n <= core::kMaxCells; ++n) {
         const double per_cell_v = voltage_v / n;
-        if (per_cell_v >= 3.45 && per_cell_v <= 4.40) {
+        if (per_cell_v >= min_cell_v && per_cell_v <= max_cell_v) {
             if (found != 0) return 0;  // two counts fit: the voltage cannot tell
             found = n;
         }
     }
     return found;
+}
+
+}  // namespace
+
+int cells_from_resting_voltage(double voltage_v) {
+    if (!(voltage_v > 0.0) || !std::isfinite(voltage_v)) return 0;
+    // A pack resting below 3.6 V per cell is nearly empty, and nobody takes off with one:
+    // a count that puts it there loses to one in the take-off band (the Matrice 100 at
+    // 24.22 V is 4.04 V per cell as 6S; as 7S, 3.46 V, it had made the count a tie).
+    if (const int n = only_count_between(voltage_v, kTakeoffRestMinCellV, kRestMaxCellV)) return n;
+    return only_count_between(voltage_v, kRestMinCellV, kRestMaxCellV);
 }
 
 json pack_config_json(const PackRating& r) {
@@ -169,7 +185,8 @@ json pack_config_json(const PackRating& r) {
         {"monitor", monitor},
         // The reference logger's shunt calibration (a raw log's shunt column only).
         {"sensor", {{"shunt_offset_ma", -982.8158579}, {"shunt_scale_mv_per_10a", 3.7834625},
-                    {"max_pack_voltage_v", round_to(kMaxPackV * n, 1e-4)}}},
+                    {"max_pack_voltage_v", round_to(kMaxPackV * n, 1e-4)},
+                    {"min_pack_voltage_v", round_to(kMinPackCellV * n, 1e-4)}}},
         {"joint",
          {{"first_cell_includes_lead", true},
           {"cutoff_delay_s", std::isfinite(r.cutoff_delay_s) ? r.cutoff_delay_s : kCutoffDelayS},

@@ -73,8 +73,9 @@ private:
 // first sample counts as at rest below 1 A. Throws InputError like open_reader().
 LogPack read_log_pack(const std::string& path, const ReaderOptions& options, int cells_given = 0);
 
-// The one cell count whose per-cell voltage lies where a charged or part-charged lithium
-// cell rests (3.45-4.35 V); 0 when none or more than one does.
+// The cell count a pack resting at `voltage_v` has: the one count whose per-cell voltage lies
+// where a pack takes off from (3.6-4.40 V), else the one where a charged or part-charged
+// lithium cell rests (3.45-4.40 V); 0 when neither rule finds exactly one.
 int cells_from_resting_voltage(double voltage_v);
 
 }  // namespace host

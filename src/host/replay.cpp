@@ -82,8 +82,9 @@ public:
     };
     // `csv`: the log is a headered CSV (the only format --negative-discharge flips); `merged`:
     // the --average-ms windows held more than one sample on average.
+    // `milliamperes`: the log's current column was read in mA (a CSV log's name or --current-unit).
     std::vector<std::string> notes(bool flew, double takeoff_a, const Lags& lags, double window_s, bool csv,
-                                   bool merged) const {
+                                   bool merged, bool milliamperes) const {
         const double fastest_s = lags.fastest_s;
         std::vector<std::string> out;
         char buf[512];
@@ -110,6 +111,18 @@ public:
                           "the pack voltage fell from %.3g to %.3g V",
                           loaded_mah_, static_cast<double>(first_v_), static_cast<double>(last_v_));
             out.push_back(buf + remedy);
+        }
+        // The other unit: a current in amperes read as milliamperes is a thousand times low and
+        // never takes off (a CMU Matrice 100 flight with --current-unit mA: 33.5 A read as
+        // 0.0335 A), while the pack's voltage falls as in any flight. The reverse, milliamperes
+        // read as amperes, breaks the sensor's current limit and the brief says so.
+        if (!flew && milliamperes && max_a_ < takeoff_a && max_a_ * 1000.0 >= takeoff_a && last_v_ < kSignMinFall * first_v_) {
+            std::snprintf(buf, sizeof buf,
+                          "the current never reaches the take-off threshold (%.3g A), peaking at %.3g A read in mA, "
+                          "while the pack voltage fell from %.3g to %.3g V: if the current column counts amperes, give "
+                          "--current-unit A (manifest: columns.current_unit or current_unit)",
+                          takeoff_a, max_a_, static_cast<double>(first_v_), static_cast<double>(last_v_));
+            out.push_back(buf);
         }
         // Battery logs are written a few times a second to once every few seconds.
         const double dt_s = median(intervals_s_);
@@ -212,7 +225,8 @@ public:
 private:
     static constexpr double kSlowestIntervalS = 10.0;
     static constexpr double kLongestMergedIntervalS = 0.075;  // the reference logger's 67.7 ms and its jitter
-    // A loaded count this far below zero while the voltage fell by over 3 %.
+    // A loaded count this far below zero while the voltage fell by over 3 % (the fall also
+    // tells a flight in amperes read as mA from a log that stayed on the ground).
     static constexpr double kSignMinMah = 10.0;
     static constexpr float kSignMinFall = 0.97f;
     static constexpr double kFastestIntervalS = 1e-3;  // a flight controller's blackbox at most
@@ -329,7 +343,8 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     const bool merged = info.averaged_in > info.averaged_out + info.averaged_out / 5;  // over 1.2 a window
     for (const std::string& n : shape.notes(flew, options.config.monitor.flying.min_flying_current_a, lags,
                                               static_cast<double>(options.reader.average_us) * 1e-6,
-                                              info.format == LogFormat::Csv, merged))
+                                              info.format == LogFormat::Csv, merged,
+                                              info.format == LogFormat::Csv && info.current_scale_to_a > 0.0 && info.current_scale_to_a < 0.01))
         input_notes.push_back(n);
     j["input"] = {{"path", path}, {"format", to_string(info.format)}, {"cells", info.cell_count},
                   {"has_temperature", info.has_temperature}, {"notes", input_notes}};

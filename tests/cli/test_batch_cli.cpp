@@ -106,7 +106,7 @@ TEST_CASE("batch: a bad log becomes an error row, the rest are replayed and kept
 
 TEST_CASE("batch: a config for another pack than the logs' is said, not only counted", "[cli][batch]") {
     // A 6S flight replayed with the 4S reference config: every row said "ok", and the note
-    // that `replay` prints reached only the table's notes count.
+    // that `replay` prints reached only the table's notes column (then a count).
     const std::string dir = clitest::temp_dir();
     REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/6s-hover-healthy.json") + " -o " + q(dir + "/six.csv"))
                 .exit_code == 0);
@@ -121,6 +121,73 @@ TEST_CASE("batch: a config for another pack than the logs' is said, not only cou
                          " --no-progress --format json");
     CHECK(own.exit_code == 0);
     CHECK_THAT(own.err, !Catch::Contains("does the config match"));
+}
+
+TEST_CASE("batch: a log's notes are the table's notes column and said on stderr, as replay says them", "[cli][batch]") {
+    // A truncated log: its row said "ok", the note that the file ends inside a message was
+    // only in --out's summary, and the table's notes column held a count (1).
+    const std::string dir = clitest::temp_dir();
+    const std::string whole = dir + "/whole.bin", cut = dir + "/cut.bin";
+    REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/3s-hover-healthy.json") + " --format dataflash -o " + q(whole))
+                .exit_code == 0);
+    const std::string bytes = read_file(whole);
+    clitest::write_file(cut, bytes.substr(0, bytes.size() - 5));
+    const std::string config = " -c " + q(kSource + "/configs/generic-3s.json");
+    const auto r = run("batch " + q(cut) + config + " --no-progress --format json");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const nlohmann::json row = nlohmann::json::parse(r.out)["rows"][0];
+    CHECK(row["status"] == "ok");
+    REQUIRE(row["notes"].is_array());
+    REQUIRE(row["notes"].size() == 1);
+    CHECK_THAT(row["notes"][0].get<std::string>(), Catch::Contains("file ends inside a BCL message"));
+    // What replay says of the log, batch says too, each line naming the log.
+    const auto replay = run("replay " + q(cut) + config);
+    REQUIRE(replay.exit_code == 0);
+    CHECK_THAT(replay.err, Catch::Contains("battsim replay: note: byte "));
+    CHECK_THAT(r.err, Catch::Contains("battsim batch: note: " + cut + ": " + row["notes"][0].get<std::string>() + "\n"));
+
+    // With the 4S reference config it gains the config's notes of this log: in CSV, "; " apart.
+    const auto csv = run("batch " + q(cut) + " -c " + q(kConfig) + " --no-progress --format csv");
+    REQUIRE(csv.exit_code == 0);
+    CHECK_THAT(csv.out, Catch::Contains("the partial message is ignored; the log has 3 cell voltages but the config 4"));
+    // A shard's JSON merges back into the same CSV (merge reads the notes as text).
+    REQUIRE(run("batch " + q(cut) + " -c " + q(kConfig) + " --no-progress --format json -o " + q(dir + "/s.json")).exit_code == 0);
+    const auto merged = run("merge " + q(dir + "/s.json") + " --format csv");
+    CHECK(merged.exit_code == 0);
+    CHECK(merged.out == csv.out);
+    // A whole log has none.
+    const auto clean = run("batch " + q(whole) + config + " --no-progress --format json");
+    CHECK(nlohmann::json::parse(clean.out)["rows"][0]["notes"] == nlohmann::json::array());
+    CHECK(clean.err.find("note:") == std::string::npos);
+}
+
+TEST_CASE("batch: an empty directory's error row names it in the Markdown table, however it was written", "[cli][batch]") {
+    // Given as "DIR/" (a shell's completion) with a manifest's test label, the row's log cell
+    // had been empty and nothing in the row named the directory.
+    const std::string dir = temp_dir();
+    REQUIRE(::mkdir((dir + "/spring").c_str(), 0755) == 0);
+    clitest::write_file(dir + "/m.json", R"({"schema": "battsim.manifest", "version": 1, "logs": [{"path": "spring/", "test": "T7"}]})");
+    const auto r = run("batch -m " + q(dir + "/m.json") + " -c " + q(kConfig) + " --no-progress");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.out, Catch::Contains("| T7 | spring | – |") && Catch::Contains("error: directory holds no log files"));
+}
+
+TEST_CASE("batch: two logs of one stem are refused naming only the options given", "[cli][batch]") {
+    const std::string dir = fleet_dir(1, false);
+    REQUIRE(::mkdir((dir + "/b").c_str(), 0755) == 0);
+    clitest::write_file(dir + "/b/g1.csv", read_file(dir + "/g1.csv"));
+    const std::string logs = q(dir + "/g1.csv") + " " + q(dir + "/b/g1.csv") + " -c " + q(kConfig) + " --no-progress";
+    auto r = run("batch " + logs + " --out " + q(dir + "/out"));
+    CHECK(r.exit_code == 2);
+    // It had said "--out and --compare name summaries" without a --compare.
+    CHECK_THAT(r.err, Catch::StartsWith("battsim batch: --out names summaries <stem>.json, but these logs share a stem:\n"));
+    r = run("batch " + logs + " --compare " + q(dir));
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::StartsWith("battsim batch: --compare names summaries <stem>.json"));
+    r = run("batch " + logs + " --out " + q(dir + "/out") + " --compare " + q(dir));
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::StartsWith("battsim batch: --out and --compare name summaries <stem>.json"));
 }
 
 TEST_CASE("batch: an output that cannot be written is said before the run; one that fails spares the others",
@@ -453,8 +520,8 @@ TEST_CASE("batch: the monitor table pools a drone's charger checks into one gain
 }
 
 TEST_CASE("batch: what a config makes unreliable is said once, with how many logs it touches", "[cli][batch]") {
-    // The table only counts each log's notes; a fleet replayed with the joint estimator and
-    // no OCV table would otherwise read plausible nonsense without a word.
+    // Every row's notes repeat it, and a fleet replayed with the joint estimator and no OCV
+    // table would otherwise read plausible nonsense without a word on the terminal.
     const std::string dir = clitest::temp_dir();
     for (const char* name : {"a.csv", "b.csv"}) clitest::write_file(dir + "/" + name, read_file(kSource + "/logs/example-4s.csv"));
     const std::string logs = q(dir + "/a.csv") + " " + q(dir + "/b.csv");

@@ -268,6 +268,18 @@ TEST_CASE("replay notes a current of the other sign and a time column in millise
     REQUIRE(wrong.size() == 1);
     CHECK(wrong[0] == "the current never reaches the take-off threshold (1 A) but falls to -20 A with --negative-discharge: "
                       "if this log counts discharge as positive, replay it without (manifest: \"negative_is_discharge\": false)");
+    // Amperes read as milliamperes: 20 A read as 0.02 A never takes off, and nothing had said
+    // why (the reverse, mA read as A, breaks the sensor's current limit and the brief asks).
+    const auto milli = notes("ok.csv", " --current-unit mA");
+    REQUIRE(milli.size() == 1);
+    CHECK(milli[0] == "the current never reaches the take-off threshold (1 A), peaking at 0.02 A read in mA, while the pack "
+                      "voltage fell from 16.5 to 15.9 V: if the current column counts amperes, give --current-unit A "
+                      "(manifest: columns.current_unit or current_unit)");
+    // A log in mA that stays on the ground (the voltage steady): nothing to say.
+    std::string ground = "time_s,voltage_v,current_ma\n";
+    for (int k = 0; k < 300; ++k) ground += std::to_string(0.63 + 0.067 * k) + ",16.52,250\n";
+    clitest::write_file(dir + "/ground.csv", ground);
+    CHECK(notes("ground.csv", "").empty());
     // Regeneration peaks that do reach the take-off current (a car's drive cycle, a brake):
     // the count runs backwards while the voltage falls, and that is said too.
     std::string regen = "time_s,voltage_v,current_a\n";

@@ -34,6 +34,7 @@ TEST_CASE("make-config: the reference rating gives the committed configs' number
                 CHECK(made[section][it.key()].get<double>() == Approx(it.value().get<double>()).epsilon(1e-9));
             }
         CHECK(made["sensor"]["max_pack_voltage_v"].get<double>() == Approx(5.25 * cells));
+        CHECK(made["sensor"]["min_pack_voltage_v"].get<double>() == Approx(2.0 * cells));  // not the core's 1.0 V
         CHECK(made["joint"]["cutoff_delay_s"].get<double>() == 5.0);
         if (cells == 4) CHECK(made["joint"]["ocv_cell_voltage_v"] == ref["joint"]["ocv_cell_voltage_v"]);
         CHECK(made["estimator"] == "joint");
@@ -54,6 +55,8 @@ TEST_CASE("make-config: capacity scales the charges, the curve's current and the
     CHECK(b["internal_resistance_ohm"].get<double>() == Approx(0.00894).margin(1e-9));            // 6 × 5 mΩ / 3.3548
     CHECK(b["full_voltage_v"].get<double>() == Approx(25.2));
     CHECK(j["monitor"]["min_flight_voltage_v"].get<double>() == Approx(19.95));
+    // A glitched sample below 2.0 V per cell is kept out; one at 2.2 V had passed the 1.0 V default.
+    CHECK(j["sensor"]["min_pack_voltage_v"].get<double>() == Approx(12.0));
     CHECK(j["monitor"]["remembered_average_power_w"].get<double>() == Approx(1590.2).margin(0.05));  // 79 W × 6 × k
     // Given values win; the description says where they came from.
     r.resistance_ohm = 0.012;
@@ -68,6 +71,7 @@ TEST_CASE("make-config: capacity scales the charges, the curve's current and the
     // And the result is a config like any other.
     const LoadedConfig c = config_from_json(g, "test");
     CHECK(c.monitor.cells_in_series == 6);
+    CHECK(c.monitor.sensor.min_pack_voltage_v == Approx(12.0f));
     CHECK(c.monitor.joint.ocv.points == 21);
 }
 
@@ -140,6 +144,10 @@ TEST_CASE("The cell count from how high a pack rests", "[pack_config]") {
     CHECK(cells_from_resting_voltage(22.8) == 6);  // 3.80 V; 4.56 V as 5S, 3.26 V as 7S
     CHECK(cells_from_resting_voltage(25.2) == 0);  // a full 6S pack (4.2 V) or a 7S one at 3.6 V
     CHECK(cells_from_resting_voltage(21.9) == 0);  // 3.65 V as 6S and 4.38 V as 5S: cannot tell
+    // Two counts rest in 3.45-4.40 V, but only one where a pack takes off from (3.6 V and up).
+    CHECK(cells_from_resting_voltage(24.22) == 6);  // CMU Matrice 100 flight 1: 4.04 V; 3.46 V as 7S
+    CHECK(cells_from_resting_voltage(17.5) == 4);   // 4.375 V; 3.50 V as 5S
+    CHECK(cells_from_resting_voltage(10.5) == 3);   // none takes off: 3.50 V as 3S, 2.63 V as 4S
     CHECK(cells_from_resting_voltage(2.0) == 0);
     CHECK(cells_from_resting_voltage(NAN) == 0);
 }
@@ -234,6 +242,14 @@ TEST_CASE("Replay notes a config for another pack than the log's autopilot flew"
                       "match this pack?");
     rest.resting_voltage_v = 14.99;
     CHECK(config_notes(m, rest).empty());
+    // A 6S Matrice 100 pack read as 7S: 3.46 V per cell rests, but no pack takes off from it.
+    battsim::core::MonitorConfig seven = m;
+    seven.cells_in_series = 7;
+    rest.resting_voltage_v = 24.22;
+    notes = config_notes(seven, rest);
+    REQUIRE(notes.size() == 1);
+    CHECK(notes[0] == "the pack rests at 24.22 V: 4.04 V per cell as 6 cells, 3.46 V as the config's 7: does the config "
+                      "match this pack?");
     LogFacts passed;
     passed.capacity_passed_s = 22.4;
     notes = config_notes(m, passed);

@@ -272,9 +272,16 @@ json make_row(const BatchItem& item, const json& summary) {
     row["samples"] = total.is_number_unsigned() ? total.get<uint64_t>() : 0;
     const json faults = pick("/sensor_fault_samples");
     row["sensor_fault_samples"] = faults.is_number_unsigned() ? faults.get<uint64_t>() : 0;
-    const json notes = pick("/input/notes");
-    const json config_notes = pick("/config_notes");
-    row["notes"] = (notes.is_array() ? notes.size() : 0) + (config_notes.is_array() ? config_notes.size() : 0);
+    // The notes themselves, the reader's then the config's: a count had told a truncated log
+    // from a config without an OCV table only through --out's summaries.
+    json notes = json::array();
+    for (const char* pointer : {"/input/notes", "/config_notes"}) {
+        const json list = pick(pointer);
+        if (list.is_array())
+            for (const json& note : list)
+                if (note.is_string()) notes.push_back(note);
+    }
+    row["notes"] = notes;
     return row;
 }
 
@@ -301,7 +308,7 @@ json make_error_row(const BatchItem& item, const std::string& reason) {
     row["samples"] = 0;
     row["sensor_fault_samples"] = 0;
     row["sensor_fault_cause"] = json::array();
-    row["notes"] = 0;
+    row["notes"] = json::array();
     row["outlier_cell"] = nullptr;
     return row;
 }
@@ -354,9 +361,14 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
                     // A check that cannot be made fails the row; the replay's summary is kept.
                     row = check_error.empty() ? make_row(item, summary) : make_error_row(item, check_error);
                     samples = check_error.empty() ? row["samples"].get<uint64_t>() : 0;
-                    // The notes the log gave rise to (the config's own are said once per config).
-                    for (const std::string& note : other_pack_notes(summary))
-                        log_notes[k].push_back(item.path + ": " + note);
+                    // The notes the log gave rise to, as replay says them: the reader's, then the
+                    // config's of this log (those of the config alone are said once per config).
+                    const std::vector<std::string> config_wide = config_notes(item.replay.config.monitor);
+                    for (const json& note : summary["input"].value("notes", json::array()))
+                        log_notes[k].push_back(item.path + ": " + note.get<std::string>());
+                    for (const json& note : summary.value("config_notes", json::array()))
+                        if (std::find(config_wide.begin(), config_wide.end(), note.get<std::string>()) == config_wide.end())
+                            log_notes[k].push_back(item.path + ": " + note.get<std::string>());
                 } catch (const std::exception& e) {
                     // InputError carries file:line:column; anything else is reported as is.
                     row = make_error_row(item, e.what());

@@ -68,8 +68,9 @@ struct BatchResult {
     // --out summaries that could not be written, in item order ("log: why"); their rows keep
     // the numbers computed.
     std::vector<std::string> unwritten;
-    // What a log's config_notes say of that log beyond what its config alone makes unreliable
-    // (a config for another pack than the log's), "log: note", in item order.
+    // What the reader said of a log (its summary's input.notes) and what its config_notes say of
+    // that log beyond what its config alone makes unreliable (a config for another pack than
+    // the log's, a count past the capacity), "log: note", in item order.
     std::vector<std::string> log_notes;
 };
 

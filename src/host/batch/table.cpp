@@ -36,7 +36,7 @@ const std::vector<std::string> kRowKeys = {
 std::string row_type_problem(const json& r) {
     static const std::vector<std::string> texts = {"test", "log", "config", "estimator", "status"};
     static const std::vector<std::string> texts_or_null = {"pack", "monitor", "error"};
-    static const std::vector<std::string> text_lists = {"warnings", "sensor_fault_cause"};
+    static const std::vector<std::string> text_lists = {"warnings", "sensor_fault_cause", "notes"};
     const auto in = [](const std::vector<std::string>& keys, const std::string& k) {
         return std::find(keys.begin(), keys.end(), k) != keys.end();
     };
@@ -109,20 +109,26 @@ std::string md_cell(const std::string& s) {
 
 std::string text(const json& v) { return v.is_string() ? v.get<std::string>() : std::string(); }
 
+// The last component of `path`: a directory given as "DIR/" (a shell's completion) is named
+// "DIR" (its error row's log cell had been empty).
 std::string file_name(const std::string& path) {
-    const size_t slash = path.find_last_of('/');
-    return slash == std::string::npos ? path : path.substr(slash + 1);
+    const size_t end = path.find_last_not_of('/');
+    if (end == std::string::npos) return path;  // "/" or empty
+    const size_t slash = path.find_last_of('/', end);
+    const size_t from = slash == std::string::npos ? 0 : slash + 1;
+    return path.substr(from, end + 1 - from);
 }
 
-// A CSV field: numbers in their shortest exact form, arrays joined with ';', quoted
+// A CSV field: numbers in their shortest exact form, arrays joined with `separator`, quoted
 // when needed (RFC 4180).
-std::string csv_field(const json& v) {
+std::string csv_field(const json& v, const char* separator = ";") {
     std::string s;
     if (v.is_null()) return s;
     if (v.is_string()) {
         s = v.get<std::string>();
     } else if (v.is_array()) {
-        for (size_t i = 0; i < v.size(); ++i) s += (i ? ";" : "") + (v[i].is_string() ? v[i].get<std::string>() : json_text(v[i]));
+        for (size_t i = 0; i < v.size(); ++i)
+            s += (i ? separator : "") + (v[i].is_string() ? v[i].get<std::string>() : json_text(v[i]));
     } else {
         s = json_text(v);
     }
@@ -228,7 +234,8 @@ std::string render_csv(const json& rows, const std::vector<std::string>& keys) {
     for (size_t i = 0; i < keys.size(); ++i) out += (i ? "," : "") + keys[i];
     out += "\n";
     for (const json& r : rows) {
-        for (size_t i = 0; i < keys.size(); ++i) out += (i ? "," : "") + csv_field(r[keys[i]]);
+        // Notes are sentences, some with commas and semicolons of their own: "; " reads apart.
+        for (size_t i = 0; i < keys.size(); ++i) out += (i ? "," : "") + csv_field(r[keys[i]], keys[i] == "notes" ? "; " : ";");
         out += "\n";
     }
     return out;
@@ -645,8 +652,9 @@ json read_table_file(const std::string& path) {
                 fail(where + ": expected \"status\" text and \"flight\" true/false");
             if (r["status"] != "ok" && r["status"] != "error")
                 fail(where + ".status: expected \"ok\" or \"error\", found " + json_brief(r["status"]));
-            if (!r["cell_scores"].is_array() || !r["warnings"].is_array() || !r["sensor_fault_cause"].is_array())
-                fail(where + ": expected \"cell_scores\", \"warnings\" and \"sensor_fault_cause\" arrays");
+            if (!r["cell_scores"].is_array() || !r["warnings"].is_array() || !r["sensor_fault_cause"].is_array() ||
+                !r["notes"].is_array())
+                fail(where + ": expected \"cell_scores\", \"warnings\", \"sensor_fault_cause\" and \"notes\" arrays");
             // Every value of the type batch writes: an edited or corrupted shard must not pass its
             // values into the merged table and the per-pack trends unseen.
             const std::string problem = row_type_problem(r);

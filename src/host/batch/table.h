@@ -15,7 +15,7 @@ namespace battsim {
 namespace host {
 
 constexpr const char* kBatchSchema = "battsim.batch";
-constexpr int kBatchVersion = 1;
+constexpr int kBatchVersion = 2;  // 2: a row's notes are their text, no longer a count
 
 enum class TableFormat { Markdown, Csv, Json };
 // "md", "csv", "json"; throws std::invalid_argument.

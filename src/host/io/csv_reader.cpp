@@ -799,6 +799,7 @@ private:
                                      names_[static_cast<std::size_t>(current_col_)] +
                                      "\": expected a name ending in _a or _ma (or (a), (ma)), or give the unit: --current-unit A or mA (manifest: columns.current_unit or current_unit)");
             }
+            info_.current_scale_to_a = current_scale_;
             if (m.current_negative_is_discharge) current_scale_ = -current_scale_;
         }
 

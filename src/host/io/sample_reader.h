@@ -84,6 +84,9 @@ struct SourceInfo {
     // messages), in the order first seen, each with its first value. Empty for CSV and raw
     // logs. Complete once next() has returned false.
     std::vector<std::pair<std::string, double>> parameters;
+    // A CSV log's current column: the amperes one of its units was read as (1e-3: milliamperes;
+    // 0: another format), for the note when a log in amperes read as milliamperes never flies.
+    double current_scale_to_a = 0.0;
     // With --average-ms: the samples read and the averaged samples made of them (0: none).
     long averaged_in = 0, averaged_out = 0;
 };
