@@ -317,7 +317,7 @@ TEST_CASE("battsim discharge reads the joint estimator's OCV table off the Samsu
     const std::string bin = BATTSIM_BINARY;
     const std::string dir = testsupport::scratch_dir("discharge-ocv-cli");
     const std::string data = std::string(BATTSIM_DATA_DIR) + "/samsung-30q/";
-    const std::string cfg = std::string(BATTSIM_SOURCE_DIR) + "/configs/fitted/samsung-30q.json";  // 1S, R = 0.032 Ω
+    const std::string cfg = std::string(BATTSIM_SOURCE_DIR) + "/configs/fitted/samsung-30q.json";  // 1S, R = 0.029 Ω
     auto read = [&](const std::string& rate, const std::string& extra) {
         const std::string cmd = bin + " discharge " + data + "Q30_S001_" + rate + ".csv --negative-discharge -c " + cfg +
                                 " --min-voltage 2.5 --max-voltage 4.2 --json " + extra + " > " + dir + "/" + rate +
