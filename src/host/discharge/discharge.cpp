@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/estimate/coulomb_counter.h"
+#include "host/input_shape.h"
 #include "host/plot/plot.h"
 #include "host/report/summary.h"
 #include "host/stats.h"
@@ -114,12 +115,16 @@ DischargeResult process_discharge(const std::string& path, const DischargeOption
     std::unique_ptr<SampleReader> reader = open_reader(path, o.reader);
     core::Sample s;
     std::vector<Raw> raw;
+    // What replay says of the log's shape (samples 1000 s apart, a clock that jumps) holds for
+    // a discharge read the same way.
+    InputShape shape(o.reader.columns.current_negative_is_discharge, o.loaded_current_a);
     bool connected = false, done = false;
     // The discharge going on under load below the minimum: cut off there without a word, a
     // Li-ion cell read with a 3.325 V LiPo minimum lost its last sixth.
     double below_s = 0.0, below_low_v = INFINITY, below_last_s = NAN;
     while (reader->next(s)) {
         ++r.samples_read;
+        shape.add(s);
         if (done) {  // read to the end so the reader checks the whole file
             const double t_s = s.time_us * 1e-6;
             if (std::isfinite(s.voltage_v) && s.voltage_v <= o.min_voltage_v && s.current_a > 0.1f) {
@@ -190,6 +195,11 @@ DischargeResult process_discharge(const std::string& path, const DischargeOption
         throw InputError(path, 0, 0,
                          "the mean current is negative (" + std::to_string(r.mean_current_a) +
                              " A): expected positive = discharge; if the log records discharge as negative, pass --negative-discharge");
+    const bool merged = r.info.averaged_in > r.info.averaged_out + r.info.averaged_out / 5;  // as replay_log
+    for (const std::string& note :
+         shape.notes(r.mean_current_a >= o.loaded_current_a, o.loaded_current_a, InputShape::Lags{},
+                     static_cast<double>(o.reader.average_us) * 1e-6, r.info.format == LogFormat::Csv, merged))
+        r.info.notes.push_back(note);
 
     // Decimate by averaging blocks of `decimate` samples (the last block may be shorter).
     const size_t x = static_cast<size_t>(o.decimate);

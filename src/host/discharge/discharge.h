@@ -30,6 +30,7 @@ struct DischargeOptions {
     int decimate = 1;           // average every x samples
     double step_v = 0.01;       // table spacing
     double gradient_span = 0.01;  // fraction of the capacity the gradient is taken over
+    double loaded_current_a = 1.0;  // the config's take-off current: below it the log's shape notes count a rest
 };
 
 struct CurvePoint {

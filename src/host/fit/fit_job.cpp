@@ -92,6 +92,7 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
     for (const std::string& path : job.logs) {
         if (progress) *progress << "battsim fit: reading " << path << "\n";
         traces.push_back(load_trace(path, job.reader, job.config));
+        say_notes("battsim fit", traces.back(), progress);
     }
     ModelSpec start = spec_from_config(job.config);
     FitOptions options = job.options;
@@ -140,6 +141,7 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
     for (const std::string& path : job.test_logs) {
         if (progress) *progress << "battsim fit: testing on " << path << "\n";
         tests.push_back(load_trace(path, job.reader, job.config));
+        say_notes("battsim fit", tests.back(), progress);
         // A test log starts like the fitted ones: full (zero) or as the monitor finds it.
         const InitialMode mode = options.initial == InitialMode::Zero ? InitialMode::Zero : InitialMode::Monitor;
         const LogFitStats s = evaluate(tests.back(), result.specs[0], mode, 0.0f);

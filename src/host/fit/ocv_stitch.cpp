@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ostream>
 #include <stdexcept>
 #include <tuple>
 #include <utility>
@@ -560,7 +561,8 @@ OcvStitch stitch_ocv(const std::vector<std::string>& logs, const std::vector<std
     return stitch_ocv(all, config, o);
 }
 
-OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& config, const OcvStitchOptions& o) {
+OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& config, const OcvStitchOptions& o,
+                     std::ostream* notes_out) {
     if (o.points < 2 || o.points > core::kOcvTableMaxPoints)
         throw std::invalid_argument("--points: expected 2.." + std::to_string(core::kOcvTableMaxPoints));
     if (!(o.fast_time_s > 0.0) || !(o.slow_time_s >= 0.0) || !(o.prior_sigma_v > 0.0) || !(o.smooth_sigma_v > 0.0) || !(o.empty_sigma_v > 0.0) || !(o.rest_weight > 0.0) ||
@@ -585,19 +587,22 @@ OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& 
         s.prior_v[static_cast<size_t>(j)] = std::min(s.prior_v[static_cast<size_t>(j)], s.prior_v[static_cast<size_t>(j) + 1]);
 
     // A log with fewer than 10 valid samples says nothing of the curve: left out, and said.
+    size_t said = 0;  // notes written to notes_out
     std::vector<Trace> traces;
     std::vector<bool> is_test;
     for (const OcvStitchLog& log : logs) {
         Trace t = load_trace(log.path, log.reader, config);
-        // A config for another pack stitches a table no cell has (a 6S config on 4S flights:
-        // 2.77 V per cell at full): said, as replay says it.
-        for (const std::string& note : t.config_notes) s.notes.push_back(log.path + ": " + note);
+        // What replay says of the log (a config for another pack stitches a table no cell has:
+        // a 6S config on 4S flights, 2.77 V per cell at full; a current of the other sign
+        // stitches a charge), said as it is read: a fit that then fails for want of data
+        // says why.
+        for (const std::string& note : t.notes) s.notes.push_back(log.path + ": " + note);
         size_t valid = 0;
         for (const TracePoint& p : t.points) valid += p.valid;
-        if (valid < 10) {
-            s.notes.push_back(log.path + ": " + std::to_string(valid) + " valid samples, left out");
-            continue;
-        }
+        if (valid < 10) s.notes.push_back(log.path + ": " + std::to_string(valid) + " valid samples, left out");
+        if (notes_out)
+            for (; said < s.notes.size(); ++said) *notes_out << "battsim fit-ocv: note: " << s.notes[said] << "\n";
+        if (valid < 10) continue;
         traces.push_back(std::move(t));
         is_test.push_back(log.test);
     }
@@ -679,6 +684,8 @@ OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& 
     s.test_rms_before_v = pooled_rms(on_prior, before, s.capacity_ah, true);
     s.test_rms_v = pooled_rms(flights, after, s.capacity_ah, true);
     add_notes(s, flights);
+    if (notes_out)
+        for (; said < s.notes.size(); ++said) *notes_out << "battsim fit-ocv: note: " << s.notes[said] << "\n";
     for (size_t n = 0; n < traces.size(); ++n) {
         OcvStitchFlight out;
         out.log = traces[n].path;

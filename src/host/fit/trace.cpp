@@ -54,7 +54,7 @@ Trace load_trace(const std::string& path, const ReaderOptions& reader, const Loa
     t.info.cell_count = input["cells"].get<int>();
     t.info.has_temperature = input["has_temperature"].get<bool>();
     for (const auto& note : input["notes"]) t.info.notes.push_back(note.get<std::string>());
-    t.config_notes = other_pack_notes(summary);
+    t.notes = log_notes(summary);
     // The summary's flight window: initialised valid samples from the first flying sample
     // to the last flying one.
     long first_flying = -1, last_flying = -1;
@@ -75,6 +75,11 @@ Trace load_trace(const std::string& path, const ReaderOptions& reader, const Loa
         p.in_flight = p.valid && p.initialised;
     }
     return t;
+}
+
+void say_notes(const std::string& command, const Trace& trace, std::ostream* out) {
+    if (!out) return;
+    for (const std::string& note : trace.notes) *out << command << ": note: " << trace.path << ": " << note << "\n";
 }
 
 }  // namespace fit

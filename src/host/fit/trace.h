@@ -5,6 +5,7 @@
 // parameters, so they are taken once from this replay.
 #pragma once
 #include <cstdint>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -39,7 +40,7 @@ struct Trace {
     long settle_index = -1;  // first initialised sample; -1 = never initialised
     float monitor_initial_ah = 0;
     bool has_temperature = false;  // any valid sample carries one
-    std::vector<std::string> config_notes;  // the replay's notes that the config is for another pack (other_pack_notes)
+    std::vector<std::string> notes;  // what the replay says of the log with this config (log_notes)
 };
 
 // A trace's label: the file name of `path` without directory and extension.
@@ -48,6 +49,10 @@ std::string trace_label(const std::string& path);
 // Replays `path` with `config` (the base model; extensions play no part in the monitor's
 // decisions) and keeps every sample. Throws InputError like replay_log().
 Trace load_trace(const std::string& path, const ReaderOptions& reader, const LoadedConfig& config);
+
+// Writes the trace's notes to `out` (if not null) as replay says them, one a line, prefixed
+// with `command` and the log: "battsim fit: note: LOG: ...".
+void say_notes(const std::string& command, const Trace& trace, std::ostream* out);
 
 }  // namespace fit
 }  // namespace host

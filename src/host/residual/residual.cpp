@@ -1005,6 +1005,7 @@ nlohmann::json run_residual_job(const ResidualJob& job, ResidualReport* out, std
     for (const std::string& path : job.logs) {
         if (progress) *progress << "battsim residual: reading " << path << "\n";
         traces.push_back(fit::load_trace(path, job.reader, job.config));
+        fit::say_notes("battsim residual", traces.back(), progress);
     }
     const ModelSpec spec = fit::spec_from_config(job.config);
     if (progress) *progress << "battsim residual: analysing\n";

@@ -1,0 +1,105 @@
+// The commands that fit along replayed logs (fit, residual, fit-ocv, calibrate) and discharge
+// say what replay says of a misread log: a fit of a log read with the wrong sign, units or a
+// jumping clock runs without an error, and its numbers alone had not shown it.
+#include <catch2/catch.hpp>
+
+#include <cstdio>
+#include <sstream>
+#include <string>
+
+#include "cli_util.h"
+
+using clitest::q;
+using clitest::run;
+
+namespace {
+const std::string kSource = BATTSIM_SOURCE_DIR;
+const std::string kCell = kSource + "/configs/fitted/samsung-30q-discharge.json";  // a 3 Ah 18650
+
+struct Discharge {
+    double sign = -1.0;          // the logged current's sign while discharging
+    double current_scale = 1.0;  // 1000: a current in mA under an ampere header
+    double jump_s = 0.0;         // the clock jumps this far halfway through
+};
+
+// A 1S constant-current discharge at 3 A, one row a second: 10 s at rest, then 600 s under
+// load while the voltage falls from 4.05 to 3.25 V.
+std::string discharge_csv(const Discharge& d) {
+    std::ostringstream s;
+    s << "time_s,voltage_v,current_a\n";
+    for (int k = 0; k < 610; ++k) {
+        const double t_s = k + (k >= 305 ? d.jump_s : 0.0);
+        const bool loaded = k >= 10;
+        const double v = loaded ? 4.05 - 0.8 * (k - 10) / 600.0 : 4.15;
+        const double a = loaded ? d.sign * 3.0 * d.current_scale : 0.0;
+        char row[80];
+        std::snprintf(row, sizeof row, "%.1f,%.4f,%.4f\n", t_s, v, a);
+        s << row;
+    }
+    return s.str();
+}
+}  // namespace
+
+TEST_CASE("fit, residual and fit-ocv say a current of the other sign, as replay does", "[cli][fit]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string log = dir + "/negative.csv";
+    clitest::write_file(log, discharge_csv(Discharge{}));
+    const std::string note = ": note: " + log + ": the current never reaches the take-off threshold";
+    auto r = run("fit " + q(log) + " -c " + q(kCell) + " --initial zero --params none");
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("battsim fit" + note) && Catch::Contains("replay it with --negative-discharge"));
+    r = run("residual " + q(log) + " -c " + q(kCell) + " --initial zero --max-effects 0");
+    CHECK_THAT(r.err, Catch::Contains("battsim residual" + note));
+    r = run("fit-ocv " + q(log) + " -c " + q(kCell) + " --json");
+    CHECK_THAT(r.err, Catch::Contains("battsim fit-ocv" + note));
+    // Read the right way round, nothing to say.
+    r = run("fit " + q(log) + " -c " + q(kCell) + " --initial zero --params none --negative-discharge");
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, !Catch::Contains("note:"));
+}
+
+TEST_CASE("fit says why the samples were kept out: a current in mA read as amperes", "[cli][fit]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string log = dir + "/ma.csv";
+    Discharge d;
+    d.current_scale = 1000.0;
+    clitest::write_file(log, discharge_csv(d));
+    // The 10 resting rows pass the sensor limits; the 600 loaded ones read 3000 A.
+    const auto r = run("fit " + q(log) + " -c " + q(kCell) + " --initial zero --params none --negative-discharge");
+    INFO(r.err);
+    CHECK_THAT(r.err, Catch::Contains("battsim fit: note: " + log + ": the config's sensor limits kept out 600 of the 610 "
+                                      "samples: 600 current_high (sensor.max_current_a); a current in mA read as amperes "
+                                      "(give --current-unit mA)?"));
+}
+
+TEST_CASE("fit, residual, calibrate and discharge say a clock that jumps", "[cli][fit]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string log = dir + "/jump.csv";
+    Discharge d;
+    d.jump_s = 3600.0;
+    clitest::write_file(log, discharge_csv(d));
+    const std::string jump = ": note: " + log + ": the log's clock jumps 3601 s at 304 s into the log";
+    auto r = run("fit " + q(log) + " -c " + q(kCell) + " --initial zero --params none --negative-discharge");
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("battsim fit" + jump));
+    r = run("residual " + q(log) + " -c " + q(kCell) + " --initial zero --max-effects 0 --negative-discharge");
+    CHECK_THAT(r.err, Catch::Contains("battsim residual" + jump));
+    // discharge reads one log, and says its notes without the path, as replay does.
+    r = run("discharge " + q(log) + " -c " + q(kCell) + " --negative-discharge --min-voltage 3.2 --ocv-points 0");
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("battsim discharge: note: the log's clock jumps 3601 s at 304 s into the log"));
+    // calibrate: the bundled 4S flight with its clock jumping an hour after the landing.
+    std::istringstream in(clitest::read_file(kSource + "/logs/example-4s.csv"));
+    std::string line, jumped;
+    for (int k = 0; std::getline(in, line); ++k) {
+        const size_t comma = line.find(',');
+        const long t_ms = std::stol(line.substr(0, comma)) + (k >= 3800 ? 3600000L : 0L);
+        jumped += std::to_string(t_ms) + line.substr(comma) + "\n";
+    }
+    const std::string flight = dir + "/example-jump.csv";
+    clitest::write_file(flight, jumped);
+    r = run("calibrate " + q(flight) + " -c " + q(kSource + "/configs/sim-4s.json"));
+    CHECK_THAT(r.err, Catch::Contains("battsim calibrate: note: " + flight + ": the log's clock jumps 36"));
+}
