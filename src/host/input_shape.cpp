@@ -27,6 +27,7 @@ void InputShape::add(const core::Sample& s) {
         // starts at a rest).
         if (std::isfinite(s.current_a) && std::fabs(s.current_a) >= ground_a_)
             loaded_mah_ += static_cast<double>(s.current_a) * step_s / 3.6;
+        if (std::isfinite(s.current_a)) counted_mah_ += static_cast<double>(s.current_a) * step_s / 3.6;
         if (step_s > longest_s_) {
             longest_s_ = step_s;
             longest_at_s_ = static_cast<double>(last_us_ - first_us_) * 1e-6;
@@ -102,6 +103,21 @@ std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const La
                       "the samples are %.3g ms apart (median) and the log spans %.3g s: if the time column "
                       "counts seconds, give --time-unit s (or --time-col with a column in seconds)",
                       dt_s * 1e3, span_s);
+        out.push_back(buf);
+    }
+    // A time or current unit a thousand times too small that still flies: a 1 ms spacing is a
+    // blackbox log's too, so the spacing alone cannot tell; the charge the pack emptied on can.
+    const double range_v = pack_.full_v - pack_.empty_v;
+    const double capacity_mah = 1000.0 * pack_.capacity_ah;
+    if (!seconds_as_ms && range_v > 0.0 && capacity_mah > 0.0 && voltages_ >= kCoarseMinSamples &&
+        first_v_ >= pack_.empty_v + kEmptiedFromShare * range_v && last_v_ <= pack_.empty_v + kEmptiedToShare * range_v &&
+        std::fabs(counted_mah_) < kEmptiedMaxCapacityShare * capacity_mah) {
+        std::snprintf(buf, sizeof buf,
+                      "the pack voltage fell from %.4g to %.4g V (the config's range: %.4g to %.4g V) on %.3g mAh "
+                      "counted over %.4g s, %.2g %% of the config's %.4g Ah: if the time column counts seconds, give "
+                      "--time-unit s; if the current column counts amperes, --current-unit A",
+                      static_cast<double>(first_v_), static_cast<double>(last_v_), pack_.full_v, pack_.empty_v,
+                      std::fabs(counted_mah_), span_s, 100.0 * std::fabs(counted_mah_) / capacity_mah, pack_.capacity_ah);
         out.push_back(buf);
     }
     if (coarse_ && varied_ && voltages_ >= kCoarseMinSamples) {

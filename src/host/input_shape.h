@@ -16,11 +16,18 @@ namespace host {
 // seconds spreads a flight over days. Both read on without complaint, so say so. Two more
 // shapes make every estimate rougher without any error: a pack voltage in 0.1 V steps (a
 // radio's telemetry log) and samples too close together for the resistance's lag.
+// The config's pack, for the notes that judge a log against it (NaN: not known).
+struct ShapePack {
+    double empty_v = NAN, full_v = NAN;  // its voltage range (min_voltage_v, max_voltage_v)
+    double capacity_ah = NAN;
+};
+
 class InputShape {
 public:
     // `negated`: --negative-discharge given; `ground_a`: the take-off current (below it, the
     // craft is on the ground).
-    InputShape(bool negated, double ground_a) : negated_(negated), ground_a_(ground_a) {}
+    InputShape(bool negated, double ground_a, const ShapePack& pack = ShapePack())
+        : negated_(negated), ground_a_(ground_a), pack_(pack) {}
     void add(const core::Sample& s);
     // Whether the joint estimator's resistance can pair this log's samples:
     struct Lags {
@@ -50,6 +57,10 @@ private:
     // The scatter (σ) at which a step of hover_min_step_a is a quarter noise: at ±100 mA
     // (σ 0.058 A) on 0.2 A steps a simulated hover's capacity already read 7–10 % low.
     static constexpr double kNoiseShareOfStep = 0.25;
+    // A pack run from over half its range to within a tenth of empty on under 5 % of its
+    // capacity: no cell does that (a 3 Ah cell's 1C discharge, its seconds read as
+    // milliseconds, emptied in 3.5 s on 3 mAh).
+    static constexpr double kEmptiedFromShare = 0.5, kEmptiedToShare = 0.1, kEmptiedMaxCapacityShare = 0.05;
     bool negated_;  // --negative-discharge given
     bool coarse_ = true, varied_ = false;
     float first_v_ = 0.0f, last_v_ = 0.0f;
@@ -57,8 +68,10 @@ private:
     std::vector<double> intervals_s_;
     uint64_t first_us_ = 0, last_us_ = 0;
     double loaded_mah_ = 0.0;  // current × interval at currents beyond the take-off threshold, as read
+    double counted_mah_ = 0.0;  // current × interval over the whole log, as read
     double longest_s_ = 0.0, longest_at_s_ = 0.0, longest_mah_ = 0.0;  // the longest interval, where, its charge
     double ground_a_;
+    ShapePack pack_;
     bool have_current_ = false;
     double last_a_ = 0.0;
     std::vector<double> ground_steps_a_;  // |ΔI| between ground readings

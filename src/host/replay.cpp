@@ -84,8 +84,12 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     int series_cells = 0;
 
     core::Sample sample;
+    ShapePack pack;
+    pack.empty_v = options.config.monitor.min_voltage_v;
+    pack.full_v = options.config.monitor.max_voltage_v;
+    pack.capacity_ah = options.config.monitor.battery.capacity_ah;
     InputShape shape(options.reader.columns.current_negative_is_discharge,
-                     options.config.monitor.flying.min_flying_current_a);
+                     options.config.monitor.flying.min_flying_current_a, pack);
     LogFacts facts;  // for the config's notes
     FirstRest rest(options.config.monitor.initial.max_resting_current_a);
     const double capacity_mah = 1000.0 * options.config.monitor.battery.capacity_ah;

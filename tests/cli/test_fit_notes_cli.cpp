@@ -20,17 +20,19 @@ struct Discharge {
     double sign = -1.0;          // the logged current's sign while discharging
     double current_scale = 1.0;  // 1000: a current in mA under an ampere header
     double jump_s = 0.0;         // the clock jumps this far halfway through
+    double end_v = 3.25;         // the voltage at the end of the load
+    std::string time_header = "time_s";
 };
 
 // A 1S constant-current discharge at 3 A, one row a second: 10 s at rest, then 600 s under
-// load while the voltage falls from 4.05 to 3.25 V.
+// load while the voltage falls from 4.05 V to `end_v`.
 std::string discharge_csv(const Discharge& d) {
     std::ostringstream s;
-    s << "time_s,voltage_v,current_a\n";
+    s << d.time_header << ",voltage_v,current_a\n";
     for (int k = 0; k < 610; ++k) {
         const double t_s = k + (k >= 305 ? d.jump_s : 0.0);
         const bool loaded = k >= 10;
-        const double v = loaded ? 4.05 - 0.8 * (k - 10) / 600.0 : 4.15;
+        const double v = loaded ? 4.05 - (4.05 - d.end_v) * (k - 10) / 600.0 : 4.15;
         const double a = loaded ? d.sign * 3.0 * d.current_scale : 0.0;
         char row[80];
         std::snprintf(row, sizeof row, "%.1f,%.4f,%.4f\n", t_s, v, a);
@@ -102,4 +104,24 @@ TEST_CASE("fit, residual, calibrate and discharge say a clock that jumps", "[cli
     clitest::write_file(flight, jumped);
     r = run("calibrate " + q(flight) + " -c " + q(kSource + "/configs/sim-4s.json"));
     CHECK_THAT(r.err, Catch::Contains("battsim calibrate: note: " + flight + ": the log's clock jumps 36"));
+}
+
+TEST_CASE("replay and fit say a pack emptied on a thousandth of its charge: seconds under a time_ms header", "[cli][fit]") {
+    // 1 ms apart, as a blackbox log is: the spacing cannot tell, the charge can (a 3 Ah cell
+    // emptied in 0.61 s on 0.5 mAh).
+    const std::string dir = clitest::temp_dir();
+    const std::string log = dir + "/seconds.csv";
+    Discharge d;
+    d.end_v = 2.5;
+    d.time_header = "time_ms";
+    clitest::write_file(log, discharge_csv(d));
+    const std::string note = "the pack voltage fell from 4.15 to 2.503 V (the config's range: 4.2 to 2.5 V) on 0.5 mAh";
+    auto r = run("replay " + q(log) + " -c " + q(kCell) + " --negative-discharge --json");
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("battsim replay: note: " + note) && Catch::Contains("give --time-unit s"));
+    r = run("fit " + q(log) + " -c " + q(kCell) + " --negative-discharge --initial zero --params none");
+    CHECK_THAT(r.err, Catch::Contains("battsim fit: note: " + log + ": " + note));
+    // Read in seconds, the same log says nothing of it.
+    r = run("replay " + q(log) + " -c " + q(kCell) + " --negative-discharge --time-unit s --json");
+    CHECK_THAT(r.err, !Catch::Contains("fell from"));
 }

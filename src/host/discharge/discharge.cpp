@@ -117,7 +117,11 @@ DischargeResult process_discharge(const std::string& path, const DischargeOption
     std::vector<Raw> raw;
     // What replay says of the log's shape (samples 1000 s apart, a clock that jumps) holds for
     // a discharge read the same way.
-    InputShape shape(o.reader.columns.current_negative_is_discharge, o.loaded_current_a);
+    ShapePack pack;
+    pack.empty_v = o.min_voltage_v;
+    pack.full_v = o.max_voltage_v;
+    if (o.rated_capacity_ah > 0) pack.capacity_ah = o.rated_capacity_ah;
+    InputShape shape(o.reader.columns.current_negative_is_discharge, o.loaded_current_a, pack);
     bool connected = false, done = false;
     // The discharge going on under load below the minimum: cut off there without a word, a
     // Li-ion cell read with a 3.325 V LiPo minimum lost its last sixth.

@@ -31,6 +31,7 @@ struct DischargeOptions {
     double step_v = 0.01;       // table spacing
     double gradient_span = 0.01;  // fraction of the capacity the gradient is taken over
     double loaded_current_a = 1.0;  // the config's take-off current: below it the log's shape notes count a rest
+    double rated_capacity_ah = 0;   // the config's, when one was given (0: none)
 };
 
 struct CurvePoint {
