@@ -37,6 +37,10 @@ void InputShape::add(const core::Sample& s) {
             longest_mah_ = std::isfinite(s.current_a) ? static_cast<double>(s.current_a) * step_s / 3.6 : 0.0;
         }
     }
+    if (s.has_temperature && std::isfinite(s.temperature_c)) {
+        min_temperature_c_ = std::min(min_temperature_c_, static_cast<double>(s.temperature_c));
+        max_temperature_c_ = std::max(max_temperature_c_, static_cast<double>(s.temperature_c));
+    }
     if (!have_) first_us_ = s.time_us;
     last_us_ = s.time_us;
     have_ = true;
@@ -118,6 +122,15 @@ std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const La
                       "--time-unit s; if the current column counts amperes, --current-unit A",
                       static_cast<double>(first_v_), static_cast<double>(last_v_), pack_.full_v, pack_.empty_v,
                       std::fabs(counted_mah_), span_s, 100.0 * std::fabs(counted_mah_) / capacity_mah, pack_.capacity_ah);
+        out.push_back(buf);
+    }
+    // A temperature in kelvin reads as a pack far past burning: a model's temperature terms
+    // then run it hot (its resistance near nothing).
+    if (std::isfinite(min_temperature_c_) && min_temperature_c_ > kKelvinMinC) {
+        std::snprintf(buf, sizeof buf,
+                      "the temperature reads %.4g to %.4g degC, every reading above %.0f: in kelvin? battsim reads "
+                      "degrees Celsius (subtract 273.15 from the column)",
+                      min_temperature_c_, max_temperature_c_, kKelvinMinC);
         out.push_back(buf);
     }
     if (coarse_ && varied_ && voltages_ >= kCoarseMinSamples) {

@@ -69,6 +69,9 @@ private:
     uint64_t first_us_ = 0, last_us_ = 0;
     double loaded_mah_ = 0.0;  // current × interval at currents beyond the take-off threshold, as read
     double counted_mah_ = 0.0;  // current × interval over the whole log, as read
+    double min_temperature_c_ = INFINITY, max_temperature_c_ = -INFINITY;
+    // Above this every reading: kelvin (a cell at 200 degC has long burnt).
+    static constexpr double kKelvinMinC = 200.0;
     double longest_s_ = 0.0, longest_at_s_ = 0.0, longest_mah_ = 0.0;  // the longest interval, where, its charge
     double ground_a_;
     ShapePack pack_;

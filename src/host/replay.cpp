@@ -65,7 +65,8 @@ std::vector<std::string> log_notes(const nlohmann::json& summary) {
         out.push_back("the config's sensor limits kept out " +
                       std::to_string(summary["samples"]["total"].get<uint64_t>() - summary["samples"]["valid"].get<uint64_t>()) +
                       " of the " + summary["samples"]["total"].dump() + " samples: " + kept_out);
-    for (const std::string& note : other_pack_notes(summary)) out.push_back(note);
+    for (const nlohmann::json& note : summary.value("config_notes", nlohmann::json::array()))
+        if (note.is_string() && is_log_note(note.get<std::string>())) out.push_back(note.get<std::string>());
     return out;
 }
 
@@ -91,6 +92,7 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     InputShape shape(options.reader.columns.current_negative_is_discharge,
                      options.config.monitor.flying.min_flying_current_a, pack);
     LogFacts facts;  // for the config's notes
+    facts.temperature_samples = 0;
     FirstRest rest(options.config.monitor.initial.max_resting_current_a);
     const double capacity_mah = 1000.0 * options.config.monitor.battery.capacity_ah;
     bool first = true;
@@ -108,6 +110,7 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
             first = false;
         }
         rest.add(sample);
+        if (sample.has_temperature && std::isfinite(sample.temperature_c)) ++facts.temperature_samples;
         if (options.realtime_speed > 0) {
             // Pace only the output; the monitor still sees the log's time stamps. A gap in the
             // log is waited out for at most kMaxRealtimeWaitS (a clock that jumped by hours

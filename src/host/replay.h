@@ -39,8 +39,8 @@ std::string kept_out_text(const nlohmann::json& summary);
 // residual, fit-ocv, calibrate) must say too, as replay does: the input's notes (the reader's
 // and the log's shape: a current of the other sign, a clock that jumps, a time unit that does
 // not fit), the samples the sensor limits kept out and why, and the config's notes about
-// this log (other_pack_notes). A fit on a misread log runs without an error, and its numbers
-// alone had not shown it.
+// this log (is_log_note: another pack, a temperature dependence the log cannot drive). A fit
+// on a misread log runs without an error, and its numbers alone had not shown it.
 std::vector<std::string> log_notes(const nlohmann::json& summary);
 
 // Replays `path`; throws InputError (bad log) or std::runtime_error (outputs). Returns

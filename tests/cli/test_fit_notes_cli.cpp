@@ -3,7 +3,10 @@
 // jumping clock runs without an error, and its numbers alone had not shown it.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 #include <string>
 
@@ -22,21 +25,25 @@ struct Discharge {
     double jump_s = 0.0;         // the clock jumps this far halfway through
     double end_v = 3.25;         // the voltage at the end of the load
     std::string time_header = "time_s";
+    double temperature_c = NAN;  // NaN: no temperature column
 };
 
 // A 1S constant-current discharge at 3 A, one row a second: 10 s at rest, then 600 s under
 // load while the voltage falls from 4.05 V to `end_v`.
 std::string discharge_csv(const Discharge& d) {
     std::ostringstream s;
-    s << d.time_header << ",voltage_v,current_a\n";
+    const bool temperature = !std::isnan(d.temperature_c);
+    s << d.time_header << ",voltage_v,current_a" << (temperature ? ",temperature_c" : "") << "\n";
     for (int k = 0; k < 610; ++k) {
         const double t_s = k + (k >= 305 ? d.jump_s : 0.0);
         const bool loaded = k >= 10;
         const double v = loaded ? 4.05 - (4.05 - d.end_v) * (k - 10) / 600.0 : 4.15;
         const double a = loaded ? d.sign * 3.0 * d.current_scale : 0.0;
         char row[80];
-        std::snprintf(row, sizeof row, "%.1f,%.4f,%.4f\n", t_s, v, a);
+        std::snprintf(row, sizeof row, "%.1f,%.4f,%.4f", t_s, v, a);
         s << row;
+        if (temperature) s << "," << d.temperature_c;
+        s << "\n";
     }
     return s.str();
 }
@@ -124,4 +131,44 @@ TEST_CASE("replay and fit say a pack emptied on a thousandth of its charge: seco
     // Read in seconds, the same log says nothing of it.
     r = run("replay " + q(log) + " -c " + q(kCell) + " --negative-discharge --time-unit s --json");
     CHECK_THAT(r.err, !Catch::Contains("fell from"));
+}
+
+TEST_CASE("a config with a temperature dependence is noted on a log without a temperature", "[cli][fit]") {
+    // The Panasonic cell's config, fitted with its temperature: read without one it runs at
+    // 25 degC (its -20 degC drive cycle: MAE 0.364 V against 0.035 V with the column).
+    const std::string config = kSource + "/configs/fitted/panasonic-18650pf.json";
+    const std::string dir = clitest::temp_dir();
+    const std::string bare = dir + "/bare.csv", warm = dir + "/warm.csv", kelvin = dir + "/kelvin.csv";
+    Discharge d;
+    clitest::write_file(bare, discharge_csv(d));
+    d.temperature_c = 25.0;
+    clitest::write_file(warm, discharge_csv(d));
+    d.temperature_c = 250.0;
+    clitest::write_file(kelvin, discharge_csv(d));
+    const std::string note = "the config's model depends on the temperature (battery.extensions.temperature) but the "
+                             "log has no temperature: it runs at 25 degC throughout";
+    auto r = run("replay " + q(bare) + " -c " + q(config) + " --negative-discharge --json");
+    REQUIRE(r.exit_code == 0);
+    const auto notes = nlohmann::json::parse(r.out).value("config_notes", nlohmann::json::array());
+    CHECK(std::any_of(notes.begin(), notes.end(), [&](const nlohmann::json& n) { return n.get<std::string>().rfind(note, 0) == 0; }));
+    r = run("fit " + q(bare) + " -c " + q(config) + " --negative-discharge --initial zero --params none");
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("battsim fit: note: " + bare + ": " + note));
+    r = run("fit " + q(warm) + " -c " + q(config) + " --negative-discharge --initial zero --params none");
+    CHECK_THAT(r.err, !Catch::Contains("depends on the temperature") && !Catch::Contains("kelvin"));
+    // Kelvin read as degC: every reading above 200.
+    r = run("replay " + q(kelvin) + " -c " + q(config) + " --negative-discharge --json");
+    CHECK_THAT(r.err, Catch::Contains("battsim replay: note: the temperature reads 250 to 250 degC, every reading above "
+                                      "200: in kelvin?"));
+    // Temperature terms fitted without a temperature move nothing (they had stayed at 0 with
+    // no standard error, and the config been written): refused, exit 3.
+    const std::string start = kSource + "/configs/fitted/panasonic-18650pf-25c.json";
+    r = run("fit " + q(bare) + " -c " + q(start) + " --negative-discharge --initial zero --add temperature -o " +
+            q(dir + "/out.json"));
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("battsim fit: " + bare + ": the log has no temperature, so the temperature terms"));
+    CHECK_FALSE(std::filesystem::exists(dir + "/out.json"));
+    // With a temperature they are fitted.
+    r = run("fit " + q(warm) + " -c " + q(start) + " --negative-discharge --initial zero --add temperature --params temp_e0");
+    CHECK(r.exit_code == 0);
 }

@@ -1,5 +1,7 @@
 #include "host/fit/trace.h"
 
+#include <cmath>
+
 #include "host/replay.h"
 
 namespace battsim {
@@ -44,7 +46,7 @@ Trace load_trace(const std::string& path, const ReaderOptions& reader, const Loa
         p.monitor_model_v = st.model_voltage_v;
         p.monitor_consumed_mah = st.consumed_mah;
         p.monitor_filtered_a = st.filtered_current_a;
-        if (p.valid && p.has_temperature) t.has_temperature = true;
+        if (p.valid && p.has_temperature && std::isfinite(p.temperature_c)) t.has_temperature = true;
         t.points.push_back(p);
     };
     const nlohmann::json summary = replay_log(path, options, observe);
@@ -55,6 +57,10 @@ Trace load_trace(const std::string& path, const ReaderOptions& reader, const Loa
     t.info.has_temperature = input["has_temperature"].get<bool>();
     for (const auto& note : input["notes"]) t.info.notes.push_back(note.get<std::string>());
     t.notes = log_notes(summary);
+    // Replayed without the extensions (above), so the config's own temperature terms are
+    // judged here.
+    const std::string temperature = missing_temperature_note(config.monitor, t.has_temperature);
+    if (!temperature.empty()) t.notes.push_back(temperature);
     // The summary's flight window: initialised valid samples from the first flying sample
     // to the last flying one.
     long first_flying = -1, last_flying = -1;
