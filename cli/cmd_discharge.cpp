@@ -130,7 +130,8 @@ std::function<int()> setup(CLI::App& sub) {
         people << a->log << ": " << result.samples_kept << " of " << result.samples_read << " samples above "
                << opt.min_voltage_v << " V, " << summary["duration_s"] << " s\n";
         people << "  " << summary["capacity_mah"] << " mAh, " << summary["energy_mwh"] << " mWh at a mean "
-               << summary["mean_current_a"] << " A; " << summary["first_voltage_v"] << " -> " << summary["last_voltage_v"] << " V\n";
+               << summary["mean_current_a"] << " A (" << host::discharge::c_rate_text(result) << "); "
+               << summary["first_voltage_v"] << " -> " << summary["last_voltage_v"] << " V\n";
         if (with_ocv) {
             people << "  OCV table (" << ocv.cell_voltage_v.size() << " points per cell, SOC 0 -> 1): "
                    << summary["ocv_table"]["cell_voltage_v"].front() << " ... " << summary["ocv_table"]["cell_voltage_v"].back()
