@@ -172,3 +172,37 @@ TEST_CASE("a config with a temperature dependence is noted on a log without a te
     r = run("fit " + q(warm) + " -c " + q(start) + " --negative-discharge --initial zero --add temperature --params temp_e0");
     CHECK(r.exit_code == 0);
 }
+
+TEST_CASE("too little data to fit is an input error (exit 3) with the command's own remedy", "[cli][fit]") {
+    const std::string dir = clitest::temp_dir();
+    // Two rows of the 1S discharge: fewer samples than the six base parameters.
+    const std::string csv = discharge_csv(Discharge{});
+    const std::string two = dir + "/two.csv";
+    clitest::write_file(two, csv.substr(0, csv.find('\n', csv.find('\n', csv.find('\n') + 1) + 1) + 1));
+    auto r = run("fit " + q(two) + " -c " + q(kCell) + " --negative-discharge --initial zero");
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("battsim fit: " + two + ": 2 samples to fit 6 parameters: too few (a longer log, or "
+                                      "fewer parameters with --params)"));
+    // residual has no --params: its parameters are kept at the config's values with --fixed.
+    r = run("residual " + q(two) + " -c " + q(kCell) + " --negative-discharge --initial zero");
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("2 samples to fit 6 parameters: too few (a longer log, or more parameters kept at "
+                                      "the config's values with --fixed)"));
+    CHECK_THAT(r.err, !Catch::Contains("--params"));
+    // --window flight on a bench discharge at 0.3 A (under the cell config's 1 A take-off):
+    // what is missing is a flight, not --initial zero, which was given.
+    const std::string slow = dir + "/slow.csv";
+    std::string low = csv;
+    for (size_t at = low.find(",-3.0000"); at != std::string::npos; at = low.find(",-3.0000", at)) low.replace(at, 8, ",-0.3000");
+    clitest::write_file(slow, low);
+    r = run("fit " + q(slow) + " -c " + q(kCell) + " --negative-discharge --initial zero --window flight");
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("battsim fit: " + slow + ": no sample to fit: it has no flight for --window flight: "
+                                      "no sample reached the flying current (monitor.min_flying_current_a, 1 A; the "
+                                      "highest valid one is 0.3 A); give --window all"));
+    CHECK_THAT(r.err, !Catch::Contains("--initial zero"));
+    // fit-ocv: no log with 10 valid samples.
+    r = run("fit-ocv " + q(two) + " -c " + q(kCell) + " --negative-discharge");
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("no log to fit holds 10 valid samples"));
+}

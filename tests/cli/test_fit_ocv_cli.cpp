@@ -154,7 +154,7 @@ TEST_CASE("fit-ocv reports bad input and bad options with their exit codes", "[c
     CHECK(bad.err.find("bad.csv:3") != std::string::npos);
     clitest::write_file(dir + "/tiny.csv", "time_s,voltage_v,current_a\n0,16.0,0.1\n0.1,16.0,0.1\n");
     const auto tiny = run("fit-ocv " + q(dir + "/tiny.csv") + " -c " + cfg);
-    CHECK(tiny.exit_code == 2);
+    CHECK(tiny.exit_code == 3);  // too little data: the input's fault
     CHECK(tiny.err.find("10 valid samples") != std::string::npos);
     const auto points = run("fit-ocv " + q(dir + "/tiny.csv") + " -c " + cfg + " --points 40");
     CHECK(points.exit_code == 2);
@@ -164,6 +164,6 @@ TEST_CASE("fit-ocv reports bad input and bad options with their exit codes", "[c
     CHECK(nothing.exit_code == 2);
     // Nothing is written when the fit fails.
     const auto none = run("fit-ocv " + q(dir + "/tiny.csv") + " -c " + cfg + " -o " + q(dir + "/out.json"));
-    CHECK(none.exit_code == 2);
+    CHECK(none.exit_code == 3);
     CHECK(clitest::read_file(dir + "/out.json").empty());
 }

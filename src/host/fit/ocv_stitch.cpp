@@ -607,7 +607,7 @@ OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& 
         is_test.push_back(log.test);
     }
     if (std::find(is_test.begin(), is_test.end(), false) == is_test.end())
-        throw std::invalid_argument("no log to fit holds 10 valid samples");
+        throw TooLittleData(logs.size() == 1 ? logs[0].path : std::string(), "no log to fit holds 10 valid samples");
 
     // One fit per candidate slow time constant; the one whose fit leaves the smallest error wins.
     const double r_config = mc.battery.internal_resistance_ohm / s.cells;

@@ -24,6 +24,7 @@
 #include <nlohmann/json.hpp>
 
 #include "host/config_json.h"
+#include "host/fit/trace.h"  // TooLittleData
 #include "host/io/sample_reader.h"
 
 namespace battsim {
@@ -93,7 +94,7 @@ struct OcvStitchLog {
 };
 
 // Reads every log (throws InputError like replay_log) and fits. Throws std::invalid_argument
-// for bad options or fewer than one usable fitted log. With `notes_out`, each of the notes
+// for bad options, TooLittleData (an InputError) for no fitted log of 10 valid samples. With `notes_out`, each of the notes
 // is also written there as it is found ("battsim fit-ocv: note: ..."), a log's as it is read.
 OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& config, const OcvStitchOptions& options,
                      std::ostream* notes_out = nullptr);

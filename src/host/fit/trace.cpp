@@ -20,6 +20,7 @@ Trace load_trace(const std::string& path, const ReaderOptions& reader, const Loa
     Trace t;
     t.path = path;
     t.label = trace_label(path);
+    t.flying_current_a = config.monitor.flying.min_flying_current_a;
     ReplayOptions options;
     options.reader = reader;
     options.config = config;

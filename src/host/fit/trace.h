@@ -16,6 +16,19 @@ namespace battsim {
 namespace host {
 namespace fit {
 
+// Too little data to fit: a log with no sample in the objective, or no more samples than
+// parameters. The data's fault, not the command line's: an InputError (exit 3). `advice` names
+// the remedy in the caller's own options; finding() is the message without it.
+class TooLittleData : public InputError {
+public:
+    TooLittleData(const std::string& file, const std::string& finding, const std::string& advice = "")
+        : InputError(file, 0, 0, advice.empty() ? finding : finding + " (" + advice + ")"), finding_(finding) {}
+    const std::string& finding() const { return finding_; }
+
+private:
+    std::string finding_;
+};
+
 struct TracePoint {
     double time_s = 0;  // since the log's first sample
     float dt_s = 0;     // the monitor's dt (since the previous valid sample)
@@ -40,6 +53,7 @@ struct Trace {
     long settle_index = -1;  // first initialised sample; -1 = never initialised
     float monitor_initial_ah = 0;
     bool has_temperature = false;  // any valid sample carries one
+    float flying_current_a = 0;    // the config's take-off current (monitor.min_flying_current_a)
     std::vector<std::string> notes;  // what the replay says of the log with this config (log_notes)
 };
 

@@ -205,6 +205,7 @@ State refit(const std::vector<Trace>& traces, const State& from, const std::vect
     fo.prior_noise_v = prior_noise_v(traces, from, mask, o);
     fo.max_points_per_log = o.max_points_per_log;
     fo.lm.max_iterations = o.max_iterations;
+    fo.fewer_parameters_advice = "more parameters kept at the config's values with --fixed";
     const fit::FitResult r = fit::fit_model(traces, from.specs, fo);
     State s;
     s.specs = r.specs;
@@ -620,15 +621,17 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
                     fitted = refit(traces, refit(traces, neutral, added, &split.fit, o), params, &split.fit, o);
                     ev = evaluate_state(traces, fitted, o.initial, split, o.window);
                 }
-            } catch (const std::invalid_argument& e) {
+            } catch (const fit::TooLittleData& e) {
                 // More parameters than the log's fitting samples: this effect cannot be judged
-                // on it, which is a finding about the candidate, not a failure of the run.
+                // on it, which is a finding about the candidate, not a failure of the run (and
+                // the remedy for the run does not apply to it).
+                c.applicable = false;
+                c.note = e.finding();
+                scores.push_back(c);
+                continue;
+            } catch (const std::invalid_argument& e) {
                 c.applicable = false;
                 c.note = e.what();
-                // fit's advice names its own --params, which residual does not have.
-                const std::string advice = " (a longer log, or fewer parameters with --params)";
-                if (c.note.size() > advice.size() && c.note.compare(c.note.size() - advice.size(), advice.size(), advice) == 0)
-                    c.note.erase(c.note.size() - advice.size());
                 scores.push_back(c);
                 continue;
             }
