@@ -206,3 +206,26 @@ TEST_CASE("too little data to fit is an input error (exit 3) with the command's 
     CHECK(r.exit_code == 3);
     CHECK_THAT(r.err, Catch::Contains("no log to fit holds 10 valid samples"));
 }
+
+TEST_CASE("errors are prefixed once with the command", "[cli][fit]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string log = dir + "/linear.csv";
+    clitest::write_file(log, discharge_csv(Discharge{}));
+    // Minimum above maximum: the library's message had carried its own "discharge: ".
+    auto r = run("discharge " + q(log) + " --negative-discharge --min-voltage 3.5 --max-voltage 3.0");
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains("battsim discharge: need 0 < minimum voltage < maximum voltage"));
+    // A straight line has no zones to read a start config off.
+    r = run("discharge " + q(log) + " -c " + q(kCell) + " --negative-discharge --min-voltage 3.2 --config-out " +
+            q(dir + "/start.json"));
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("battsim discharge: the zones were not found"));
+    CHECK_THAT(r.err, !Catch::Contains("discharge: discharge:"));
+    // Too few samples: "battsim fit: fit: 2 samples ..." had been said.
+    const std::string csv = clitest::read_file(log);
+    const std::string two = dir + "/two.csv";
+    clitest::write_file(two, csv.substr(0, csv.find('\n', csv.find('\n', csv.find('\n') + 1) + 1) + 1));
+    r = run("fit " + q(two) + " -c " + q(kCell) + " --negative-discharge --initial zero");
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("battsim fit: " + two + ": 2 samples to fit") && !Catch::Contains("fit: fit:"));
+}

@@ -112,15 +112,15 @@ void locate_zones(DischargeResult& r) {
 
 DischargeResult process_discharge(const std::string& path, const DischargeOptions& o) {
     if (!(o.min_voltage_v > 0) || !(o.max_voltage_v > o.min_voltage_v))
-        throw std::invalid_argument("discharge: need 0 < minimum voltage < maximum voltage");
+        throw std::invalid_argument("need 0 < minimum voltage < maximum voltage");
     // The table has a row every step_v between the two: a typo of 1e5 V had asked for ten
     // million rows and 9 GB.
     if (!(o.max_voltage_v <= kMaxTableVoltage_v))
-        throw std::invalid_argument("discharge: the maximum voltage must be at most " + std::to_string(static_cast<int>(kMaxTableVoltage_v)) + " V");
-    if (o.decimate < 1) throw std::invalid_argument("discharge: --decimate must be at least 1");
-    if (!(o.alpha >= 0 && o.alpha <= 1)) throw std::invalid_argument("discharge: --alpha must be in (0, 1]");
-    if (!(o.reaction_s >= 0)) throw std::invalid_argument("discharge: --reaction must be a number of seconds >= 0");
-    if (!(o.step_v > 0)) throw std::invalid_argument("discharge: the table step must be positive");
+        throw std::invalid_argument("the maximum voltage must be at most " + std::to_string(static_cast<int>(kMaxTableVoltage_v)) + " V");
+    if (o.decimate < 1) throw std::invalid_argument("--decimate must be at least 1");
+    if (!(o.alpha >= 0 && o.alpha <= 1)) throw std::invalid_argument("--alpha must be in (0, 1]");
+    if (!(o.reaction_s >= 0)) throw std::invalid_argument("--reaction must be a number of seconds >= 0");
+    if (!(o.step_v > 0)) throw std::invalid_argument("the table step must be positive");
     DischargeResult r;
     r.path = path;
     std::unique_ptr<SampleReader> reader = open_reader(path, o.reader);
@@ -458,7 +458,7 @@ void plot_discharge(const DischargeResult& r, const std::string& path) {
 }
 
 core::TremblayParams params_from_discharge(const DischargeResult& r, const core::TremblayParams& keep) {
-    if (!r.zones.found) throw std::invalid_argument("discharge: the zones were not found (" + r.zones.note + ")");
+    if (!r.zones.found) throw std::invalid_argument("the zones were not found (" + r.zones.note + ")");
     core::TremblayParams p = keep;
     p.full_voltage_v = static_cast<float>(r.zones.full_voltage_v);
     p.exponential_voltage_v = static_cast<float>(r.zones.exponential_end_v);

@@ -157,9 +157,9 @@ class Problem {
 public:
     Problem(const std::vector<Trace>& traces, const std::vector<ModelSpec>& start, const FitOptions& o)
         : traces_(traces), options_(o) {
-        if (traces.empty()) throw std::invalid_argument("fit: no logs");
+        if (traces.empty()) throw std::invalid_argument("no logs");
         if (start.size() != 1 && start.size() != traces.size())
-            throw std::invalid_argument("fit: expected one start spec or one per log");
+            throw std::invalid_argument("expected one start spec or one per log");
         for (size_t t = 0; t < traces.size(); ++t) {
             start_.push_back(start.size() == 1 ? start[0] : start[t]);
             natural_.push_back(natural_from_params(start_.back().battery));
