@@ -719,13 +719,15 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
         for (const CandidateScore& c : last_stage.candidates) {
             if (c.applicable && (top == nullptr || c.gain > top->gain)) top = &c;
         }
-        rep.verdict = "No candidate effect explains the residual on held-out data";
+        // With --max-effects 0 no effect was tried: "no candidate explains" had read as a finding.
+        rep.verdict = o.max_effects == 0 ? "No effect was tried (--max-effects 0): the parameters were only refitted"
+                                         : "No candidate effect explains the residual on held-out data";
         if (top) {
             std::snprintf(buf, sizeof buf, " (best: %s, %.1f %% of the held-out error variance, p = %.2g)",
                           top->name.c_str(), 100 * top->gain, top->p_value);
             rep.verdict += buf;
         }
-        rep.verdict += "; nothing was added.";
+        rep.verdict += o.max_effects == 0 ? "." : "; nothing was added.";
     }
     const Structure& s = rep.structure_after;
     if (!s.acf.empty()) {
@@ -734,8 +736,10 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
                       "skewness %.2f, excess kurtosis %.2f.",
                       std::sqrt(s.sd_v * s.sd_v + s.mean_v * s.mean_v), s.acf[0], s.white_band, s.skewness, s.excess_kurtosis);
         rep.verdict += buf;
-        rep.verdict += std::fabs(s.acf[0]) > s.white_band ? " It is not white: it has memory the candidates do not capture."
-                                                          : " It is consistent with white noise.";
+        rep.verdict += std::fabs(s.acf[0]) > s.white_band
+                           ? (o.max_effects == 0 ? " It is not white: it has memory the model does not capture."
+                                                 : " It is not white: it has memory the candidates do not capture.")
+                           : " It is consistent with white noise.";
     }
     return rep;
 }
