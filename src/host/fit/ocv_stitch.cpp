@@ -11,6 +11,7 @@
 
 #include "core/model/ocv.h"
 #include "host/fit/trace.h"
+#include "host/report/summary.h"
 
 namespace battsim {
 namespace host {
@@ -723,32 +724,40 @@ LoadedConfig with_stitched_table(const LoadedConfig& config, const OcvStitch& s)
 
 nlohmann::json to_json(const OcvStitch& s) {
     using nlohmann::json;
+    // Six significant figures, as the other reports (round_sig): 1 µV per cell, and no
+    // 0.009217188882135187 ohm. The config written keeps the fit's own values.
+    const auto r = [](double x) { return round_sig(x); };
+    const auto rs = [&](const std::vector<double>& v) {
+        json a = json::array();
+        for (double x : v) a.push_back(r(x));
+        return a;
+    };
     json flights = json::array();
     for (const OcvStitchFlight& f : s.flights)
         flights.push_back({{"log", f.log},
                            {"test", f.test},
                            {"samples", f.samples},
-                           {"charge_ah", f.charge_ah},
-                           {"start_soc", {{"config_curve", f.start_soc_before}, {"fitted", f.start_soc}}},
-                           {"rms_v_per_cell", {{"config_curve", f.rms_before_v}, {"fitted", f.rms_v}}},
-                           {"pack_resistance_ohm", {{"config_curve", f.resistance_before_ohm}, {"fitted", f.resistance_ohm}}}});
+                           {"charge_ah", r(f.charge_ah)},
+                           {"start_soc", {{"config_curve", r(f.start_soc_before)}, {"fitted", r(f.start_soc)}}},
+                           {"rms_v_per_cell", {{"config_curve", r(f.rms_before_v)}, {"fitted", r(f.rms_v)}}},
+                           {"pack_resistance_ohm", {{"config_curve", r(f.resistance_before_ohm)}, {"fitted", r(f.resistance_ohm)}}}});
     return {{"schema", "battsim.ocv_stitch"},
             {"schema_version", 1},
             {"cells", s.cells},
-            {"capacity_ah", s.capacity_ah},
-            {"ocv_cell_voltage_v", {{"config_curve", s.prior_v}, {"fitted", s.table_v}}},
-            {"support_samples", s.support},
-            {"soc_span", {s.soc_min, s.soc_max}},
+            {"capacity_ah", r(s.capacity_ah)},
+            {"ocv_cell_voltage_v", {{"config_curve", rs(s.prior_v)}, {"fitted", rs(s.table_v)}}},
+            {"support_samples", rs(s.support)},
+            {"soc_span", {r(s.soc_min), r(s.soc_max)}},
             {"pack_resistance_ohm",
-             {{"config_curve", {{"ohmic_median", s.resistance_before_ohm}, {"fast", s.fast_before_ohm}, {"slow", s.slow_before_ohm}}},
-              {"fitted", {{"ohmic_median", s.resistance_ohm}, {"fast", s.fast_ohm}, {"slow", s.slow_ohm}}}}},
+             {{"config_curve", {{"ohmic_median", r(s.resistance_before_ohm)}, {"fast", r(s.fast_before_ohm)}, {"slow", r(s.slow_before_ohm)}}},
+              {"fitted", {{"ohmic_median", r(s.resistance_ohm)}, {"fast", r(s.fast_ohm)}, {"slow", r(s.slow_ohm)}}}}},
             {"rms_v_per_cell",
-             {{"config_curve", s.rms_before_v}, {"fitted", s.rms_v}, {"test_config_curve", s.test_rms_before_v}, {"test_fitted", s.test_rms_v}}},
+             {{"config_curve", r(s.rms_before_v)}, {"fitted", r(s.rms_v)}, {"test_config_curve", r(s.test_rms_before_v)}, {"test_fitted", r(s.test_rms_v)}}},
             {"iterations", s.iterations},
-            {"polarisation_time_s", {{"fast", s.fast_time_s}, {"slow", s.slow_time_s}}},
+            {"polarisation_time_s", {{"fast", r(s.fast_time_s)}, {"slow", r(s.slow_time_s)}}},
             {"slow_time_candidates", [&] {
                  json a = json::array();
-                 for (const auto& c : s.slow_time_candidates) a.push_back({{"slow_time_s", c.first}, {"rms_v_per_cell", c.second}});
+                 for (const auto& c : s.slow_time_candidates) a.push_back({{"slow_time_s", r(c.first)}, {"rms_v_per_cell", r(c.second)}});
                  return a;
              }()},
             {"notes", s.notes},
