@@ -62,6 +62,8 @@ std::function<int()> setup(CLI::App& sub) {
         add_named(inputs, "a log", a->logs);
         const std::vector<host::NamedPath> outputs{printed_output("--json", a->json), text_output("-o/--output", a->output, true)};
         if (int rc = check_outputs(command, inputs, outputs)) return rc;
+        // A flight given twice weighs twice in the shares' mean error.
+        if (int rc = check_logs_once(command, std::vector<host::NamedPath>(inputs.begin() + 1, inputs.end()))) return rc;
         // Without a table the joint estimator's capacity is off by far more than any
         // polarisation shape moves it: the best share would be a fit to that error (on flight
         // 30 with the built-in config: 76 % off the rests' capacity at the edge of the shares).

@@ -52,6 +52,9 @@ std::function<int()> setup(CLI::App& sub) {
         host::LoadedConfig config;
         if (int rc = resolve_input(a->input, opt.reader, config, "battsim discharge")) return rc;
         opt.reader.shunt = config.monitor.shunt;
+        opt.loaded_current_a = config.monitor.flying.min_flying_current_a;
+        // The built-in config's 1.55 Ah 4S pack says nothing of a log's pack.
+        if (!a->input.config.empty()) opt.rated_capacity_ah = config.monitor.battery.capacity_ah;
         opt.min_voltage_v = a->min_v > 0 ? a->min_v : config.monitor.min_voltage_v;
         opt.max_voltage_v = a->max_v > 0 ? a->max_v : config.monitor.max_voltage_v;
         opt.reaction_s = a->reaction_s;
@@ -127,7 +130,8 @@ std::function<int()> setup(CLI::App& sub) {
         people << a->log << ": " << result.samples_kept << " of " << result.samples_read << " samples above "
                << opt.min_voltage_v << " V, " << summary["duration_s"] << " s\n";
         people << "  " << summary["capacity_mah"] << " mAh, " << summary["energy_mwh"] << " mWh at a mean "
-               << summary["mean_current_a"] << " A; " << summary["first_voltage_v"] << " -> " << summary["last_voltage_v"] << " V\n";
+               << summary["mean_current_a"] << " A (" << host::discharge::c_rate_text(result) << "); "
+               << summary["first_voltage_v"] << " -> " << summary["last_voltage_v"] << " V\n";
         if (with_ocv) {
             people << "  OCV table (" << ocv.cell_voltage_v.size() << " points per cell, SOC 0 -> 1): "
                    << summary["ocv_table"]["cell_voltage_v"].front() << " ... " << summary["ocv_table"]["cell_voltage_v"].back()

@@ -47,7 +47,6 @@ void print_brief(const host::fit::OcvStitch& s, std::ostream& os) {
     if (tested)
         os << "; test flights " << 1000.0 * s.test_rms_before_v << " mV -> " << 1000.0 * s.test_rms_v << " mV";
     os << "\n";
-    for (const std::string& n : s.notes) os << "  note: " << n << "\n";
 }
 
 std::function<int()> setup(CLI::App& sub) {
@@ -156,7 +155,7 @@ std::function<int()> setup(CLI::App& sub) {
             for (size_t k = 0; k < logs.size(); ++k) logs[k].test = k % a->test_every == 1 % a->test_every;
         for (const std::string& p : a->test_logs) logs.push_back({p, reader, true});
         host::fit::OcvStitch s;
-        if (int rc = run_job(command, [&] { s = host::fit::stitch_ocv(logs, config, a->options); })) return rc;
+        if (int rc = run_job(command, [&] { s = host::fit::stitch_ocv(logs, config, a->options, &std::cerr); })) return rc;
         if (!a->output.empty()) {
             host::LoadedConfig out = host::fit::with_stitched_table(config, s);
             select_joint_estimator(out, command);

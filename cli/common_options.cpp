@@ -13,6 +13,7 @@
 #include "host/io/atomic_file.h"
 #include "host/io/number_text.h"
 #include "host/plot/plot.h"
+#include "host/replay.h"
 #include "host/report/summary.h"
 
 namespace battsim {
@@ -363,26 +364,8 @@ void print_brief(const nlohmann::json& s, std::ostream& out) {
         << fixed(s["duration_s"], 1) << " s\n";
     // Samples the config's sensor limits kept out: a config for another pack (a 3S config on
     // a 4S log) rejects much of a flight, and the figures below would not say so.
-    const auto rejected = s["samples"].value("rejected", nlohmann::json::object());
-    if (!rejected.empty()) {
-        out << "  kept out by the config's sensor limits:";
-        for (int f = 1; f < core::kSampleFaultCount; ++f) {
-            const char* key = host::sample_fault_key(static_cast<uint8_t>(f));
-            if (rejected.contains(key))
-                out << " " << rejected[key] << " " << key << " (" << host::sample_fault_limit(static_cast<uint8_t>(f)) << ")";
-        }
-        // Only cell readings kept out: a balance lead more likely than the wrong pack.
-        bool pack_kept_out = false;
-        for (int f = 1; f < core::kSampleCellVoltage; ++f)
-            pack_kept_out = pack_kept_out || rejected.contains(host::sample_fault_key(static_cast<uint8_t>(f)));
-        // The charge of a gap between valid samples is counted at the next one's current.
-        const double span_s = s["samples"].value("rejected_span_s", 0.0);
-        if (pack_kept_out && span_s > 0.0)
-            out << "; " << fixed(span_s, 1) << " s between valid samples, its charge counted at the current after it";
-        // A current column in mA read as A reads a thousand times high: the unit before the pack.
-        if (rejected.contains("current_high")) out << "; a current in mA read as amperes (give --current-unit mA)?";
-        out << (pack_kept_out ? "; does the config match this pack?\n" : "; a loose balance lead, or a config for another cell count?\n");
-    }
+    const std::string kept_out = host::kept_out_text(s);
+    if (!kept_out.empty()) out << "  kept out by the config's sensor limits: " << kept_out << "\n";
     const auto& f = s["flight"];
     if (f.is_null() && s["samples"]["valid"] == 0) {
         out << "  no valid sample (every one kept out, above): no flight, no estimate\n";

@@ -1,6 +1,7 @@
 #include "host/config_json.h"
 
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -483,6 +484,29 @@ bool is_other_pack_note(const std::string& note) {
            (note.find(kMakeConfigAdvice) != std::string::npos && ends_with_text(note, kMakeConfigAdviceEnd));
 }
 
+namespace {
+const char* const kNoTemperatureStart = "the config's model depends on the temperature";
+}  // namespace
+
+std::string missing_temperature_note(const core::MonitorConfig& config, bool log_has_temperature) {
+    const core::TemperatureDependence& t = config.extensions.temperature;
+    const bool terms = t.enabled && (t.resistance_activation_k != 0.0f || t.polarisation_activation_k != 0.0f ||
+                                     t.capacity_ah_per_c != 0.0f || t.e0_v_per_c != 0.0f);
+    // A lumped thermal state drives the terms without a measurement: such a config was made
+    // for logs without one.
+    if (log_has_temperature || !terms || config.extensions.thermal.enabled) return std::string();
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%s (battery.extensions.temperature) but the log has no temperature: it runs at %.3g degC "
+                  "throughout", kNoTemperatureStart, static_cast<double>(t.reference_c));
+    return std::string(buf) +
+           ", and a colder pack's resistance and capacity read as a warm one's: give the log's temperature column "
+           "(--temperature-col NAME), or a config without the temperature terms";
+}
+
+bool is_log_note(const std::string& note) {
+    return is_other_pack_note(note) || note.compare(0, std::strlen(kNoTemperatureStart), kNoTemperatureStart) == 0;
+}
+
 std::vector<std::string> config_notes(const core::MonitorConfig& config, const LogFacts& log) {
     std::vector<std::string> notes;
     // A config for another pack runs without complaint (a 4S log with a 6S config read a
@@ -541,6 +565,10 @@ std::vector<std::string> config_notes(const core::MonitorConfig& config, const L
         notes.push_back(std::string(buf) +
                         ": the model's voltage past there is not a battery's, and voltage_error_v.model counts it (a "
                         "pack not charged full at the start reads so too: the model is no rest curve)");
+    }
+    if (log.temperature_samples == 0) {
+        const std::string note = missing_temperature_note(config, false);
+        if (!note.empty()) notes.push_back(note);
     }
     // Without a table the joint estimator reads the state of charge off the Tremblay curve,
     // a fit of a discharge under load, not a rest curve: on the dissertation's flights with

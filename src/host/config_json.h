@@ -49,11 +49,21 @@ struct LogFacts {
     // Log time (s) at which the charge counted since full first passed the config's
     // capacity; NaN = never.
     double capacity_passed_s = NAN;
+    // Samples that carry a temperature; -1 = no log read.
+    long temperature_samples = -1;
 };
 std::vector<std::string> config_notes(const core::MonitorConfig& config, const LogFacts& log = LogFacts());
 // Whether a note of config_notes says the config is for another pack than the log's (its
 // cell count, its resting voltage, what its autopilot was set for).
 bool is_other_pack_note(const std::string& note);
+// The note config_notes makes when the config's model depends on the temperature
+// (battery.extensions.temperature, with no lumped thermal state to drive it) and the log
+// carries none: the model then runs at its reference temperature throughout, and a cold
+// pack reads as a warm one. Empty when that is not so.
+std::string missing_temperature_note(const core::MonitorConfig& config, bool log_has_temperature);
+// Whether a note of config_notes is about the log read with the config, not the config alone:
+// is_other_pack_note, or missing_temperature_note's.
+bool is_log_note(const std::string& note);
 
 }  // namespace host
 }  // namespace battsim

@@ -30,6 +30,19 @@ using SampleObserver = std::function<void(const core::Sample&, const core::Monit
 // rows or a fit's numbers would hide them.
 std::vector<std::string> other_pack_notes(const nlohmann::json& summary);
 
+// The samples a replay's config kept out by its sensor limits, in words (empty: none): the
+// count per limit and the likely cause ("3547 current_high (sensor.max_current_a); a current in
+// mA read as amperes (give --current-unit mA)?; does the config match this pack?").
+std::string kept_out_text(const nlohmann::json& summary);
+
+// What a replay's summary says of its log that the commands fitting along replays (fit,
+// residual, fit-ocv, calibrate) must say too, as replay does: the input's notes (the reader's
+// and the log's shape: a current of the other sign, a clock that jumps, a time unit that does
+// not fit), the samples the sensor limits kept out and why, and the config's notes about
+// this log (is_log_note: another pack, a temperature dependence the log cannot drive). A fit
+// on a misread log runs without an error, and its numbers alone had not shown it.
+std::vector<std::string> log_notes(const nlohmann::json& summary);
+
 // Replays `path`; throws InputError (bad log) or std::runtime_error (outputs). Returns
 // the summary JSON (schema battsim.summary).
 nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,

@@ -113,6 +113,18 @@ TEST_CASE("calibrate fails clearly without a rest, on a bad log and for the refe
                                       "voltages but the config 6 cells in series"));
 }
 
+TEST_CASE("calibrate refuses a log given twice, as fit and residual do", "[cli]") {
+    // Twice, a flight weighs twice in the shares' mean error; by another name ("./x") too.
+    const std::string dir = clitest::temp_dir();
+    const std::string log = kSource + "/logs/example-4s.csv";
+    const auto r = run("calibrate " + q(log) + " " + q(kSource + "/logs/./example-4s.csv") + " -c " + q(kConfig) + " -o " +
+                       q(dir + "/c.json"));
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains("battsim calibrate: a log \"" + kSource + "/logs/./example-4s.csv\" names the same "
+                                      "file as a log \"" + log + "\""));
+    CHECK_FALSE(std::filesystem::exists(dir + "/c.json"));
+}
+
 TEST_CASE("calibrate's config selects the joint estimator it tunes", "[cli]") {
     // sim-4s.json runs the reference estimator: a calibrated share left there changed nothing
     // a replay or the firmware ran.

@@ -3,6 +3,7 @@
 // config's estimated curve; the written config reads back and replays; bad input fails clearly.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -142,6 +143,34 @@ TEST_CASE("fit-ocv says when its config is for another pack than the flights'", 
     for (const auto& n : own["notes"]) CHECK(n.get<std::string>().find("does the config match") == std::string::npos);
 }
 
+namespace {
+// The significant figures of every floating-point number in `j`, at most.
+int most_figures(const nlohmann::json& j) {
+    int most = 0;
+    if (j.is_structured()) {
+        for (const auto& v : j) most = std::max(most, most_figures(v));
+    } else if (j.is_number_float()) {
+        std::string t = j.dump();
+        t = t.substr(0, t.find_first_of("eE"));
+        std::string digits;
+        for (char c : t)
+            if (c >= '0' && c <= '9') digits += c;
+        digits.erase(0, digits.find_first_not_of('0'));
+        digits.erase(digits.find_last_not_of('0') + 1);
+        most = static_cast<int>(digits.size());
+    }
+    return most;
+}
+}  // namespace
+
+TEST_CASE("fit-ocv's report is rounded as the other reports are", "[cli]") {
+    // 0.009217188882135187 and the like: 17 figures where the other JSON outputs give six.
+    const auto j = clitest::run_json("fit-ocv " + q(kSource + "/logs/example-4s.csv") + " -c " +
+                                     q(kSource + "/configs/sim-4s.json") + " --json");
+    CHECK(most_figures(j) <= 6);
+    CHECK(j["ocv_cell_voltage_v"]["fitted"].size() == 21u);
+}
+
 TEST_CASE("fit-ocv reports bad input and bad options with their exit codes", "[cli]") {
     const std::string dir = clitest::temp_dir();
     const std::string cfg = q(kSource + "/configs/sim-4s.json");
@@ -154,7 +183,7 @@ TEST_CASE("fit-ocv reports bad input and bad options with their exit codes", "[c
     CHECK(bad.err.find("bad.csv:3") != std::string::npos);
     clitest::write_file(dir + "/tiny.csv", "time_s,voltage_v,current_a\n0,16.0,0.1\n0.1,16.0,0.1\n");
     const auto tiny = run("fit-ocv " + q(dir + "/tiny.csv") + " -c " + cfg);
-    CHECK(tiny.exit_code == 2);
+    CHECK(tiny.exit_code == 3);  // too little data: the input's fault
     CHECK(tiny.err.find("10 valid samples") != std::string::npos);
     const auto points = run("fit-ocv " + q(dir + "/tiny.csv") + " -c " + cfg + " --points 40");
     CHECK(points.exit_code == 2);
@@ -164,6 +193,6 @@ TEST_CASE("fit-ocv reports bad input and bad options with their exit codes", "[c
     CHECK(nothing.exit_code == 2);
     // Nothing is written when the fit fails.
     const auto none = run("fit-ocv " + q(dir + "/tiny.csv") + " -c " + cfg + " -o " + q(dir + "/out.json"));
-    CHECK(none.exit_code == 2);
+    CHECK(none.exit_code == 3);
     CHECK(clitest::read_file(dir + "/out.json").empty());
 }

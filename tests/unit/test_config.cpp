@@ -228,3 +228,30 @@ TEST_CASE("config_notes: the joint estimator without a table, and a config for a
                        "match this pack?");
     CHECK(config_notes(c, facts(0, 14.8)).empty());  // 3.7 V per cell
 }
+
+TEST_CASE("config_notes: a temperature dependence on a log without a temperature", "[config]") {
+    using battsim::host::config_notes;
+    using battsim::host::is_log_note;
+    using battsim::host::LogFacts;
+    battsim::core::MonitorConfig c;
+    c.extensions.temperature.enabled = true;
+    c.extensions.temperature.resistance_activation_k = 7747.0f;
+    LogFacts none;
+    none.temperature_samples = 0;
+    const auto notes = config_notes(c, none);
+    REQUIRE(notes.size() == 1);
+    CHECK(notes[0].rfind("the config's model depends on the temperature (battery.extensions.temperature) but the log has "
+                         "no temperature: it runs at 25 degC throughout", 0) == 0);
+    CHECK(is_log_note(notes[0]));  // said by the commands that fit along the log
+    LogFacts some;
+    some.temperature_samples = 10;
+    CHECK(config_notes(c, some).empty());
+    CHECK(config_notes(c).empty());  // no log read (export-config)
+    // A lumped thermal state drives the terms without a measurement.
+    c.extensions.thermal.enabled = true;
+    CHECK(config_notes(c, none).empty());
+    // Enabled with every term zero: nothing depends on the temperature.
+    c.extensions.thermal.enabled = false;
+    c.extensions.temperature.resistance_activation_k = 0.0f;
+    CHECK(config_notes(c, none).empty());
+}

@@ -357,3 +357,67 @@ TEST_CASE("battsim discharge reads the joint estimator's OCV table off the Samsu
     CHECK(WEXITSTATUS(std::system((bin + " discharge " + data + "Q30_S001_C10.csv --negative-discharge -c " + cfg +
                                    " --min-voltage 2.5 --ocv-points 30 > /dev/null 2>&1").c_str())) == 2);
 }
+
+namespace {
+// 3600 s from 4.1 V to `end_v` at `amps` (alternating with `burst_a` every other 10 s when given),
+// one row a second.
+std::string cc_discharge(double amps, double burst_a = 0.0, double end_v = 3.0) {
+    std::string csv = "time_s,voltage_v,current_a\n";
+    for (int k = 0; k <= 3600; ++k) {
+        const double a = burst_a > 0.0 && (k / 10) % 2 == 1 ? burst_a : amps;
+        char line[64];
+        std::snprintf(line, sizeof line, "%d,%.5f,%.3f\n", k, 4.1 - (4.1 - end_v) * k / 3600.0, a);
+        csv += line;
+    }
+    return csv;
+}
+
+bool has_note(const DischargeResult& r, const std::string& start) {
+    for (const std::string& n : r.info.notes)
+        if (n.rfind(start, 0) == 0) return true;
+    return false;
+}
+}  // namespace
+
+TEST_CASE("The C-rate is of the config's rated capacity when one is given, and a charge far from it is noted",
+          "[discharge]") {
+    DischargeOptions o = options(3.0, 4.2);  // the log's last sample is the minimum: a whole discharge
+    // 2 A for an hour (1.999 Ah to the minimum): 1C of the charge delivered, 0.8C of a 2.5 Ah rating.
+    const std::string path = write("rated", cc_discharge(2.0));
+    DischargeResult r = process_discharge(path, o);
+    CHECK(mean_c_rate(r) == Approx(1.0).epsilon(1e-3));
+    CHECK(c_rate_text(r) == "1C of the charge it delivered, no -c config to rate it by");
+    o.rated_capacity_ah = 2.5;
+    r = process_discharge(path, o);
+    CHECK(mean_c_rate(r) == Approx(0.8).epsilon(1e-4));
+    CHECK(c_rate_text(r) == "0.8C of the config's rated 2.5 Ah");
+    CHECK(ocv_table_from_discharge(r, 1, 0.0, 5).mean_c_rate == Approx(0.8).epsilon(1e-4));
+    CHECK(discharge_to_json(r, false)["c_rate_of"] == "rated capacity");
+    for (const std::string& n : r.info.notes) UNSCOPED_INFO(n);
+    CHECK(r.info.notes.empty());  // 2 Ah of 2.5: within 0.5-2 times
+    // A current in mA read as amperes: 2000 Ah from a 2.5 Ah pack had read as "ran at 1C".
+    r = process_discharge(write("rated-ma", cc_discharge(2000.0)), o);
+    CHECK(c_rate_text(r) == "800C of the config's rated 2.5 Ah");
+    CHECK(has_note(r, "the discharge delivered 1.999e+06 mAh, 800 times the config's rated 2.5 Ah: a current or time "
+                      "unit off by a thousand"));
+    // A tenth of the rating, run to the minimum: also noted, as a pack's matter.
+    o.rated_capacity_ah = 20.0;
+    CHECK(has_note(process_discharge(path, o), "the discharge delivered 1999 mAh, 0.1 times the config's rated 20 Ah: a "
+                                               "config for another pack, or a pack worn or not charged full?"));
+    // Not when a --min-voltage above the cell's end cut it short (said in its own note).
+    o.min_voltage_v = 3.5;
+    CHECK_FALSE(has_note(process_discharge(write("rated-low", cc_discharge(2.0, 0.0, 2.9)), o), "the discharge delivered"));
+    // Not when the log stops above the minimum: that it is part of a discharge is said instead.
+    o.min_voltage_v = 2.9;
+    const DischargeResult part = process_discharge(path, o);
+    CHECK_FALSE(part.ended_early.empty());
+    CHECK_FALSE(has_note(part, "the discharge delivered"));
+}
+
+TEST_CASE("A current that was not constant is noted: a flight is no constant-current discharge", "[discharge]") {
+    const DischargeOptions o = options(2.9, 4.2);
+    CHECK_FALSE(has_note(process_discharge(write("constant", cc_discharge(2.0)), o), "the current was not constant"));
+    // 2 A and 20 A bursts in turn, each half the time.
+    const DischargeResult r = process_discharge(write("bursts", cc_discharge(2.0, 20.0)), o);
+    CHECK(has_note(r, "the current was not constant: 50 % of the time more than 20 % off its median"));
+}

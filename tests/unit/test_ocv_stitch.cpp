@@ -126,5 +126,6 @@ TEST_CASE("OCV stitch: options and logs it cannot use", "[fit]") {
     o = fit::OcvStitchOptions{};
     testsupport::TempDir dir("ocv-stitch-bad");
     const std::string tiny = dir.write("tiny.csv", "time_s,voltage_v,current_a\n0,16.0,0.1\n0.1,16.0,0.1\n");
-    CHECK_THROWS_AS(fit::stitch_ocv({tiny}, {}, ReaderOptions{}, config, o), std::invalid_argument);
+    // Too little data is the log's fault (an InputError: exit 3), not the options'.
+    CHECK_THROWS_AS(fit::stitch_ocv({tiny}, {}, ReaderOptions{}, config, o), fit::TooLittleData);
 }

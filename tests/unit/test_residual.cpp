@@ -86,6 +86,21 @@ TEST_CASE("Nothing is invented when the residual is noise", "[residual]") {
     CHECK(r.structure_after.histogram_counts.size() == 15);
 }
 
+TEST_CASE("With --max-effects 0 the verdict says no effect was tried, not that none explains the residual",
+          "[residual]") {
+    synth::Options o;
+    o.rc_resistance_ohm = 0.015;  // an effect there to find, had anything looked
+    o.rc_time_constant_s = 6;
+    o.flight_s = 60;
+    o.seed = 25;
+    ResidualOptions ro;
+    ro.max_effects = 0;
+    const ResidualReport r = run(o, "none-tried", ro);
+    CHECK(r.effects.empty());
+    CHECK_THAT(r.verdict, Catch::StartsWith("No effect was tried (--max-effects 0): the parameters were only refitted"));
+    CHECK_THAT(r.verdict, !Catch::Contains("No candidate effect explains") && !Catch::Contains("the candidates do not capture"));
+}
+
 TEST_CASE("A candidate with more parameters than a short log has samples is not applicable, not an abort",
           "[residual]") {
     // 2.5 s at 10 Hz: the shape correction's many parameters exceed the fitting samples. It

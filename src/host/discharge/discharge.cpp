@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/estimate/coulomb_counter.h"
+#include "host/input_shape.h"
 #include "host/plot/plot.h"
 #include "host/report/summary.h"
 #include "host/stats.h"
@@ -19,6 +20,17 @@ namespace {
 struct Raw {
     double time_s, voltage_v, current_a;
 };
+
+// Delivered charge outside this share of the rated capacity is noted.
+constexpr double kMinRatedShare = 0.5, kMaxRatedShare = 2.0;
+// A constant-current discharge holds its current within kConstantBand of the median nearly
+// all the time (a charger's within a percent or two); noted past kMaxOffShare of the time.
+constexpr double kConstantBand = 0.2, kMaxOffShare = 0.1;
+
+// Whether the log stops above the minimum voltage: its charge is part of a discharge.
+bool done_early(const DischargeOptions& o, double last_voltage_v, bool done) {
+    return !done && last_voltage_v > o.min_voltage_v + 0.02 * (o.max_voltage_v - o.min_voltage_v);
+}
 
 
 void locate_zones(DischargeResult& r) {
@@ -100,26 +112,34 @@ void locate_zones(DischargeResult& r) {
 
 DischargeResult process_discharge(const std::string& path, const DischargeOptions& o) {
     if (!(o.min_voltage_v > 0) || !(o.max_voltage_v > o.min_voltage_v))
-        throw std::invalid_argument("discharge: need 0 < minimum voltage < maximum voltage");
+        throw std::invalid_argument("need 0 < minimum voltage < maximum voltage");
     // The table has a row every step_v between the two: a typo of 1e5 V had asked for ten
     // million rows and 9 GB.
     if (!(o.max_voltage_v <= kMaxTableVoltage_v))
-        throw std::invalid_argument("discharge: the maximum voltage must be at most " + std::to_string(static_cast<int>(kMaxTableVoltage_v)) + " V");
-    if (o.decimate < 1) throw std::invalid_argument("discharge: --decimate must be at least 1");
-    if (!(o.alpha >= 0 && o.alpha <= 1)) throw std::invalid_argument("discharge: --alpha must be in (0, 1]");
-    if (!(o.reaction_s >= 0)) throw std::invalid_argument("discharge: --reaction must be a number of seconds >= 0");
-    if (!(o.step_v > 0)) throw std::invalid_argument("discharge: the table step must be positive");
+        throw std::invalid_argument("the maximum voltage must be at most " + std::to_string(static_cast<int>(kMaxTableVoltage_v)) + " V");
+    if (o.decimate < 1) throw std::invalid_argument("--decimate must be at least 1");
+    if (!(o.alpha >= 0 && o.alpha <= 1)) throw std::invalid_argument("--alpha must be in (0, 1]");
+    if (!(o.reaction_s >= 0)) throw std::invalid_argument("--reaction must be a number of seconds >= 0");
+    if (!(o.step_v > 0)) throw std::invalid_argument("the table step must be positive");
     DischargeResult r;
     r.path = path;
     std::unique_ptr<SampleReader> reader = open_reader(path, o.reader);
     core::Sample s;
     std::vector<Raw> raw;
+    // What replay says of the log's shape (samples 1000 s apart, a clock that jumps) holds for
+    // a discharge read the same way.
+    ShapePack pack;
+    pack.empty_v = o.min_voltage_v;
+    pack.full_v = o.max_voltage_v;
+    if (o.rated_capacity_ah > 0) pack.capacity_ah = o.rated_capacity_ah;
+    InputShape shape(o.reader.columns.current_negative_is_discharge, o.loaded_current_a, pack);
     bool connected = false, done = false;
     // The discharge going on under load below the minimum: cut off there without a word, a
     // Li-ion cell read with a 3.325 V LiPo minimum lost its last sixth.
     double below_s = 0.0, below_low_v = INFINITY, below_last_s = NAN;
     while (reader->next(s)) {
         ++r.samples_read;
+        shape.add(s);
         if (done) {  // read to the end so the reader checks the whole file
             const double t_s = s.time_us * 1e-6;
             if (std::isfinite(s.voltage_v) && s.voltage_v <= o.min_voltage_v && s.current_a > 0.1f) {
@@ -190,6 +210,54 @@ DischargeResult process_discharge(const std::string& path, const DischargeOption
         throw InputError(path, 0, 0,
                          "the mean current is negative (" + std::to_string(r.mean_current_a) +
                              " A): expected positive = discharge; if the log records discharge as negative, pass --negative-discharge");
+    r.rated_capacity_ah = std::max(o.rated_capacity_ah, 0.0);
+    // A charge far from the pack's rating: a unit a thousand times off (a current in mA read
+    // as A delivered 2956 Ah from a 3 Ah cell), or a config for another pack. A discharge that
+    // stopped early, or went on below the minimum, says so itself.
+    const bool cut_short = done_early(o, r.last_voltage_v, done) || below_s > 0.01 * duration_s;
+    if (r.rated_capacity_ah > 0) {
+        const double ratio = r.capacity_mah * 1e-3 / o.rated_capacity_ah;
+        if (ratio > kMaxRatedShare || (ratio < kMinRatedShare && !cut_short)) {
+            // A hundredfold is no pack's spread: a unit; within it, a pack's (or a config's).
+            const bool unit = ratio > 100.0 || ratio < 0.01;
+            char buf[400];
+            std::snprintf(buf, sizeof buf, "the discharge delivered %.4g mAh, %.3g times the config's rated %.4g Ah: %s",
+                          r.capacity_mah, ratio, o.rated_capacity_ah,
+                          unit ? "a current or time unit off by a thousand (--current-unit, --time-unit)?"
+                          : ratio > 1.0 ? "a config for another pack?"
+                                        : "a config for another pack, or a pack worn or not charged full?");
+            r.info.notes.push_back(buf);
+        }
+    }
+    // A load that varies (a flight, a pulsed test) is no constant-current discharge: the
+    // curve then follows the load's sag more than the cell's charge.
+    {
+        std::vector<double> currents;
+        for (const Raw& x : raw) currents.push_back(x.current_a);
+        const double median_a = median(currents);
+        double off_s = 0.0, lo_a = INFINITY, hi_a = -INFINITY;
+        for (size_t i = 1; i < raw.size(); ++i) {
+            if (std::fabs(raw[i].current_a - median_a) > kConstantBand * std::fabs(median_a))
+                off_s += raw[i].time_s - raw[i - 1].time_s;
+            lo_a = std::min(lo_a, raw[i].current_a);
+            hi_a = std::max(hi_a, raw[i].current_a);
+        }
+        const double off_share = r.duration_s > 0 ? off_s / r.duration_s : 0.0;
+        if (off_share > kMaxOffShare) {
+            char buf[400];
+            std::snprintf(buf, sizeof buf,
+                          "the current was not constant: %.0f %% of the time more than %.0f %% off its median of %.4g A "
+                          "(from %.4g to %.4g A): a flight or a pulsed test, not a constant-current discharge; its "
+                          "capacity, zones and OCV table follow the load's sag more than the cell's charge",
+                          100.0 * off_share, 100.0 * kConstantBand, median_a, lo_a, hi_a);
+            r.info.notes.push_back(buf);
+        }
+    }
+    const bool merged = r.info.averaged_in > r.info.averaged_out + r.info.averaged_out / 5;  // as replay_log
+    for (const std::string& note :
+         shape.notes(r.mean_current_a >= o.loaded_current_a, o.loaded_current_a, InputShape::Lags{},
+                     static_cast<double>(o.reader.average_us) * 1e-6, r.info.format == LogFormat::Csv, merged))
+        r.info.notes.push_back(note);
 
     // Decimate by averaging blocks of `decimate` samples (the last block may be shorter).
     const size_t x = static_cast<size_t>(o.decimate);
@@ -263,8 +331,7 @@ DischargeResult process_discharge(const std::string& path, const DischargeOption
     // A log that stops above the minimum voltage holds part of a discharge: its capacity is
     // what flowed until it stopped, and the zones would be read off the wrong part of the curve
     // (the first 200 rows of a 3 Ah cell's had made a 0.017 Ah config without a word).
-    const double end_margin_v = 0.02 * (o.max_voltage_v - o.min_voltage_v);
-    if (!done && r.last_voltage_v > o.min_voltage_v + end_margin_v) {
+    if (done_early(o, r.last_voltage_v, done)) {
         char buf[300];
         std::snprintf(buf, sizeof buf,
                       "the log ends at %.3f V, above the minimum voltage of %.3f V: the discharge stopped before its "
@@ -277,6 +344,24 @@ DischargeResult process_discharge(const std::string& path, const DischargeOption
     return r;
 }
 
+double mean_c_rate(const DischargeResult& r) {
+    const double capacity_ah = r.rated_capacity_ah > 0 ? r.rated_capacity_ah : r.capacity_mah * 1e-3;
+    return capacity_ah > 0 ? r.mean_current_a / capacity_ah : 0.0;
+}
+
+std::string c_rate_text(const DischargeResult& r) {
+    const double rate = mean_c_rate(r);
+    // Two figures below 10C (0.1C, 2.5C), whole ones above (14C, not 1.4e+01C).
+    char figure[32];
+    std::snprintf(figure, sizeof figure, rate >= 10.0 ? "%.0fC" : "%.2gC", rate);
+    char buf[160];
+    if (r.rated_capacity_ah > 0)
+        std::snprintf(buf, sizeof buf, "%s of the config's rated %.3g Ah", figure, r.rated_capacity_ah);
+    else
+        std::snprintf(buf, sizeof buf, "%s of the charge it delivered, no -c config to rate it by", figure);
+    return buf;
+}
+
 nlohmann::json discharge_to_json(const DischargeResult& r, bool with_table) {
     nlohmann::json j;
     j["schema"] = "battsim.discharge";
@@ -287,6 +372,8 @@ nlohmann::json discharge_to_json(const DischargeResult& r, bool with_table) {
     j["kept_to_s"] = round_sig(r.end_time_s, 9);
     j["duration_s"] = round_sig(r.duration_s, 7);
     j["mean_current_a"] = round_sig(r.mean_current_a, 6);
+    j["mean_c_rate_per_h"] = round_sig(mean_c_rate(r), 4);
+    j["c_rate_of"] = r.rated_capacity_ah > 0 ? "rated capacity" : "delivered charge";
     j["capacity_mah"] = round_sig(r.capacity_mah, 6);
     j["energy_mwh"] = round_sig(r.energy_mwh, 6);
     j["first_voltage_v"] = round_sig(r.first_voltage_v, 6);
@@ -371,7 +458,7 @@ void plot_discharge(const DischargeResult& r, const std::string& path) {
 }
 
 core::TremblayParams params_from_discharge(const DischargeResult& r, const core::TremblayParams& keep) {
-    if (!r.zones.found) throw std::invalid_argument("discharge: the zones were not found (" + r.zones.note + ")");
+    if (!r.zones.found) throw std::invalid_argument("the zones were not found (" + r.zones.note + ")");
     core::TremblayParams p = keep;
     p.full_voltage_v = static_cast<float>(r.zones.full_voltage_v);
     p.exponential_voltage_v = static_cast<float>(r.zones.exponential_end_v);
@@ -398,7 +485,7 @@ OcvTableRead ocv_table_from_discharge(const DischargeResult& r, int cells, doubl
     t.cells = cells;
     t.capacity_ah = q_total_ah;
     t.sag_resistance_ohm = resistance_ohm;
-    t.mean_c_rate = r.mean_current_a / q_total_ah;
+    t.mean_c_rate = mean_c_rate(r);
     // The curve is in order of charge drawn; interpolate voltage and current at each
     // table point's charge (clamped to the curve's ends).
     size_t i = c.size() - 1;  // the segment (c[i − 1], c[i]] holding the charge; moves down
@@ -437,9 +524,7 @@ OcvTableRead ocv_table_from_discharge(const DischargeResult& r, int cells, doubl
     if (lifted > 0)
         t.notes.push_back(std::to_string(lifted) + " OCV table point(s) lifted to keep the table rising (noise on a flat stretch)");
     if (t.mean_c_rate > 0.25) {
-        char rate[32];
-        std::snprintf(rate, sizeof rate, "%.2gC", t.mean_c_rate);
-        t.notes.push_back(std::string("the discharge ran at ") + rate +
+        t.notes.push_back("the discharge ran at a mean " + c_rate_text(r) +
                           ": faster than C/4 its polarisation sags the table below the rest voltage by more than the I·R "
                           "correction takes back; read the table off a C/10 to C/5 discharge");
     }

@@ -30,6 +30,8 @@ struct DischargeOptions {
     int decimate = 1;           // average every x samples
     double step_v = 0.01;       // table spacing
     double gradient_span = 0.01;  // fraction of the capacity the gradient is taken over
+    double loaded_current_a = 1.0;  // the config's take-off current: below it the log's shape notes count a rest
+    double rated_capacity_ah = 0;   // the config's, when one was given (0: none)
 };
 
 struct CurvePoint {
@@ -65,6 +67,7 @@ struct DischargeResult {
     double start_time_s = 0, end_time_s = 0;  // of the kept run, in the log's time
     double duration_s = 0;
     double mean_current_a = 0;  // charge / duration
+    double rated_capacity_ah = 0;  // DischargeOptions' (0: no config given)
     double capacity_mah = 0;
     double energy_mwh = 0;
     double first_voltage_v = 0, last_voltage_v = 0;
@@ -75,10 +78,18 @@ struct DischargeResult {
 };
 
 // Throws InputError (bad log, nothing above the minimum, negative mean current) and
-// std::invalid_argument (options).
+// std::invalid_argument (options). Notes in info.notes what makes the result doubtful: the
+// log's shape (InputShape), a delivered charge far from the rated capacity, a current that
+// was not constant.
 DischargeResult process_discharge(const std::string& path, const DischargeOptions& options);
 
 nlohmann::json discharge_to_json(const DischargeResult& r, bool with_table);
+// Mean current / capacity, per hour: of the config's rated capacity when one was given, else
+// of the charge the discharge delivered (which says nothing of a discharge stopped early, or
+// of a flight).
+double mean_c_rate(const DischargeResult& r);
+// The same in words: "1011C of the config's rated 2.97 Ah", "14C of the charge it delivered, ...".
+std::string c_rate_text(const DischargeResult& r);
 std::string table_csv(const DischargeResult& r);
 std::string curve_csv(const DischargeResult& r);
 // Voltage against consumed charge with the gradient on the right axis and the zone ends marked.
@@ -102,7 +113,7 @@ struct OcvTableRead {
     int cells = 1;
     double capacity_ah = 0;         // the charge the table spans (the discharge's, to its minimum)
     double sag_resistance_ohm = 0;  // R used for the I·R correction
-    double mean_c_rate = 0;         // mean current / capacity, per hour
+    double mean_c_rate = 0;         // the discharge's (DischargeResult::mean_c_rate)
     std::vector<double> cell_voltage_v;  // SOC 0 … 1, ascending
     std::vector<std::string> notes;      // e.g. the discharge was too fast for a rest curve
 };

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -168,9 +169,9 @@ class Problem {
 public:
     Problem(const std::vector<Trace>& traces, const std::vector<ModelSpec>& start, const FitOptions& o)
         : traces_(traces), options_(o) {
-        if (traces.empty()) throw std::invalid_argument("fit: no logs");
+        if (traces.empty()) throw std::invalid_argument("no logs");
         if (start.size() != 1 && start.size() != traces.size())
-            throw std::invalid_argument("fit: expected one start spec or one per log");
+            throw std::invalid_argument("expected one start spec or one per log");
         for (size_t t = 0; t < traces.size(); ++t) {
             start_.push_back(start.size() == 1 ? start[0] : start[t]);
             natural_.push_back(natural_from_params(start_.back().battery));
@@ -503,10 +504,7 @@ private:
                 // Evenly spread, deterministic thinning.
                 for (size_t i = 0; i < cap; ++i) kept.push_back(all[i * all.size() / cap]);
             }
-            if (kept.empty())
-                throw std::invalid_argument("fit: log " + tr.path +
-                                            " has no samples to fit (none valid and initialised in the window; a log that "
-                                            "starts full, such as a discharge test, may need --initial zero)");
+            if (kept.empty()) throw TooLittleData(tr.path, "no sample to fit: " + why_no_samples(tr));
             total += kept.size();
             points_.push_back(std::move(kept));
         }
@@ -514,6 +512,38 @@ private:
             const double mean = static_cast<double>(total) / traces_.size();
             weights_.push_back(options_.equal_log_weights ? std::sqrt(mean / points_[t].size()) : 1.0);
         }
+    }
+
+    // What kept every sample of `tr` out of the objective, said in the options that change it.
+    std::string why_no_samples(const Trace& tr) const {
+        size_t valid = 0, flying = 0;
+        double max_a = -INFINITY;
+        for (const TracePoint& p : tr.points) {
+            if (!p.valid) continue;
+            ++valid;
+            flying += p.flying;
+            max_a = std::max(max_a, static_cast<double>(p.current_a));
+        }
+        char buf[300];
+        if (valid == 0) {
+            std::snprintf(buf, sizeof buf, "none of its %zu samples is valid (the config's sensor limits kept every one out)",
+                          tr.points.size());
+            return buf;
+        }
+        if (first_model_index(tr, options_.initial) < 0)
+            return "the monitor never set its initial charge (it waits for a rest at the start); a log that starts "
+                   "full, such as a discharge test, fits with --initial zero";
+        if (options_.window == Window::Flight && flying == 0) {
+            std::snprintf(buf, sizeof buf,
+                          "it has no flight for --window flight: %s the flying current (monitor.min_flying_current_a, "
+                          "%.3g A; the highest valid one is %.3g A)",
+                          max_a >= tr.flying_current_a ? "no take-off held" : "no sample reached",
+                          static_cast<double>(tr.flying_current_a), max_a);
+            return std::string(buf) + "; give --window all";
+        }
+        if (options_.window == Window::Flight)
+            return "its flight window holds no sample after the initial charge was set; give --window all";
+        return "none in the samples kept for the fit";
     }
 
     const std::vector<Trace>& traces_;
@@ -599,8 +629,10 @@ FitResult fit_model(const std::vector<Trace>& traces, const std::vector<ModelSpe
     std::size_t samples = 0;
     for (const auto& p : problem.points()) samples += p.size();
     if (lm.n_params > 0 && samples <= static_cast<std::size_t>(lm.n_params))
-        throw std::invalid_argument("fit: " + std::to_string(samples) + " samples to fit " + std::to_string(lm.n_params) +
-                                    " parameters: too few (a longer log, or fewer parameters with --params)");
+        throw TooLittleData(traces.size() == 1 ? traces[0].path : std::string(),
+                            std::to_string(samples) + (samples == 1 ? " sample" : " samples") + " to fit " +
+                                std::to_string(lm.n_params) + " parameters: too few",
+                            "a longer log, or " + options.fewer_parameters_advice);
     const Eigen::VectorXd x0 = problem.start_vector();
     LmResult res = levenberg_marquardt(lm, x0, options.lm);
     Eigen::VectorXd x_linear;

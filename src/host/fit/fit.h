@@ -66,6 +66,8 @@ struct FitOptions {
     std::vector<Prior> priors;
     double prior_noise_v = 0.01;
     LmOptions lm;
+    // The remedy for more parameters than samples, in the caller's options (TooLittleData).
+    std::string fewer_parameters_advice = "fewer parameters with --params";
 };
 
 struct ParamEstimate {
@@ -103,7 +105,9 @@ struct FitResult {
 };
 
 // Throws std::invalid_argument for unknown parameter names or parameters of extensions that
-// are not enabled. `start` holds one spec per log (or a single spec for all).
+// are not enabled, and TooLittleData for a log with no sample in the objective (why: none
+// valid, no initial charge, no flight) or no more samples than parameters. `start` holds one
+// spec per log (or a single spec for all).
 FitResult fit_model(const std::vector<Trace>& traces, const std::vector<ModelSpec>& start, const FitOptions& options);
 
 // Statistics of one spec on one trace (both initial modes the fit reports).

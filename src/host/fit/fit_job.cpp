@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 
@@ -96,6 +97,7 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
     for (const std::string& path : logs) {
         if (progress) *progress << "battsim fit: reading " << path << "\n";
         traces.push_back(load_trace(path, job.reader, job.config));
+        say_notes("battsim fit", traces.back(), progress);
     }
     ModelSpec start = spec_from_config(job.config);
     FitOptions options = job.options;
@@ -116,6 +118,28 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
     // A parameter listed per log is not also shared.
     for (const std::string& p : options.per_log_params) {
         options.params.erase(std::remove(options.params.begin(), options.params.end(), p), options.params.end());
+    }
+    // Temperature terms fitted along a log without a temperature run at their reference
+    // temperature throughout: they move nothing, stay at their start with no standard error,
+    // and the config written would claim a dependence nothing measured. Refused, not noted: the
+    // note would stand beside a config written as if fitted. A lumped thermal state drives them
+    // without a measurement (residual's self_heating).
+    const auto fitted = [&](const std::string& name) {
+        return std::find(options.params.begin(), options.params.end(), name) != options.params.end() ||
+               std::find(options.per_log_params.begin(), options.per_log_params.end(), name) != options.per_log_params.end();
+    };
+    const bool temperature_fitted = start.ext.temperature.enabled && !start.ext.thermal.enabled &&
+                                    (fitted("temp_r") || fitted("temp_k") || fitted("temp_q") || fitted("temp_e0"));
+    for (const Trace& t : traces) {
+        if (!temperature_fitted || t.has_temperature) continue;
+        char buf[400];
+        std::snprintf(buf, sizeof buf,
+                      "the log has no temperature, so the temperature terms to be fitted (--add temperature, or the "
+                      "config's: temp_r, temp_k, temp_q, temp_e0) would run at %.3g degC throughout and move nothing: "
+                      "give its temperature column (--temperature-col NAME), fit without them (--params), or let a "
+                      "lumped thermal state drive them (--add thermal)",
+                      static_cast<double>(start.ext.temperature.reference_c));
+        throw InputError(t.path, 0, 0, buf);
     }
     const bool per_log = !options.per_log_params.empty();
     if (per_log && !job.output_config.empty())
@@ -144,6 +168,7 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
     for (const std::string& path : job.test_logs) {
         if (progress) *progress << "battsim fit: testing on " << path << "\n";
         tests.push_back(load_trace(path, job.reader, job.config));
+        say_notes("battsim fit", tests.back(), progress);
         // A test log starts like the fitted ones: full (zero) or as the monitor finds it.
         const InitialMode mode = options.initial == InitialMode::Zero ? InitialMode::Zero : InitialMode::Monitor;
         const LogFitStats s = evaluate(tests.back(), result.specs[0], mode, 0.0f);

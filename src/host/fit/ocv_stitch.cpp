@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ostream>
 #include <stdexcept>
 #include <tuple>
 #include <utility>
@@ -10,6 +11,7 @@
 
 #include "core/model/ocv.h"
 #include "host/fit/trace.h"
+#include "host/report/summary.h"
 
 namespace battsim {
 namespace host {
@@ -560,7 +562,8 @@ OcvStitch stitch_ocv(const std::vector<std::string>& logs, const std::vector<std
     return stitch_ocv(all, config, o);
 }
 
-OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& config, const OcvStitchOptions& o) {
+OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& config, const OcvStitchOptions& o,
+                     std::ostream* notes_out) {
     if (o.points < 2 || o.points > core::kOcvTableMaxPoints)
         throw std::invalid_argument("--points: expected 2.." + std::to_string(core::kOcvTableMaxPoints));
     if (!(o.fast_time_s > 0.0) || !(o.slow_time_s >= 0.0) || !(o.prior_sigma_v > 0.0) || !(o.smooth_sigma_v > 0.0) || !(o.empty_sigma_v > 0.0) || !(o.rest_weight > 0.0) ||
@@ -585,24 +588,27 @@ OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& 
         s.prior_v[static_cast<size_t>(j)] = std::min(s.prior_v[static_cast<size_t>(j)], s.prior_v[static_cast<size_t>(j) + 1]);
 
     // A log with fewer than 10 valid samples says nothing of the curve: left out, and said.
+    size_t said = 0;  // notes written to notes_out
     std::vector<Trace> traces;
     std::vector<bool> is_test;
     for (const OcvStitchLog& log : logs) {
         Trace t = load_trace(log.path, log.reader, config);
-        // A config for another pack stitches a table no cell has (a 6S config on 4S flights:
-        // 2.77 V per cell at full): said, as replay says it.
-        for (const std::string& note : t.config_notes) s.notes.push_back(log.path + ": " + note);
+        // What replay says of the log (a config for another pack stitches a table no cell has:
+        // a 6S config on 4S flights, 2.77 V per cell at full; a current of the other sign
+        // stitches a charge), said as it is read: a fit that then fails for want of data
+        // says why.
+        for (const std::string& note : t.notes) s.notes.push_back(log.path + ": " + note);
         size_t valid = 0;
         for (const TracePoint& p : t.points) valid += p.valid;
-        if (valid < 10) {
-            s.notes.push_back(log.path + ": " + std::to_string(valid) + " valid samples, left out");
-            continue;
-        }
+        if (valid < 10) s.notes.push_back(log.path + ": " + std::to_string(valid) + " valid samples, left out");
+        if (notes_out)
+            for (; said < s.notes.size(); ++said) *notes_out << "battsim fit-ocv: note: " << s.notes[said] << "\n";
+        if (valid < 10) continue;
         traces.push_back(std::move(t));
         is_test.push_back(log.test);
     }
     if (std::find(is_test.begin(), is_test.end(), false) == is_test.end())
-        throw std::invalid_argument("no log to fit holds 10 valid samples");
+        throw TooLittleData(logs.size() == 1 ? logs[0].path : std::string(), "no log to fit holds 10 valid samples");
 
     // One fit per candidate slow time constant; the one whose fit leaves the smallest error wins.
     const double r_config = mc.battery.internal_resistance_ohm / s.cells;
@@ -679,6 +685,8 @@ OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& 
     s.test_rms_before_v = pooled_rms(on_prior, before, s.capacity_ah, true);
     s.test_rms_v = pooled_rms(flights, after, s.capacity_ah, true);
     add_notes(s, flights);
+    if (notes_out)
+        for (; said < s.notes.size(); ++said) *notes_out << "battsim fit-ocv: note: " << s.notes[said] << "\n";
     for (size_t n = 0; n < traces.size(); ++n) {
         OcvStitchFlight out;
         out.log = traces[n].path;
@@ -716,32 +724,40 @@ LoadedConfig with_stitched_table(const LoadedConfig& config, const OcvStitch& s)
 
 nlohmann::json to_json(const OcvStitch& s) {
     using nlohmann::json;
+    // Six significant figures, as the other reports (round_sig): 1 µV per cell, and no
+    // 0.009217188882135187 ohm. The config written keeps the fit's own values.
+    const auto r = [](double x) { return round_sig(x); };
+    const auto rs = [&](const std::vector<double>& v) {
+        json a = json::array();
+        for (double x : v) a.push_back(r(x));
+        return a;
+    };
     json flights = json::array();
     for (const OcvStitchFlight& f : s.flights)
         flights.push_back({{"log", f.log},
                            {"test", f.test},
                            {"samples", f.samples},
-                           {"charge_ah", f.charge_ah},
-                           {"start_soc", {{"config_curve", f.start_soc_before}, {"fitted", f.start_soc}}},
-                           {"rms_v_per_cell", {{"config_curve", f.rms_before_v}, {"fitted", f.rms_v}}},
-                           {"pack_resistance_ohm", {{"config_curve", f.resistance_before_ohm}, {"fitted", f.resistance_ohm}}}});
+                           {"charge_ah", r(f.charge_ah)},
+                           {"start_soc", {{"config_curve", r(f.start_soc_before)}, {"fitted", r(f.start_soc)}}},
+                           {"rms_v_per_cell", {{"config_curve", r(f.rms_before_v)}, {"fitted", r(f.rms_v)}}},
+                           {"pack_resistance_ohm", {{"config_curve", r(f.resistance_before_ohm)}, {"fitted", r(f.resistance_ohm)}}}});
     return {{"schema", "battsim.ocv_stitch"},
             {"schema_version", 1},
             {"cells", s.cells},
-            {"capacity_ah", s.capacity_ah},
-            {"ocv_cell_voltage_v", {{"config_curve", s.prior_v}, {"fitted", s.table_v}}},
-            {"support_samples", s.support},
-            {"soc_span", {s.soc_min, s.soc_max}},
+            {"capacity_ah", r(s.capacity_ah)},
+            {"ocv_cell_voltage_v", {{"config_curve", rs(s.prior_v)}, {"fitted", rs(s.table_v)}}},
+            {"support_samples", rs(s.support)},
+            {"soc_span", {r(s.soc_min), r(s.soc_max)}},
             {"pack_resistance_ohm",
-             {{"config_curve", {{"ohmic_median", s.resistance_before_ohm}, {"fast", s.fast_before_ohm}, {"slow", s.slow_before_ohm}}},
-              {"fitted", {{"ohmic_median", s.resistance_ohm}, {"fast", s.fast_ohm}, {"slow", s.slow_ohm}}}}},
+             {{"config_curve", {{"ohmic_median", r(s.resistance_before_ohm)}, {"fast", r(s.fast_before_ohm)}, {"slow", r(s.slow_before_ohm)}}},
+              {"fitted", {{"ohmic_median", r(s.resistance_ohm)}, {"fast", r(s.fast_ohm)}, {"slow", r(s.slow_ohm)}}}}},
             {"rms_v_per_cell",
-             {{"config_curve", s.rms_before_v}, {"fitted", s.rms_v}, {"test_config_curve", s.test_rms_before_v}, {"test_fitted", s.test_rms_v}}},
+             {{"config_curve", r(s.rms_before_v)}, {"fitted", r(s.rms_v)}, {"test_config_curve", r(s.test_rms_before_v)}, {"test_fitted", r(s.test_rms_v)}}},
             {"iterations", s.iterations},
-            {"polarisation_time_s", {{"fast", s.fast_time_s}, {"slow", s.slow_time_s}}},
+            {"polarisation_time_s", {{"fast", r(s.fast_time_s)}, {"slow", r(s.slow_time_s)}}},
             {"slow_time_candidates", [&] {
                  json a = json::array();
-                 for (const auto& c : s.slow_time_candidates) a.push_back({{"slow_time_s", c.first}, {"rms_v_per_cell", c.second}});
+                 for (const auto& c : s.slow_time_candidates) a.push_back({{"slow_time_s", r(c.first)}, {"rms_v_per_cell", r(c.second)}});
                  return a;
              }()},
             {"notes", s.notes},

@@ -16,6 +16,7 @@
 // measure it). The table is only as right as that axis: the capacity the monitor then reports
 // is against it, which is what a fleet compares pack by pack.
 #pragma once
+#include <ostream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -23,6 +24,7 @@
 #include <nlohmann/json.hpp>
 
 #include "host/config_json.h"
+#include "host/fit/trace.h"  // TooLittleData
 #include "host/io/sample_reader.h"
 
 namespace battsim {
@@ -92,8 +94,10 @@ struct OcvStitchLog {
 };
 
 // Reads every log (throws InputError like replay_log) and fits. Throws std::invalid_argument
-// for bad options or fewer than one usable fitted log.
-OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& config, const OcvStitchOptions& options);
+// for bad options, TooLittleData (an InputError) for no fitted log of 10 valid samples. With `notes_out`, each of the notes
+// is also written there as it is found ("battsim fit-ocv: note: ..."), a log's as it is read.
+OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& config, const OcvStitchOptions& options,
+                     std::ostream* notes_out = nullptr);
 // The same with one reader for all.
 OcvStitch stitch_ocv(const std::vector<std::string>& logs, const std::vector<std::string>& test_logs,
                      const ReaderOptions& reader, const LoadedConfig& config, const OcvStitchOptions& options);

@@ -65,10 +65,10 @@ ShapeCalibration calibrate_slow_share(const std::vector<std::string>& logs, cons
             read_capacities(summary, final_ah, rest_ah);
             if (k == 0) {
                 // The real cause when a log has no rest: a config for another pack keeps its
-                // samples out, which "no rest" alone had hidden.
-                for (const std::string& note : other_pack_notes(summary))
+                // samples out, which "no rest" alone had hidden; and what replay says of the
+                // log's shape (a current of the other sign, a clock that jumps).
+                for (const std::string& note : log_notes(summary))
                     out.notes.push_back(used[i] + ": " + note);
-                if (summary["samples"]["valid"] == 0) out.notes.push_back(used[i] + ": no valid sample (every one kept out by the config's sensor limits)");
                 if (!(rest_ah > 0.0) || !(final_ah > 0.0)) {
                     out.logs_without_rest.push_back(used[i]);
                     continue;

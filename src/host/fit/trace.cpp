@@ -1,5 +1,7 @@
 #include "host/fit/trace.h"
 
+#include <cmath>
+
 #include "host/replay.h"
 
 namespace battsim {
@@ -18,6 +20,7 @@ Trace load_trace(const std::string& path, const ReaderOptions& reader, const Loa
     Trace t;
     t.path = path;
     t.label = trace_label(path);
+    t.flying_current_a = config.monitor.flying.min_flying_current_a;
     ReplayOptions options;
     options.reader = reader;
     options.config = config;
@@ -44,7 +47,7 @@ Trace load_trace(const std::string& path, const ReaderOptions& reader, const Loa
         p.monitor_model_v = st.model_voltage_v;
         p.monitor_consumed_mah = st.consumed_mah;
         p.monitor_filtered_a = st.filtered_current_a;
-        if (p.valid && p.has_temperature) t.has_temperature = true;
+        if (p.valid && p.has_temperature && std::isfinite(p.temperature_c)) t.has_temperature = true;
         t.points.push_back(p);
     };
     const nlohmann::json summary = replay_log(path, options, observe);
@@ -54,7 +57,11 @@ Trace load_trace(const std::string& path, const ReaderOptions& reader, const Loa
     t.info.cell_count = input["cells"].get<int>();
     t.info.has_temperature = input["has_temperature"].get<bool>();
     for (const auto& note : input["notes"]) t.info.notes.push_back(note.get<std::string>());
-    t.config_notes = other_pack_notes(summary);
+    t.notes = log_notes(summary);
+    // Replayed without the extensions (above), so the config's own temperature terms are
+    // judged here.
+    const std::string temperature = missing_temperature_note(config.monitor, t.has_temperature);
+    if (!temperature.empty()) t.notes.push_back(temperature);
     // The summary's flight window: initialised valid samples from the first flying sample
     // to the last flying one.
     long first_flying = -1, last_flying = -1;
@@ -75,6 +82,11 @@ Trace load_trace(const std::string& path, const ReaderOptions& reader, const Loa
         p.in_flight = p.valid && p.initialised;
     }
     return t;
+}
+
+void say_notes(const std::string& command, const Trace& trace, std::ostream* out) {
+    if (!out) return;
+    for (const std::string& note : trace.notes) *out << command << ": note: " << trace.path << ": " << note << "\n";
 }
 
 }  // namespace fit

@@ -5,6 +5,7 @@
 // parameters, so they are taken once from this replay.
 #pragma once
 #include <cstdint>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,19 @@
 namespace battsim {
 namespace host {
 namespace fit {
+
+// Too little data to fit: a log with no sample in the objective, or no more samples than
+// parameters. The data's fault, not the command line's: an InputError (exit 3). `advice` names
+// the remedy in the caller's own options; finding() is the message without it.
+class TooLittleData : public InputError {
+public:
+    TooLittleData(const std::string& file, const std::string& finding, const std::string& advice = "")
+        : InputError(file, 0, 0, advice.empty() ? finding : finding + " (" + advice + ")"), finding_(finding) {}
+    const std::string& finding() const { return finding_; }
+
+private:
+    std::string finding_;
+};
 
 struct TracePoint {
     double time_s = 0;  // since the log's first sample
@@ -39,7 +53,8 @@ struct Trace {
     long settle_index = -1;  // first initialised sample; -1 = never initialised
     float monitor_initial_ah = 0;
     bool has_temperature = false;  // any valid sample carries one
-    std::vector<std::string> config_notes;  // the replay's notes that the config is for another pack (other_pack_notes)
+    float flying_current_a = 0;    // the config's take-off current (monitor.min_flying_current_a)
+    std::vector<std::string> notes;  // what the replay says of the log with this config (log_notes)
 };
 
 // A trace's label: the file name of `path` without directory and extension.
@@ -48,6 +63,10 @@ std::string trace_label(const std::string& path);
 // Replays `path` with `config` (the base model; extensions play no part in the monitor's
 // decisions) and keeps every sample. Throws InputError like replay_log().
 Trace load_trace(const std::string& path, const ReaderOptions& reader, const LoadedConfig& config);
+
+// Writes the trace's notes to `out` (if not null) as replay says them, one a line, prefixed
+// with `command` and the log: "battsim fit: note: LOG: ...".
+void say_notes(const std::string& command, const Trace& trace, std::ostream* out);
 
 }  // namespace fit
 }  // namespace host

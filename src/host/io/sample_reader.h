@@ -28,6 +28,7 @@ public:
 
 private:
     static std::string format(const std::string& file, long line, long column, const std::string& msg) {
+        if (file.empty()) return msg;  // of several files, none to name
         std::string s = file;
         if (line > 0) s += ":" + std::to_string(line);
         if (column > 0) s += ":" + std::to_string(column);

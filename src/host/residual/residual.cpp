@@ -205,6 +205,7 @@ State refit(const std::vector<Trace>& traces, const State& from, const std::vect
     fo.prior_noise_v = prior_noise_v(traces, from, mask, o);
     fo.max_points_per_log = o.max_points_per_log;
     fo.lm.max_iterations = o.max_iterations;
+    fo.fewer_parameters_advice = "more parameters kept at the config's values with --fixed";
     const fit::FitResult r = fit::fit_model(traces, from.specs, fo);
     State s;
     s.specs = r.specs;
@@ -620,15 +621,17 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
                     fitted = refit(traces, refit(traces, neutral, added, &split.fit, o), params, &split.fit, o);
                     ev = evaluate_state(traces, fitted, o.initial, split, o.window);
                 }
-            } catch (const std::invalid_argument& e) {
+            } catch (const fit::TooLittleData& e) {
                 // More parameters than the log's fitting samples: this effect cannot be judged
-                // on it, which is a finding about the candidate, not a failure of the run.
+                // on it, which is a finding about the candidate, not a failure of the run (and
+                // the remedy for the run does not apply to it).
+                c.applicable = false;
+                c.note = e.finding();
+                scores.push_back(c);
+                continue;
+            } catch (const std::invalid_argument& e) {
                 c.applicable = false;
                 c.note = e.what();
-                // fit's advice names its own --params, which residual does not have.
-                const std::string advice = " (a longer log, or fewer parameters with --params)";
-                if (c.note.size() > advice.size() && c.note.compare(c.note.size() - advice.size(), advice.size(), advice) == 0)
-                    c.note.erase(c.note.size() - advice.size());
                 scores.push_back(c);
                 continue;
             }
@@ -720,13 +723,15 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
         for (const CandidateScore& c : last_stage.candidates) {
             if (c.applicable && (top == nullptr || c.gain > top->gain)) top = &c;
         }
-        rep.verdict = "No candidate effect explains the residual on held-out data";
+        // With --max-effects 0 no effect was tried: "no candidate explains" had read as a finding.
+        rep.verdict = o.max_effects == 0 ? "No effect was tried (--max-effects 0): the parameters were only refitted"
+                                         : "No candidate effect explains the residual on held-out data";
         if (top) {
             std::snprintf(buf, sizeof buf, " (best: %s, %.1f %% of the held-out error variance, p = %.2g)",
                           top->name.c_str(), 100 * top->gain, top->p_value);
             rep.verdict += buf;
         }
-        rep.verdict += "; nothing was added.";
+        rep.verdict += o.max_effects == 0 ? "." : "; nothing was added.";
     }
     const Structure& s = rep.structure_after;
     if (!s.acf.empty()) {
@@ -735,8 +740,10 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
                       "skewness %.2f, excess kurtosis %.2f.",
                       std::sqrt(s.sd_v * s.sd_v + s.mean_v * s.mean_v), s.acf[0], s.white_band, s.skewness, s.excess_kurtosis);
         rep.verdict += buf;
-        rep.verdict += std::fabs(s.acf[0]) > s.white_band ? " It is not white: it has memory the candidates do not capture."
-                                                          : " It is consistent with white noise.";
+        rep.verdict += std::fabs(s.acf[0]) > s.white_band
+                           ? (o.max_effects == 0 ? " It is not white: it has memory the model does not capture."
+                                                 : " It is not white: it has memory the candidates do not capture.")
+                           : " It is consistent with white noise.";
     }
     return rep;
 }
@@ -1021,6 +1028,7 @@ nlohmann::json run_residual_job(const ResidualJob& job, ResidualReport* out, std
     for (const std::string& path : logs) {
         if (progress) *progress << "battsim residual: reading " << path << "\n";
         traces.push_back(fit::load_trace(path, job.reader, job.config));
+        fit::say_notes("battsim residual", traces.back(), progress);
     }
     const ModelSpec spec = fit::spec_from_config(job.config);
     if (progress) *progress << "battsim residual: analysing\n";

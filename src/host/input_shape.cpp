@@ -1,0 +1,225 @@
+#include "host/input_shape.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "core/estimate/difference_resistance.h"
+#include "host/stats.h"
+
+namespace battsim {
+namespace host {
+
+void InputShape::add(const core::Sample& s) {
+    if (std::isfinite(s.voltage_v) && s.voltage_v != 0.0f) {
+        const double tenths = 10.0 * static_cast<double>(s.voltage_v);
+        coarse_ = coarse_ && std::fabs(tenths - std::round(tenths)) < 2e-3;
+        if (voltages_ == 0) first_v_ = s.voltage_v;
+        last_v_ = s.voltage_v;
+        varied_ = varied_ || s.voltage_v != first_v_;
+        ++voltages_;
+    }
+    if (have_ && s.time_us > last_us_) {
+        const double step_s = static_cast<double>(s.time_us - last_us_) * 1e-6;
+        // The first kMaxIntervals: their median is the log's usual interval, and a replay's
+        // memory stays flat however long the log (every interval had been kept).
+        if (intervals_s_.size() < kMaxIntervals) intervals_s_.push_back(step_s);
+        // The log's own count at loaded currents, whether or not the monitor counted (it
+        // starts at a rest).
+        if (std::isfinite(s.current_a) && std::fabs(s.current_a) >= ground_a_)
+            loaded_mah_ += static_cast<double>(s.current_a) * step_s / 3.6;
+        if (std::isfinite(s.current_a)) counted_mah_ += static_cast<double>(s.current_a) * step_s / 3.6;
+        if (step_s > longest_s_) {
+            longest_s_ = step_s;
+            longest_at_s_ = static_cast<double>(last_us_ - first_us_) * 1e-6;
+            // At the log's current after the gap: the monitor's own count over the step
+            // had also taken its first charge estimate when that came at the same sample
+            // (a ULog's 3600 s jump at 0 A read "4953 mAh counted over the gap").
+            longest_mah_ = std::isfinite(s.current_a) ? static_cast<double>(s.current_a) * step_s / 3.6 : 0.0;
+        }
+    }
+    if (s.has_temperature && std::isfinite(s.temperature_c)) {
+        min_temperature_c_ = std::min(min_temperature_c_, static_cast<double>(s.temperature_c));
+        max_temperature_c_ = std::max(max_temperature_c_, static_cast<double>(s.temperature_c));
+    }
+    if (!have_) first_us_ = s.time_us;
+    last_us_ = s.time_us;
+    have_ = true;
+    if (std::isfinite(s.current_a)) {
+        const double current_a = static_cast<double>(s.current_a);
+        min_a_ = std::min(min_a_, current_a);
+        max_a_ = std::max(max_a_, current_a);
+        // On the ground (both readings under the take-off current) a step is the sensor's
+        // scatter, not the load's: the first kMaxIntervals, for the scatter note below.
+        if (have_current_ && std::fabs(current_a) < ground_a_ && std::fabs(last_a_) < ground_a_ &&
+            ground_steps_a_.size() < kMaxIntervals)
+            ground_steps_a_.push_back(std::fabs(current_a - last_a_));
+        last_a_ = current_a;
+        have_current_ = true;
+    }
+}
+
+std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const Lags& lags, double window_s, bool csv,
+                                           bool merged, bool milliamperes) const {
+    const double fastest_s = lags.fastest_s;
+    std::vector<std::string> out;
+    char buf[512];
+    // What to do about the other sign: the option flips headered CSV logs only; the
+    // readers of the other formats take the sign as the autopilot or logger wrote it.
+    const std::string remedy =
+        !csv ? std::string(": this log's current sensor counts discharge as negative (--negative-discharge flips "
+                           "headered CSV logs only: set the sensor's sign where it is logged, or export the log to CSV)")
+        : negated_ ? std::string(" with --negative-discharge: if this log counts discharge as positive, replay it "
+                                 "without (manifest: \"negative_is_discharge\": false)")
+                   : std::string(": if this log counts discharge as negative, replay it with --negative-discharge "
+                                 "(manifest: \"negative_is_discharge\": true)");
+    if (!flew && max_a_ < takeoff_a && min_a_ <= -takeoff_a) {
+        std::snprintf(buf, sizeof buf, "the current never reaches the take-off threshold (%.3g A) but falls to %.3g A",
+                      takeoff_a, min_a_);
+        out.push_back(buf + remedy);
+    } else if (loaded_mah_ < -kSignMinMah && last_v_ < kSignMinFall * first_v_) {
+        // A log that does reach the take-off current the wrong way round (regeneration,
+        // a brief reverse reading) but whose loaded count runs backwards while the pack
+        // empties. Counted only at take-off currents: a charger's taper and the rest after
+        // it (a correctly signed log) count little and the voltage falls a few tenths.
+        std::snprintf(buf, sizeof buf,
+                      "the charge counted at currents beyond the take-off threshold is %.0f mAh (negative) while "
+                      "the pack voltage fell from %.3g to %.3g V",
+                      loaded_mah_, static_cast<double>(first_v_), static_cast<double>(last_v_));
+        out.push_back(buf + remedy);
+    }
+    // The other unit: a current in amperes read as milliamperes is a thousand times low and
+    // never takes off (a CMU Matrice 100 flight with --current-unit mA: 33.5 A read as
+    // 0.0335 A), while the pack's voltage falls as in any flight. The reverse, milliamperes
+    // read as amperes, breaks the sensor's current limit and the brief says so.
+    if (!flew && milliamperes && max_a_ < takeoff_a && max_a_ * 1000.0 >= takeoff_a && last_v_ < kSignMinFall * first_v_) {
+        std::snprintf(buf, sizeof buf,
+                      "the current never reaches the take-off threshold (%.3g A), peaking at %.3g A read in mA, "
+                      "while the pack voltage fell from %.3g to %.3g V: if the current column counts amperes, give "
+                      "--current-unit A (manifest: columns.current_unit or current_unit)",
+                      takeoff_a, max_a_, static_cast<double>(first_v_), static_cast<double>(last_v_));
+        out.push_back(buf);
+    }
+    // Battery logs are written a few times a second to once every few seconds.
+    const double dt_s = median(intervals_s_);
+    // Unless the user's own --average-ms windows spaced them so.
+    if (dt_s > kSlowestIntervalS && !(dt_s <= 1.5 * window_s)) {
+        std::snprintf(buf, sizeof buf,
+                      "the samples are %.4g s apart (median): if the time column counts milliseconds, give "
+                      "--time-unit ms (or --time-col with a column in seconds)",
+                      dt_s);
+        out.push_back(buf);
+    }
+    // The other way round: seconds read as milliseconds squeeze a flight into a fraction
+    // of a second, too short for any take-off (a CMU flight as time_ms: 200 s in 0.2 s).
+    const double span_s = static_cast<double>(last_us_ - first_us_) * 1e-6;
+    const bool seconds_as_ms = dt_s > 0.0 && dt_s < kFastestIntervalS && span_s < kShortestSpanS && !flew &&
+                               intervals_s_.size() >= static_cast<size_t>(kCoarseMinSamples);
+    if (seconds_as_ms) {
+        std::snprintf(buf, sizeof buf,
+                      "the samples are %.3g ms apart (median) and the log spans %.3g s: if the time column "
+                      "counts seconds, give --time-unit s (or --time-col with a column in seconds)",
+                      dt_s * 1e3, span_s);
+        out.push_back(buf);
+    }
+    // A time or current unit a thousand times too small that still flies: a 1 ms spacing is a
+    // blackbox log's too, so the spacing alone cannot tell; the charge the pack emptied on can.
+    const double range_v = pack_.full_v - pack_.empty_v;
+    const double capacity_mah = 1000.0 * pack_.capacity_ah;
+    if (!seconds_as_ms && range_v > 0.0 && capacity_mah > 0.0 && voltages_ >= kCoarseMinSamples &&
+        first_v_ >= pack_.empty_v + kEmptiedFromShare * range_v && last_v_ <= pack_.empty_v + kEmptiedToShare * range_v &&
+        std::fabs(counted_mah_) < kEmptiedMaxCapacityShare * capacity_mah) {
+        std::snprintf(buf, sizeof buf,
+                      "the pack voltage fell from %.4g to %.4g V (the config's range: %.4g to %.4g V) on %.3g mAh "
+                      "counted over %.4g s, %.2g %% of the config's %.4g Ah: if the time column counts seconds, give "
+                      "--time-unit s; if the current column counts amperes, --current-unit A",
+                      static_cast<double>(first_v_), static_cast<double>(last_v_), pack_.full_v, pack_.empty_v,
+                      std::fabs(counted_mah_), span_s, 100.0 * std::fabs(counted_mah_) / capacity_mah, pack_.capacity_ah);
+        out.push_back(buf);
+    }
+    // A temperature in kelvin reads as a pack far past burning: a model's temperature terms
+    // then run it hot (its resistance near nothing).
+    if (std::isfinite(min_temperature_c_) && min_temperature_c_ > kKelvinMinC) {
+        std::snprintf(buf, sizeof buf,
+                      "the temperature reads %.4g to %.4g degC, every reading above %.0f: in kelvin? battsim reads "
+                      "degrees Celsius (subtract 273.15 from the column)",
+                      min_temperature_c_, max_temperature_c_, kKelvinMinC);
+        out.push_back(buf);
+    }
+    if (coarse_ && varied_ && voltages_ >= kCoarseMinSamples) {
+        out.push_back("the pack voltage moves in 0.1 V steps, as a radio's telemetry carries it: the capacity, "
+                      "resistance and short-flight warnings read from it are rougher than from the monitor's own "
+                      "sensors (README, \"Radio telemetry logs\")");
+    }
+    if (dt_s > 0.0 && dt_s < fastest_s && !seconds_as_ms) {
+        std::snprintf(buf, sizeof buf,
+                      "the samples are %.3g ms apart (median): the joint estimator's resistance compares samples "
+                      "up to %.3g s apart among its last %d, so below %.3g ms it is measured late or never; "
+                      "give --average-ms %.0f (manifest: average_ms)",
+                      dt_s * 1e3, fastest_s * (core::DifferenceResistanceEstimator::kHistory - 1),
+                      core::DifferenceResistanceEstimator::kHistory, fastest_s * 1e3, std::ceil(fastest_s * 1e3));
+        out.push_back(buf);
+    }
+    // Windows that merge samples into intervals longer than the reference logger's own
+    // join the readings either side of a current step, so each pair the resistance takes
+    // straddles part of the polarisation: on the dissertation's flights 200 ms windows
+    // read R0 6-9 % high and the capacity up to 14 % low (README, "Input formats"). A
+    // window no longer than the log's own interval merges nothing and is not said.
+    if (lags.hover_min_step_a > 0.0 && merged && dt_s > kLongestMergedIntervalS) {
+        std::snprintf(buf, sizeof buf,
+                      "--average-ms %.0f merges the samples into %.0f ms intervals (median), longer than the "
+                      "reference logger's 68 ms: readings either side of a current step are averaged together, and "
+                      "the joint estimator's resistance reads high and its capacity low (README, \"Input formats\"); "
+                      "averaging is for fast logs: %.0f ms suffices",
+                      window_s * 1e3, dt_s * 1e3, std::ceil(std::max(fastest_s, 1e-3) * 1e3));
+        out.push_back(buf);
+    }
+    // A clock that jumps (a logging gap, or two sessions in one file): the monitor counts
+    // the charge over it at the currents either side, and a flight's time spans it.
+    if (dt_s > 0.0 && longest_s_ > kLongestGapS && longest_s_ > kGapMedians * dt_s) {
+        std::snprintf(buf, sizeof buf,
+                      "the log's clock jumps %.4g s at %.4g s into the log (a logging gap, or two sessions in one "
+                      "file): the monitor counts the charge over the gap at the currents either side (%.4g mAh at the "
+                      "current after it) and a flight's time spans it; replay two sessions apart",
+                      longest_s_, longest_at_s_, std::isfinite(longest_mah_) ? longest_mah_ : 0.0);
+        out.push_back(buf);
+    }
+    // A log written once a second (ArduCopter 3.0's CURR rows): no pair is close enough,
+    // so R0 is never measured and a resistive pack hides (underpowered.log, README).
+    if (flew && lags.slowest_s > 0.0 && dt_s > lags.slowest_s) {
+        std::snprintf(buf, sizeof buf,
+                      "the samples are %.3g s apart (median): the joint estimator's resistance pairs samples at "
+                      "most %.3g s apart, so it measures few or none and keeps the config's %.3g mOhm: a pack of "
+                      "higher resistance is not seen as one (no high-resistance warning; its short flight is "
+                      "missed or put down to capacity)",
+                      dt_s, lags.slowest_s, lags.prior_ohm * 1e3);
+        out.push_back(buf);
+    }
+    // A noisy current sensor: the hover resistance takes its scatter for current steps the
+    // voltage did not follow, and reads low (README, "A noisy current sensor"). σ from the
+    // mean of the smallest 90 % of the ground steps (a difference of two readings has σ√2;
+    // the mean of the smallest 90 % of |N(0, 1)| is 0.6573), not their median: in a log
+    // of 0.1 A steps the median is 0 or a whole step, whatever the noise.
+    if (lags.hover_min_step_a > 0.0 && ground_steps_a_.size() >= static_cast<size_t>(kCoarseMinSamples)) {
+        std::vector<double> steps = ground_steps_a_;
+        std::sort(steps.begin(), steps.end());
+        const size_t kept = std::max<size_t>(1, steps.size() * 9 / 10);
+        double sum = 0.0;
+        for (size_t k = 0; k < kept; ++k) sum += steps[k];
+        const double sigma_a = sum / static_cast<double>(kept) / (0.6573 * std::sqrt(2.0));
+        if (sigma_a > kNoiseShareOfStep * lags.hover_min_step_a) {
+            std::snprintf(buf, sizeof buf,
+                          "the current scatters by about %.2g A (one standard deviation, from %zu steps on the "
+                          "ground): the joint estimator's hover resistance, paired from %.3g A steps, takes that "
+                          "for steps the voltage did not follow and reads low in a steady hover, and the capacity "
+                          "with it; for a sensor this noisy set \"joint\": {\"hover_resistance_min_step_a\": %.2g} "
+                          "(README, \"A noisy current sensor\")",
+                          sigma_a, ground_steps_a_.size(), lags.hover_min_step_a,
+                          std::max(1.0, std::ceil(sigma_a / kNoiseShareOfStep * 10.0) / 10.0));
+            out.push_back(buf);
+        }
+    }
+    return out;
+}
+
+}  // namespace host
+}  // namespace battsim
