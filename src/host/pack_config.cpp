@@ -31,21 +31,18 @@ constexpr double kVarianceV = 0.05, kAveragePowerW = 79.0, kMaxPackV = 5.25;
 constexpr double kMinPackCellV = 2.0;
 constexpr double kCutoffDelayS = 5.0;
 constexpr double kGroundPowerW = 3.0;  // a small craft's electronics on the ground, at most
-// The estimators' current thresholds, as the core's defaults set them for the reference pack,
-// and the power of the pack's size they scale with (a bar on squared currents: 2).
+// The estimators' current thresholds (their defaults are the core's, set for the reference
+// pack) and the power of the pack's size they scale with (a bar on squared currents: 2). The
+// ground's and the rest's bars are set apart, with the take-off bar.
 struct CurrentKey {
     const char* key;
-    double reference;
     int power;
 };
 constexpr CurrentKey kJointCurrentKeys[] = {
-    {"offset_learn_max_current_a", 3.0, 1},   {"rest_capacity_max_current_a", 1.0, 1},
-    {"offset_fault_a", 0.5, 1},               {"resistance_min_step_a", 0.5, 1},
-    {"resistance_min_excitation_a2", 400.0, 2}, {"hover_resistance_min_step_a", 0.2, 1},
-    {"hover_resistance_min_excitation_a2", 10.0, 2}, {"cell_min_charge_ah", 0.1, 1},
-    {"cell_current_ridge_a2", 10.0, 2},       {"cell_slow_current_ridge_a2", 1.0e5, 2},
-    {"cell_step_min_a", 4.0, 1},              {"cell_step_band_a", 1.0, 1},
-    {"cell_resistance_min_step_a", 2.0, 1},   {"cell_resistance_min_excitation_a2", 20000.0, 2},
+    {"offset_fault_a", 1},           {"resistance_min_step_a", 1},        {"resistance_min_excitation_a2", 2},
+    {"hover_resistance_min_step_a", 1}, {"hover_resistance_min_excitation_a2", 2}, {"cell_min_charge_ah", 1},
+    {"cell_current_ridge_a2", 2},    {"cell_slow_current_ridge_a2", 2},   {"cell_step_min_a", 1},
+    {"cell_step_band_a", 1},         {"cell_resistance_min_step_a", 1},   {"cell_resistance_min_excitation_a2", 2},
 };
 // The simulator's healthy LiPo cell at rest, empty to full in 5 % steps (read off a C/5
 // discharge by scripts/suite-ocv-tables.py; normalised to the rated capacity).
@@ -199,19 +196,22 @@ json pack_config_json(const PackRating& r) {
     // which the Matrice 100's 4.5 Ah fleet was measured with.
     const double s = std::min(1.0, k);
     if (s < 1.0) {
+        const json defaults = config_to_json(default_config())["joint"];
         for (const CurrentKey& c : kJointCurrentKeys)
-            j["joint"][c.key] = round_to(c.reference * std::pow(s, c.power), c.power == 2 ? 1e-2 : 1e-3);
+            j["joint"][c.key] = round_to(defaults.at(c.key).get<double>() * std::pow(s, c.power), c.power == 2 ? 1e-2 : 1e-3);
         // What the electronics draw on the ground (flight controller, receiver, video) does
         // not shrink with the pack: the take-off bar stays above kGroundPowerW (a 1S pack
         // idling at 1.5 W, 0.39 A, under a 0.29 A bar had "taken off" 52 times in 5 minutes on
         // the ground), and the ground's bar only a quarter above it: a 1S racer's throttle
         // dips to 1.2 A, which under a 1.6 A bar had counted as ground and left its capacity
         // 25 % high at the landing.
-        const double flying_a = round_to(std::max(1.0 * s, kGroundPowerW / (kNominalV * n)), 1e-3);
+        const double flying_a =
+            round_to(std::max(j["monitor"]["min_flying_current_a"].get<double>() * s, kGroundPowerW / (kNominalV * n)), 1e-3);
         j["monitor"]["min_flying_current_a"] = flying_a;
         j["monitor"]["max_resting_current_a"] = flying_a;
         j["joint"]["rest_capacity_max_current_a"] = flying_a;
-        j["joint"]["offset_learn_max_current_a"] = round_to(std::max(3.0 * s, 1.25 * flying_a), 1e-3);
+        j["joint"]["offset_learn_max_current_a"] =
+            round_to(std::max(defaults.at("offset_learn_max_current_a").get<double>() * s, 1.25 * flying_a), 1e-3);
     }
     config_from_json(j, "make-config");  // the same checks as any config file; throws ConfigError
     return j;
