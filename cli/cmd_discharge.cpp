@@ -54,7 +54,10 @@ std::function<int()> setup(CLI::App& sub) {
         opt.reader.shunt = config.monitor.shunt;
         opt.loaded_current_a = config.monitor.flying.min_flying_current_a;
         // The built-in config's 1.55 Ah 4S pack says nothing of a log's pack.
-        if (!a->input.config.empty()) opt.rated_capacity_ah = config.monitor.battery.capacity_ah;
+        if (!a->input.config.empty()) {
+            opt.rated_capacity_ah = config.monitor.battery.capacity_ah;
+            opt.reader.clock_step_capacity_ah = opt.rated_capacity_ah;
+        }
         opt.min_voltage_v = a->min_v > 0 ? a->min_v : config.monitor.min_voltage_v;
         opt.max_voltage_v = a->max_v > 0 ? a->max_v : config.monitor.max_voltage_v;
         opt.reaction_s = a->reaction_s;

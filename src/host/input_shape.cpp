@@ -180,7 +180,7 @@ std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const La
                       "the log's clock jumps %.4g s at %.4g s into the log (a logging gap, or two sessions in one "
                       "file): the monitor counts the charge over the gap at the currents either side (%.4g mAh at the "
                       "current after it) and a flight's time spans it; replay two sessions apart",
-                      longest_s_, longest_at_s_, std::isfinite(longest_mah_) ? longest_mah_ : 0.0);
+                      longest_s_, longest_at_s_, std::isfinite(longest_mah_) ? longest_mah_ + 0.0 : 0.0);  // + 0.0: no "-0 mAh"
         out.push_back(buf);
     }
     // A log written once a second (ArduCopter 3.0's CURR rows): no pair is close enough,

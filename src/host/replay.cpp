@@ -73,6 +73,7 @@ std::vector<std::string> log_notes(const nlohmann::json& summary) {
 nlohmann::json replay_log(const std::string& path, const ReplayOptions& options, const SampleObserver& observer) {
     ReaderOptions reader_options = options.reader;
     reader_options.shunt = options.config.monitor.shunt;  // the firmware's calibration, one source
+    reader_options.clock_step_capacity_ah = options.config.monitor.battery.capacity_ah;
     std::unique_ptr<SampleReader> reader = open_reader(path, reader_options);
 
     // The monitor is large-ish (fixed arrays); keep it off the stack for deep call chains.

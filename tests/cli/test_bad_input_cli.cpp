@@ -353,22 +353,30 @@ TEST_CASE("log --port names what it expected when the path is no serial device",
     CHECK(std::filesystem::exists(dir + "/kept.csv"));
 }
 
-TEST_CASE("a log whose clock jumps is said, and --realtime does not wait the jump out", "[cli]") {
-    // Two sessions in one file, an hour apart: the charge over the hour was counted at the
-    // currents either side without a word (with the reference estimator), and --realtime
-    // slept through the hour.
-    const std::string dir = clitest::temp_dir();
-    std::string text = testsupport::raw_flight(12, 0.001), jumped;
+namespace {
+// The raw test flight with its clock put an hour ahead from row `from` on.
+std::string jumped_at(const std::string& text, size_t from) {
+    std::string jumped;
     size_t row = 0, start = 0;
     for (size_t end; (end = text.find('\n', start)) != std::string::npos; start = end + 1, ++row) {
         std::string line = text.substr(start, end - start + 1);
-        if (row >= 300) {
+        if (row >= from) {
             const size_t comma = line.find(',');
             line = std::to_string(std::stol(line.substr(0, comma)) + 3600000) + line.substr(comma);
         }
         jumped += line;
     }
-    clitest::write_file(dir + "/two.csv", jumped);
+    return jumped;
+}
+}  // namespace
+
+TEST_CASE("a log whose clock jumps is said, and --realtime does not wait the jump out", "[cli]") {
+    // Two sessions in one file, an hour apart on the ground: the charge over the hour was
+    // counted at the currents either side without a word (with the reference estimator),
+    // and --realtime slept through the hour.
+    const std::string dir = clitest::temp_dir();
+    const std::string text = testsupport::raw_flight(12, 0.001);
+    clitest::write_file(dir + "/two.csv", jumped_at(text, 100));
     auto r = run("replay " + q(dir + "/two.csv") + " -c " + q(kConfig) + " --json");
     REQUIRE(r.exit_code == 0);
     const nlohmann::json j = nlohmann::json::parse(r.out);
@@ -386,6 +394,30 @@ TEST_CASE("a log whose clock jumps is said, and --realtime does not wait the jum
     const int status = std::system(cmd.c_str());
     REQUIRE(WIFEXITED(status));
     CHECK(WEXITSTATUS(status) == 0);  // 124: timeout stopped it
+}
+
+TEST_CASE("a clock step in flight is read as one, and the flight is the unbroken log's", "[cli]") {
+    // At 12 A either side, an hour's jump would be 12 Ah on a 1.55 Ah pack: counted as a gap,
+    // it had run the state of charge far below empty and read volts of model error.
+    const std::string dir = clitest::temp_dir();
+    const std::string text = testsupport::raw_flight(12, 0.001);
+    clitest::write_file(dir + "/step.csv", jumped_at(text, 300));
+    clitest::write_file(dir + "/one.csv", text);
+    auto r = run("replay " + q(dir + "/step.csv") + " -c " + q(kConfig) + " --json");
+    REQUIRE(r.exit_code == 0);
+    nlohmann::json stepped = nlohmann::json::parse(r.out);
+    r = run("replay " + q(dir + "/one.csv") + " -c " + q(kConfig) + " --json");
+    REQUIRE(r.exit_code == 0);
+    nlohmann::json one = nlohmann::json::parse(r.out);
+    const std::vector<std::string> notes = stepped["input"]["notes"];
+    REQUIRE(notes.size() == 1);
+    CHECK_THAT(notes[0], Catch::StartsWith("the log's clock steps 3600.07 s ahead at 20.033 s into the log, with 12 A "
+                                           "before and 12 A after"));
+    CHECK_THAT(notes[0], Catch::EndsWith("the samples after it are read 3600 s earlier, to follow on"));
+    // One usual interval (67 ms) across the step: the same samples at the same times.
+    stepped.erase("input");
+    one.erase("input");
+    CHECK(stepped == one);
 }
 
 TEST_CASE("a log given twice is refused where it would count twice: fit, residual, fit-ocv, score", "[cli]") {

@@ -679,3 +679,41 @@ TEST_CASE("headered reader with the CMU M100 mapping on flight 1", "[io][data]")
           "columns read as a DJI Matrice 100 log (CMU): time \"time\" in s, voltage \"battery_voltage\" in V, "
           "current \"battery_current\" in A");
 }
+
+// ---------------------------------------------------------------------------------------
+// A step of the log's clock, told from a logging gap by the charge it would take
+
+TEST_CASE("a clock step the pack could not have flown through is moved back; a gap stays", "[io]") {
+    TempDir t;
+    // 10 A either side of a 3600 s jump: at least 10 Ah over it, more than 1.55 Ah.
+    const std::string stepped = t.write("step.csv",
+                                        "time_s,voltage_v,current_a\n0,16,10\n0.1,16,10\n0.2,16,10\n3600.2,16,10\n3600.3,16,10\n");
+    ReaderOptions opt;
+    opt.clock_step_capacity_ah = 1.55;
+    SourceInfo info;
+    std::vector<core::Sample> v = read_all(stepped, opt, &info);
+    REQUIRE(v.size() == 5);
+    CHECK(v[3].time_us == 300000u);  // one usual interval (0.1 s) after the last before the step
+    CHECK(v[4].time_us == 400000u);
+    REQUIRE(info.notes.size() == 1);
+    CHECK(info.notes[0] ==
+          "the log's clock steps 3600 s ahead at 0.2 s into the log, with 10 A before and 10 A after: over a logging gap "
+          "that long the pack would have delivered at least 10 Ah, more than one and a half times the config's 1.55 Ah, so "
+          "the clock stepped (a radio's clock set by GPS, two files joined); the samples after it are read 3599.9 s "
+          "earlier, to follow on");
+    // Off unless asked: the jump is kept as it is.
+    CHECK(read_all(stepped, ReaderOptions())[3].time_us == 3600200000u);
+    // At 0.4 A on the ground the same jump is 0.4 Ah: a pack could sit through it, a gap.
+    const std::string ground = t.write("ground.csv",
+                                       "time_s,voltage_v,current_a\n0,16,0.4\n0.1,16,0.4\n3600.1,16,0.4\n3600.2,16,10\n");
+    info = SourceInfo();
+    v = read_all(ground, opt, &info);
+    CHECK(v[2].time_us == 3600100000u);
+    CHECK(info.notes.empty());
+    // So is a jump the smaller current either side could have flown: 100 s at 10 A then 0.5 A.
+    const std::string landed = t.write("landed.csv", "time_s,voltage_v,current_a\n0,16,10\n0.1,16,10\n100.1,16,0.5\n");
+    CHECK(read_all(landed, opt)[2].time_us == 100100000u);
+    // And one within half again the capacity (a label's rating can be low): 10 Ah over the hour on an 8 Ah pack.
+    opt.clock_step_capacity_ah = 8.0;
+    CHECK(read_all(stepped, opt)[3].time_us == 3600200000u);
+}

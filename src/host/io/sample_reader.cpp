@@ -3,6 +3,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -211,6 +212,68 @@ private:
     mutable SourceInfo info_;
 };
 
+// Moves the samples after a step of the log's clock back (ReaderOptions::clock_step_capacity_ah).
+// Counted as a gap, a 3600 s step mid-flight had charged the pack 13.95 Ah (of 5.2) over it and
+// read a model error of volts; only a jump the pack could not have flown through is moved.
+class ClockStepReader final : public SampleReader {
+public:
+    // Shorter jumps are left to the monitor as gaps (TimeOrder::kJumpUs: the shared logs'
+    // longest logging gap is 8.8 s).
+    static constexpr std::uint64_t kMinStepUs = 30000000;
+    // A config's capacity may be the label's, and a pack gives a little more; none gives half again.
+    static constexpr double kCapacities = 1.5;
+
+    ClockStepReader(std::unique_ptr<SampleReader> inner, double capacity_ah)
+        : inner_(std::move(inner)), capacity_ah_(capacity_ah) {}
+
+    bool next(core::Sample& out) override {
+        if (!inner_->next(out)) return false;
+        if (!have_) first_us_ = out.time_us;
+        const std::uint64_t raw_us = out.time_us;
+        out.time_us = raw_us >= shift_us_ ? raw_us - shift_us_ : 0;
+        if (have_ && out.time_us > last_us_ + kMinStepUs) {
+            const std::uint64_t jump_us = out.time_us - last_us_;
+            const double before_a = std::fabs(static_cast<double>(last_a_)), after_a = std::fabs(static_cast<double>(out.current_a));
+            const double least_ah = std::min(before_a, after_a) * static_cast<double>(jump_us) * 1e-6 / 3600.0;
+            if (std::isfinite(least_ah) && least_ah > kCapacities * capacity_ah_) {
+                // The step becomes one usual interval (the last one before it).
+                const std::uint64_t step_us = jump_us - interval_us_;
+                shift_us_ += step_us;
+                out.time_us -= step_us;
+                char buf[400];
+                std::snprintf(buf, sizeof buf,
+                              "the log's clock steps %.6g s ahead at %.6g s into the log, with %.3g A before and %.3g A "
+                              "after: over a logging gap that long the pack would have delivered at least %.4g Ah, more "
+                              "than one and a half times the config's %.4g Ah, so the clock stepped (a radio's clock "
+                              "set by GPS, two files joined); the samples after it are read %.6g s earlier, to follow on",
+                              static_cast<double>(jump_us) * 1e-6, static_cast<double>(last_us_ - first_us_) * 1e-6,
+                              before_a, after_a, least_ah, capacity_ah_, static_cast<double>(step_us) * 1e-6);
+                notes_.push_back(buf);
+            }
+        }
+        if (have_ && out.time_us > last_us_ && out.time_us - last_us_ <= kMinStepUs) interval_us_ = out.time_us - last_us_;
+        last_us_ = std::max(last_us_, out.time_us);
+        last_a_ = out.current_a;
+        have_ = true;
+        return true;
+    }
+
+    const SourceInfo& info() const override {
+        info_ = inner_->info();
+        info_.notes.insert(info_.notes.end(), notes_.begin(), notes_.end());
+        return info_;
+    }
+
+private:
+    std::unique_ptr<SampleReader> inner_;
+    double capacity_ah_;
+    bool have_ = false;
+    std::uint64_t first_us_ = 0, last_us_ = 0, shift_us_ = 0, interval_us_ = 0;
+    float last_a_ = 0.0f;
+    std::vector<std::string> notes_;
+    mutable SourceInfo info_;
+};
+
 // A reader with one more note of its own (options that do not apply to the log's format).
 class NotedReader final : public SampleReader {
 public:
@@ -274,6 +337,8 @@ std::unique_ptr<SampleReader> open_format(const std::string& path, const ReaderO
 
 std::unique_ptr<SampleReader> open_reader(const std::string& path, const ReaderOptions& options) {
     std::unique_ptr<SampleReader> reader = open_format(path, options);
+    if (options.clock_step_capacity_ah > 0.0)
+        reader = std::unique_ptr<SampleReader>(new ClockStepReader(std::move(reader), options.clock_step_capacity_ah));
     if (options.average_us == 0) return reader;
     return std::unique_ptr<SampleReader>(new AveragingReader(std::move(reader), options.average_us));
 }

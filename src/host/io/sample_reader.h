@@ -72,6 +72,11 @@ struct ReaderOptions {
     // at its last sample's time. For logs sampled faster than the joint estimator's
     // resistance lags reach (blackbox logs at hundreds of hertz).
     std::uint64_t average_us = 0;
+    // > 0: the pack's capacity, for telling a clock step from a logging gap. A forward jump
+    // of the log's clock over which even the smaller current either side would have drawn
+    // more than this is a step of the clock (a radio's RTC set by GPS, two files joined), not
+    // time that passed: the samples after it are moved back to follow on (a note says so).
+    double clock_step_capacity_ah = 0.0;
 };
 
 // What the reader found out about the log, for summaries and the README tables.
