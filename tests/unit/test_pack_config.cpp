@@ -108,6 +108,28 @@ TEST_CASE("make-config: a small pack's current thresholds shrink with it, not be
     CHECK_FALSE(big["joint"].contains("resistance_min_excitation_a2"));
 }
 
+TEST_CASE("make-config: below 4S the filters' voltage sigma is per cell", "[pack_config]") {
+    PackRating r;
+    r.cells = 1;
+    r.capacity_ah = 2.0;  // not a small pack: the σ follows the cells, not the capacity
+    json j = pack_config_json(r);
+    CHECK(j["joint"]["voltage_sigma_v"].get<double>() == Approx(0.0035));  // 0.014 V × 1/4
+    CHECK(j["joint"]["health_filter"]["voltage_sigma_v"].get<double>() == Approx(0.01));   // 0.04 V × 1/4
+    CHECK(j["joint"]["verdict_filter"]["voltage_sigma_v"].get<double>() == Approx(0.01));
+    r.cells = 3;
+    const LoadedConfig c = config_from_json(pack_config_json(r), "test");
+    CHECK(c.monitor.joint.ekf.voltage_sigma_v == Approx(0.0105f));
+    CHECK(c.monitor.joint.health.ekf.voltage_sigma_v == Approx(0.03f));
+    CHECK(c.monitor.joint.verdict.ekf.voltage_sigma_v == Approx(0.03f));
+    // 4S and up keep the core's own.
+    for (int cells : {4, 6}) {
+        r.cells = cells;
+        j = pack_config_json(r);
+        CHECK_FALSE(j["joint"].contains("voltage_sigma_v"));
+        CHECK_FALSE(j["joint"].contains("health_filter"));
+    }
+}
+
 TEST_CASE("make-config: a rating out of range is refused with what was expected", "[pack_config]") {
     PackRating r;
     r.cells = 4;
