@@ -62,6 +62,8 @@ int run(const MakeConfigArgs& a) {
         log = host::read_log_pack(a.from_log, options, a.cells);
         for (const std::string& why : log.ignored) std::cerr << me << ": note: ignored " << why << "\n";
         for (const std::string& note : log.notes) std::cerr << me << ": note: " << note << "\n";
+        if (!std::isfinite(a.cutoff_v))
+            for (const std::string& note : log.cutoff_notes) std::cerr << me << ": note: " << note << "\n";
     }
     // The command line first, then the log; each value says where it came from.
     auto pick = [&r](double given, const char* given_text, double logged, const std::string& logged_from, double* out) {

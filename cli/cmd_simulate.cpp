@@ -138,6 +138,8 @@ std::function<int()> setup(CLI::App& sub) {
                 std::cerr << "battsim simulate: note: " << s.name << ": the current sensor clipped " << t.sensor_stats.current_clipped
                           << " of " << t.sensor_stats.reads << " reads at its +-81.92 mV shunt range: the log's current is wrong there "
                           << "(the truth's current_clipped_reads)\n";
+            const std::string ground = host::sim::ground_draw_note(r);
+            if (!ground.empty()) std::cerr << "battsim simulate: note: " << ground << "\n";
             std::cout << s.name << ": " << t.rows << " rows -> " << log << "; flight " << t.landing_s - t.takeoff_s
                       << " s of " << t.total_flight_time_s << " s to cutoff (healthy pack " << t.healthy_total_flight_time_s
                       << " s)" << (t.landed_by_cutoff ? ", cut short by the cutoff" : "") << "\n";

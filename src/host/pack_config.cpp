@@ -51,6 +51,11 @@ constexpr double kOcvCellV[] = {3.3271, 3.5607, 3.6542, 3.6925, 3.7166, 3.7358, 
                                 3.8302, 3.8503, 3.8749, 3.9009, 3.9296, 3.9605, 3.9951, 4.035,  4.0898, 4.1999};
 // A per-cell cutoff outside this is not one anybody flies to: a typo or another unit.
 constexpr double kCutoffMinV = 2.5, kCutoffMaxV = 3.9;
+// Below this per cell a cutoff is a Li-ion pack's, not the LiPo's the config describes (whose
+// rest curve ends at 3.33 V): from a log, more likely a level set for another cell count
+// (ArduCopter 3's default LOW_VOLT, 10.5 V, is 3.5 V per cell on 3S and 2.62 V on 4S), and
+// the remaining time runs to it. The band the level would fit as a LiPo's loaded cutoff:
+constexpr double kLipoCutoffMinV = 3.0, kLipoCutoffLowV = 3.2, kLipoCutoffHighV = 3.7;
 // Where a charged or part-charged lithium cell rests, and the part of it a pack takes off from.
 constexpr double kRestMinCellV = 3.45, kTakeoffRestMinCellV = 3.6, kRestMaxCellV = 4.40;
 
@@ -281,9 +286,28 @@ LogPack log_pack(const SourceInfo& info, double resting_voltage_v, int cells_giv
                 }
             }
             if (enabled == 0.0)
-                p.notes.push_back("the log's battery failsafe takes no action (" + switch_name + " 0): its " + from +
+                p.cutoff_notes.push_back("the log's battery failsafe takes no action (" + switch_name + " 0): its " + from +
                                   " V only raised a warning, and the pilot may fly below it; it is the cutoff all the "
                                   "same (give --cutoff-v to set another)");
+            if (v / n < kLipoCutoffMinV) {
+                std::string note = "the log's " + from + " V is " + number_text(v / n, "%.2f V") + " per cell on " +
+                                   std::to_string(n) + " cells, below where a LiPo is flown (" +
+                                   number_text(kLipoCutoffMinV, "%.1f") + " V per cell or more under load)";
+                // The one other count at which it is an ordinary LiPo cutoff, when there is one.
+                int fits = 0, fitting = 0;
+                for (int m = 1; m <= core::kMaxCells; ++m)
+                    if (m != n && v / m >= kLipoCutoffLowV && v / m <= kLipoCutoffHighV) {
+                        fits = m;
+                        ++fitting;
+                    }
+                if (fitting == 1)
+                    note += "; it is " + number_text(v / fits, "%.2f V") + " per cell on " + std::to_string(fits) +
+                            " cells: set for another pack?";
+                note += " The remaining time runs to it, which lengthens it; give --cutoff-v (e.g. " +
+                        number_text(kMinV * n, "%.2f") + " for " + std::to_string(n) +
+                        " cells at 3.325 V) unless this is a Li-ion pack flown that low";
+                p.cutoff_notes.push_back(note);
+            }
         } else if (n > 0) {
             p.ignored.push_back(from + " V: " + number_text(v / n, "%.2f V") + " per cell (" +
                                 std::to_string(n) + " cells) is no cutoff (" + number_text(kCutoffMinV, "%.1f") + "-" +

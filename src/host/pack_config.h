@@ -48,6 +48,9 @@ struct LogPack {
     std::string cutoff_delay_from;
     std::vector<std::string> ignored;  // parameters present but not taken, and why
     std::vector<std::string> notes;    // taken, with a caveat
+    // Caveats on the log's cutoff, moot when the user gives one (they had said "it is the
+    // cutoff all the same" beside a --cutoff-v that replaced it).
+    std::vector<std::string> cutoff_notes;
     int declared_cells_beyond = 0;     // a declared count above core::kMaxCells (then cells = 0)
 };
 // `resting_voltage_v`: the log's first pack voltage while at rest (NaN = not at rest).

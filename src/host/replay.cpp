@@ -22,6 +22,9 @@ namespace {
 // racing flights at 6–28 mV, the Matrice 100's middle half at 7–38 mV.
 constexpr double kLostModelVPerCell = 0.25;
 constexpr double kMaxRealtimeWaitS = 2.0;  // --realtime: the longest wait for one sample
+// A flight that starts within the take-off confirmation and this much more of the log's first
+// sample had no ground before it: the log opened loaded (a sample or two of a slow log included).
+constexpr double kStartedLoadedSlackS = 1.0;
 
 }  // namespace
 
@@ -161,6 +164,26 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
                                               info.format == LogFormat::Csv && info.current_scale_to_a > 0.0 &&
                                                   info.current_scale_to_a < 0.01))
         input_notes.push_back(n);
+    // A log whose flight starts with its first samples never showed the ground: opened in the air
+    // or armed, or a craft that draws the take-off current disarmed, which then reads as one
+    // flight that never lands (a 1S whoop idling at 1.2 A against a 0.81 A bar: "flight 291.8 s,
+    // still flying" for a 240 s hop), with the starting charge read off a loaded sample.
+    if (flew && body["flight"]["start_s"].is_number()) {
+        const double from_first_s = body["flight"]["start_s"].get<double>() - static_cast<double>(t0_us) * 1e-6;
+        const double bar_a = options.config.monitor.flying.min_flying_current_a;
+        if (from_first_s <= options.config.monitor.flying.takeoff_confirm_s + kStartedLoadedSlackS) {
+            char buf[320];
+            std::snprintf(buf, sizeof buf,
+                          "the flight starts %.2f s into the log, with no ground before it (take-off current "
+                          "monitor.min_flying_current_a %.3g A): the log opened in the air or armed, or the craft draws "
+                          "that much on the ground",
+                          from_first_s, bar_a);
+            input_notes.push_back(std::string(buf) +
+                                  ", so the charge at the start is read off a loaded sample and a ground at that draw "
+                                  "counts as flight. If it was on the ground, give the config a take-off current above "
+                                  "its ground draw");
+        }
+    }
     j["input"] = {{"path", path}, {"format", to_string(info.format)}, {"cells", info.cell_count},
                   {"has_temperature", info.has_temperature}, {"notes", input_notes}};
     j["config"] = options.config.name;

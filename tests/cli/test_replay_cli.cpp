@@ -296,7 +296,10 @@ TEST_CASE("replay notes a current of the other sign and a time column in millise
                    Catch::EndsWith("mAh (negative) while the pack voltage fell from 16.5 to 15.3 V: if this log counts "
                                    "discharge as negative, replay it with --negative-discharge (manifest: "
                                    "\"negative_is_discharge\": true)"));
-    CHECK(notes("regen.csv", " --negative-discharge").empty());
+    // Flipped, it opens loaded: the one note left is that its flight starts with the log.
+    const auto rg_flipped = notes("regen.csv", " --negative-discharge");
+    REQUIRE(rg_flipped.size() == 1);
+    CHECK_THAT(rg_flipped[0].get<std::string>(), Catch::StartsWith("the flight starts 0.60 s into the log, with no ground before it"));
     // A correctly signed log of a charger's taper (-0.9 to -0.2 A at 16.8 V) and the rest
     // after it (16.6 V): below the take-off current nothing is counted, and nothing is said.
     std::string taper = "time_s,voltage_v,current_a\n";

@@ -76,3 +76,43 @@ TEST_CASE("score names the scenario whose simulated log cannot be read back", "[
     CHECK_THAT(r.err, Catch::Contains("scenario late: its simulated log cannot be read back"));
     CHECK(r.err.find("/battsim-score-") == std::string::npos);
 }
+
+TEST_CASE("simulate and replay say when a small craft's ground idle reads as flight", "[cli][sim]") {
+    // A 1S 300 mAh whoop on its make-config config: the scenario's default idle (5 W, 1.2 A)
+    // is above the config's 0.81 A take-off current, and the replay had read the 20 s on the
+    // ground, a 240 s hop and 30 s after it as one flight "still flying", without a word.
+    const std::string dir = clitest::temp_dir();
+    const std::string cfg = dir + "/whoop-config.json";
+    REQUIRE(run("make-config --cells 1 --capacity-mah 300 -o " + q(cfg)).exit_code == 0);
+    const auto whoop = [&](const std::string& name, double idle_w) {
+        nlohmann::json s = {{"schema", "battsim.scenario"}, {"version", 1}, {"name", name}, {"seed", 7},
+                            {"monitor_config", cfg}, {"pack", {{"cells", 1}, {"capacity_ah", 0.3}}},
+                            {"profile", {{"kind", "hover"}, {"idle_before_s", 20}, {"flight_s", 60}, {"idle_after_s", 20}}}};
+        if (idle_w > 0) s["profile"]["idle_power_w"] = idle_w;
+        const std::string path = dir + "/" + name + ".json";
+        clitest::write_file(path, s.dump(2));
+        return path;
+    };
+    const auto loud = run("simulate " + q(whoop("idle-5w", 0)) + " -o " + q(dir + "/idle-5w.csv"));
+    INFO(loud.err);
+    REQUIRE(loud.exit_code == 0);
+    CHECK_THAT(loud.err, Catch::Contains("note: idle-5w: the ground idle draws 1.2"));
+    CHECK_THAT(loud.err, Catch::Contains("(monitor.min_flying_current_a 0.811 A)"));
+    const auto replayed = clitest::run_json("replay " + q(dir + "/idle-5w.csv") + " -c " + q(cfg) + " --json");
+    CHECK_FALSE(replayed["flight"]["landed"].get<bool>());
+    bool said = false;
+    for (const auto& n : replayed["input"]["notes"])
+        said = said || n.get<std::string>().rfind("the flight starts 0.51 s into the log, with no ground before it (take-off "
+                                                   "current monitor.min_flying_current_a 0.811 A)", 0) == 0;
+    CHECK(said);
+
+    // At 1.5 W on the ground (0.36 A) the ground is ground: neither says anything, and the
+    // replay sees the landing.
+    const auto quiet = run("simulate " + q(whoop("idle-1w5", 1.5)) + " -o " + q(dir + "/idle-1w5.csv"));
+    INFO(quiet.err);
+    REQUIRE(quiet.exit_code == 0);
+    CHECK(quiet.err.find("note:") == std::string::npos);
+    const auto landed = clitest::run_json("replay " + q(dir + "/idle-1w5.csv") + " -c " + q(cfg) + " --json");
+    CHECK(landed["flight"]["landed"].get<bool>());
+    for (const auto& n : landed["input"]["notes"]) CHECK(n.get<std::string>().find("no ground before it") == std::string::npos);
+}

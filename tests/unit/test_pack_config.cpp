@@ -222,12 +222,32 @@ TEST_CASE("What an autopilot log says about its pack", "[pack_config]") {
                                 "3.325 V per cell is used");
         const LogPack off = log_pack(with_parameters({{"FS_BATT_ENABLE", 0}, {"LOW_VOLT", 10.5}}), 14.99);
         CHECK(off.cutoff_voltage_v == Approx(10.5));
-        REQUIRE(off.notes.size() == 1);
-        CHECK(off.notes[0].find("takes no action (FS_BATT_ENABLE 0)") != std::string::npos);
+        REQUIRE(off.cutoff_notes.size() == 2);
+        CHECK(off.cutoff_notes[0].find("takes no action (FS_BATT_ENABLE 0)") != std::string::npos);
+        CHECK(off.notes.empty());
         // More cells than battsim handles: not guessed from the voltage instead.
         const LogPack many = log_pack(with_parameters({{"BAT1_N_CELLS", 14}}), 58.0);
         CHECK(many.cells == 0);
         CHECK(many.declared_cells_beyond == 14);
+    }
+    SECTION("a cutoff below a LiPo's is said, with the count it would fit") {
+        // ArduCopter 3's default LOW_VOLT on a 4S pack (robert_lefebvre_octo_PM.log): 2.62 V per
+        // cell, taken without a word, ran the remaining time to a depth no LiPo is flown to.
+        const LogPack four = log_pack(with_parameters({{"LOW_VOLT", 10.5}}), 14.99);
+        CHECK(four.cutoff_voltage_v == Approx(10.5));  // still the cutoff: a Li-ion pack is flown there
+        REQUIRE(four.cutoff_notes.size() == 1);
+        CHECK(four.cutoff_notes[0] ==
+              "the log's LOW_VOLT 10.5 V is 2.62 V per cell on 4 cells, below where a LiPo is flown (3.0 V per cell or "
+              "more under load); it is 3.50 V per cell on 3 cells: set for another pack? The remaining time runs to it, "
+              "which lengthens it; give --cutoff-v (e.g. 13.30 for 4 cells at 3.325 V) unless this is a Li-ion pack "
+              "flown that low");
+        // An ordinary LiPo cutoff says nothing (underpowered.log: 9.4 V on 3S, 3.13 V per cell).
+        CHECK(log_pack(with_parameters({{"LOW_VOLT", 9.4}}), 12.10).cutoff_notes.empty());
+        // 2.6 V per cell on 6S fits no single other count in the band: no guess named.
+        const LogPack six = log_pack(with_parameters({{"BATT_LOW_VOLT", 15.6}}), 24.2);
+        REQUIRE(six.cells == 6);
+        REQUIRE(six.cutoff_notes.size() == 1);
+        CHECK(six.cutoff_notes[0].find("set for another pack") == std::string::npos);
     }
     SECTION("a log's cell columns count before its voltage") {
         SourceInfo info;

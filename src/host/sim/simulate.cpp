@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "host/config_json.h"
 #include "host/io/atomic_file.h"
@@ -476,6 +477,26 @@ void write_simulation(const SimulationResult& r, const std::string& log_path, co
     truth.write(json_text(truth_to_json(r), 2) + "\n");
     log.commit();
     truth.commit();
+}
+
+std::string ground_draw_note(const SimulationResult& r) {
+    std::vector<double> ground_a;
+    for (const TruthPoint& p : r.truth.series)
+        if (p.time_s < r.truth.takeoff_s - r.scenario.profile.armed_s) ground_a.push_back(p.current_a);
+    if (ground_a.empty()) return "";
+    // The median: the idle's own draw, whatever a first point or the arming does.
+    std::nth_element(ground_a.begin(), ground_a.begin() + ground_a.size() / 2, ground_a.end());
+    const double idle_a = ground_a[ground_a.size() / 2];
+    const double bar_a = r.scenario.config.monitor.flying.min_flying_current_a;
+    if (!(idle_a >= bar_a)) return "";
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "%s: the ground idle draws %.2f A (profile.idle_power_w %g W), at or above the monitor config's "
+                  "take-off current (monitor.min_flying_current_a %.3g A): its replay reads the ground as flight, one "
+                  "flight from the log's first sample that never lands. Give the scenario a smaller idle_power_w "
+                  "(what the craft draws disarmed), or the config a take-off current above the idle's",
+                  r.scenario.name.c_str(), idle_a, r.scenario.profile.idle_power_w, bar_a);
+    return buf;
 }
 
 }  // namespace sim

@@ -107,6 +107,12 @@ ForwardResult fly_to_cutoff(const PlantParams& plant, const PlantState& state, d
 
 nlohmann::json truth_to_json(const SimulationResult& r);
 
+// When the simulated ground idle draws at least the monitor config's take-off current: the
+// monitor then reads the log as one flight from its first sample, never landed (a 1S 300 mAh
+// scenario at the default 5 W idle draws 1.2 A against make-config's 0.81 A bar). The text
+// says what to change; empty when the ground reads as ground.
+std::string ground_draw_note(const SimulationResult& r);
+
 // Writes the log and the truth JSON atomically.
 void write_simulation(const SimulationResult& r, const std::string& log_path, const std::string& truth_path);
 
