@@ -9,6 +9,7 @@
 
 #include "command.h"
 #include "host/batch/inputs.h"
+#include "host/batch/manifest.h"
 #include "host/config_reader.h"
 #include "host/io/atomic_file.h"
 #include "host/io/number_text.h"
@@ -96,26 +97,27 @@ int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedC
         std::cerr << "battsim: --current-source: expected auto, current or shunt, found \"" << a.current_source << "\"\n";
         return kExitUsage;
     }
-    auto unit_scale = [](const std::string& unit, const char* what, double& out) -> bool {
-        if (unit.empty()) return true;
-        if (unit == "s" || unit == "A") out = 1.0;
-        else if (unit == "ms" || unit == "mA") out = 1e-3;
-        else if (unit == "us") out = 1e-6;
-        else {
-            std::cerr << "battsim: " << what << ": unknown unit \"" << unit << "\"\n";
-            return false;
-        }
-        return true;
-    };
+    // Each quantity takes only its own units, as a manifest's columns do: a shared table had
+    // read "--current-unit us" as 1e-6 A and "--time-unit A" as seconds, exit 0.
     host::ColumnMapping& m = reader.columns;
+    try {
+        if (!a.time_unit.empty()) m.time_scale_to_s = host::time_unit_scale(a.time_unit);
+    } catch (const std::invalid_argument& e) {
+        std::cerr << "battsim: --time-unit: " << e.what() << "\n";
+        return kExitUsage;
+    }
+    try {
+        if (!a.current_unit.empty()) m.current_scale_to_a = host::current_unit_scale(a.current_unit);
+    } catch (const std::invalid_argument& e) {
+        std::cerr << "battsim: --current-unit: " << e.what() << "\n";
+        return kExitUsage;
+    }
     m.time = a.time_col;
     m.voltage = a.voltage_col;
     m.current = a.current_col;
     m.temperature = a.temperature_col;
     m.cells = a.cell_cols;
     m.current_negative_is_discharge = a.negative_discharge;
-    if (!unit_scale(a.time_unit, "--time-unit", m.time_scale_to_s)) return kExitUsage;
-    if (!unit_scale(a.current_unit, "--current-unit", m.current_scale_to_a)) return kExitUsage;
     if (a.average_ms != 0.0) {
         try {
             reader.average_us = static_cast<std::uint64_t>(std::llround(host::average_window_ms(a.average_ms) * 1000.0));

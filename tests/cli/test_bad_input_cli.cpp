@@ -456,3 +456,36 @@ TEST_CASE("a spreadsheet's ';' CSV is named as such; a column name's raw bytes a
     r = run("replay " + q(kExample) + " -c " + q(dir + "/absent.json"));
     CHECK_THAT(r.err, Catch::Contains(dir + "/absent.json: cannot open config file: no such file"));
 }
+
+TEST_CASE("a time or current unit of the other quantity is refused, as a manifest's is", "[cli]") {
+    // replay, fit and the other one-log commands had read "--current-unit us" as 1e-6 A and
+    // "--time-unit A" as seconds, exit 0: a pipeline's typo gave quietly wrong numbers.
+    const std::string dir = clitest::temp_dir();
+    const std::string log = dir + "/f.csv";
+    std::string text = "t,v,i\n";
+    for (int k = 0; k < 400; ++k)
+        text += std::to_string(k * 100) + ",16.5," + std::to_string(k < 100 ? 200 : 15000) + "\n";
+    clitest::write_file(log, text);
+    const std::string cols = " --time-col t --voltage-col v --current-col i";
+    struct Case {
+        std::string units, says;
+    };
+    const Case cases[] = {
+        {"--time-unit ms --current-unit us", "--current-unit: unknown current unit \"us\"; expected A or mA"},
+        {"--time-unit ms --current-unit s", "--current-unit: unknown current unit \"s\"; expected A or mA"},
+        {"--time-unit A --current-unit mA", "--time-unit: unknown time unit \"A\"; expected s, ms or us"},
+        {"--time-unit mA --current-unit mA", "--time-unit: unknown time unit \"mA\"; expected s, ms or us"},
+    };
+    for (const char* command : {"replay", "fit"}) {
+        for (const Case& c : cases) {
+            INFO(command << " " << c.units);
+            const auto r = run(std::string(command) + " " + q(log) + cols + " " + c.units + " --json");
+            CHECK(r.exit_code == 2);
+            CHECK_THAT(r.err, Catch::Contains(c.says));
+            CHECK(r.out.empty());
+        }
+    }
+    // The units of each quantity still read as they did.
+    const auto ok = clitest::run_json("replay " + q(log) + cols + " --time-unit ms --current-unit mA --json");
+    CHECK(ok["duration_s"] == 39.9);
+}

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -534,4 +535,40 @@ TEST_CASE("batch: what a config makes unreliable is said once, with how many log
     CHECK(r.err.find("note (") == std::string::npos);
     r = run("batch " + logs + " -c " + q(kConfig) + " --no-progress -o " + q(dir + "/t.md"));  // the reference needs none
     CHECK(r.err.find("note (") == std::string::npos);
+}
+
+TEST_CASE("batch: a directory it may not read is said as such, not as one without logs", "[cli][batch]") {
+    // An unreadable fleet folder had made the row "directory holds no log files", as if no
+    // drone had flown. Root reads any directory, so as root the run drops that power (capsh).
+    const std::string dir = fleet_dir(1, false);
+    REQUIRE(::mkdir((dir + "/locked").c_str(), 0755) == 0);
+    REQUIRE(::mkdir((dir + "/locked/sub").c_str(), 0755) == 0);
+    clitest::write_file(dir + "/locked/sub/a.csv", raw_flight(12, 0.0006));
+    REQUIRE(::chmod((dir + "/locked/sub").c_str(), 0) == 0);
+    const std::string args = " batch \"" + dir + "/locked/sub\" \"" + dir + "/locked/*/*.csv\" \"" + dir +
+                             "/g1.csv\" -c \"" + kConfig + "\" --format json --no-progress";
+    clitest::Result r;
+    if (::geteuid() != 0) {
+        r = run(args);
+    } else if (std::system("command -v capsh >/dev/null 2>&1") == 0) {
+        r = testsupport::run_program("capsh", "--drop=cap_dac_override,cap_dac_read_search -- -c " +
+                                                  q(std::string("\"") + BATTSIM_BINARY + "\"" + args));
+    } else {
+        ::chmod((dir + "/locked/sub").c_str(), 0755);
+        WARN("running as root without capsh: the unreadable directory cannot be made; not checked");
+        return;
+    }
+    ::chmod((dir + "/locked/sub").c_str(), 0755);  // so the scratch directory can be removed
+    INFO(r.err);
+    CHECK(r.exit_code == 1);
+    const auto table = nlohmann::json::parse(r.out);
+    REQUIRE(table["rows"].size() == 3);
+    CHECK(table["rows"][0]["status"] == "error");
+    CHECK(table["rows"][0]["error"] == "cannot read the directory: Permission denied");
+    // A pattern that passes through it names the directory it could not read.
+    CHECK(table["rows"][1]["status"] == "error");
+    CHECK(table["rows"][1]["error"] == dir + "/locked/sub: cannot read the directory: Permission denied");
+    CHECK(table["rows"][2]["status"] == "ok");
+    CHECK_THAT(r.err, Catch::Contains("failed: " + dir + "/locked/sub: cannot read the directory: Permission denied"));
+    CHECK(r.err.find("holds no log files") == std::string::npos);
 }

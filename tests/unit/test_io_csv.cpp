@@ -206,13 +206,13 @@ TEST_CASE("bad input: header only", "[io]") {
 TEST_CASE("bad input: wrong column count", "[io]") {
     TempDir t;
     const std::string p = t.write("raw.csv", std::string(kRawRow1) + "694,16.57,4.14,4.14,4.14,4.16,173.53\n" + kRawRow3);
-    CHECK(read_error(p) == p + ":2: expected 8 fields (9 with a trailing comma): time_ms, bus_voltage_v, "
+    CHECK(read_error(p) == p + ":2:8: expected 8 fields (9 with a trailing comma): time_ms, bus_voltage_v, "
                                "cell1_v..cell4_v, current_ma, shunt_mv, found 7");
     const std::string q = t.write("raw10.csv", std::string(kRawRow1) + "694,16.57,4.14,4.14,4.14,4.16,173.53,0.44,1,\n");
-    CHECK(read_error(q) == q + ":2: expected 8 fields (9 with a trailing comma): time_ms, bus_voltage_v, "
+    CHECK(read_error(q) == q + ":2:9: expected 8 fields (9 with a trailing comma): time_ms, bus_voltage_v, "
                                "cell1_v..cell4_v, current_ma, shunt_mv, found 10");
     const std::string c = t.write("hdr.csv", "time_s,voltage_v,current_a\n0,12.0,1.0\n0.1,12.0,1.0,5\n");
-    CHECK(read_error(c) == c + ":3: expected 3 fields (as in the header on line 1), found 4");
+    CHECK(read_error(c) == c + ":3:4: expected 3 fields (as in the header on line 1), found 4");
 }
 
 TEST_CASE("bad input: non-numeric field", "[io]") {
@@ -297,7 +297,7 @@ TEST_CASE("bad input: truncated last line is skipped with a note", "[io]") {
     }
     SECTION("the same short line WITH a newline is an error") {
         const std::string p = t.write("f.csv", std::string(kRawRow1) + kRawRow2 + "760,16.57,4.1\n");
-        CHECK(read_error(p) == p + ":3: expected 8 fields (9 with a trailing comma): time_ms, bus_voltage_v, "
+        CHECK(read_error(p) == p + ":3:4: expected 8 fields (9 with a trailing comma): time_ms, bus_voltage_v, "
                                    "cell1_v..cell4_v, current_ma, shunt_mv, found 3");
     }
     SECTION("a bad number in the middle of the last line is still an error") {

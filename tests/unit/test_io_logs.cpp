@@ -1149,6 +1149,8 @@ TEST_CASE("A binary log cut short before its battery data says it is cut short",
     CHECK_THAT(error_of(Kind::Ulog, ulog), Catch::Contains("no battery_status data") &&
                                                Catch::Contains("the file ends inside a message at byte") &&
                                                Catch::Contains("cut short"));
+    // Nor does it say the topic is not logged, which the part missing may hold.
+    CHECK_THAT(error_of(Kind::Ulog, ulog), !Catch::Contains("not logged"));
     const std::string bin = head_of(data_path("/ardupilot/log171.bin"), "cut.bin", 1000);
     CHECK_THAT(error_of(Kind::DfBinary, bin), Catch::Contains("no BAT or CURR messages") && Catch::Contains("cut short"));
 }

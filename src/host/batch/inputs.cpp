@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <stdexcept>
@@ -44,17 +45,22 @@ bool natural_less(const std::string& a, const std::string& b) {
 namespace {
 
 // Regular (or symlinked-to-regular) files directly in `dir`, hidden ones skipped, sorted.
-std::vector<std::string> list_directory(const std::string& dir) {
+// `why` is set when the directory cannot be listed: one the user may not read had read as
+// "holds no log files", as if the fleet's logs were not there.
+std::vector<std::string> list_directory(const std::string& dir, std::string& why) {
     std::vector<std::string> names;
     std::error_code ec;
     fs::directory_iterator it(dir, ec);
-    if (ec) return names;
-    for (const fs::directory_entry& e : it) {
-        const std::string name = e.path().filename().string();
+    for (; !ec && it != fs::directory_iterator(); it.increment(ec)) {
+        const std::string name = it->path().filename().string();
         if (name.empty() || name[0] == '.') continue;
         std::error_code sec;
-        if (!fs::is_regular_file(e.path(), sec)) continue;
+        if (!fs::is_regular_file(it->path(), sec)) continue;
         names.push_back(name);
+    }
+    if (ec) {
+        why = "cannot read the directory: " + ec.message();
+        return {};
     }
     std::sort(names.begin(), names.end(), natural_less);
     std::vector<std::string> out;
@@ -73,11 +79,22 @@ bool exists(const std::string& p) {
     return fs::exists(p, ec);
 }
 
-std::vector<std::string> glob_paths(const std::string& pattern) {
+// Directories glob(3) could not read while matching, with why; glob's error callback takes
+// no context, and inputs are expanded on one thread.
+thread_local std::vector<std::string>* g_glob_unreadable = nullptr;
+
+extern "C" int note_glob_error(const char* path, int err) {
+    if (g_glob_unreadable) g_glob_unreadable->push_back(std::string(path) + ": cannot read the directory: " + std::strerror(err));
+    return 0;  // go on with the rest of the pattern
+}
+
+std::vector<std::string> glob_paths(const std::string& pattern, std::vector<std::string>& unreadable) {
     glob_t g{};
     std::vector<std::string> out;
+    g_glob_unreadable = &unreadable;
     // GLOB_NOSORT: glob(3) sorts by the locale's collation; we sort locale-free below.
-    const int rc = ::glob(pattern.c_str(), GLOB_NOSORT, nullptr, &g);
+    const int rc = ::glob(pattern.c_str(), GLOB_NOSORT, note_glob_error, &g);
+    g_glob_unreadable = nullptr;
     if (rc == 0) {
         for (size_t i = 0; i < g.gl_pathc; ++i) out.emplace_back(g.gl_pathv[i]);
     }
@@ -118,19 +135,25 @@ std::vector<ExpandedPath> expand_inputs(const std::vector<std::string>& argument
     };
     for (const std::string& arg : arguments) {
         if (is_directory(arg)) {
-            const std::vector<std::string> files = list_directory(arg);
-            if (files.empty()) out.push_back({arg, arg, "directory holds no log files"});
+            std::string why;
+            const std::vector<std::string> files = list_directory(arg, why);
+            if (!why.empty()) out.push_back({arg, arg, why});
+            else if (files.empty()) out.push_back({arg, arg, "directory holds no log files"});
             for (const std::string& f : files) add(f, arg);
         } else if (is_glob_pattern(arg) && !exists(arg)) {
             std::vector<std::string> files;
-            for (const std::string& m : glob_paths(arg)) {
+            std::vector<std::string> unreadable;  // directories the pattern passes that could not be listed
+            for (const std::string& m : glob_paths(arg, unreadable)) {
                 if (is_directory(m)) {
-                    for (const std::string& f : list_directory(m)) files.push_back(f);
+                    std::string why;
+                    for (const std::string& f : list_directory(m, why)) files.push_back(f);
+                    if (!why.empty()) unreadable.push_back(m + ": " + why);
                 } else {
                     files.push_back(m);
                 }
             }
-            if (files.empty()) out.push_back({arg, arg, "pattern matches no file"});
+            for (const std::string& u : unreadable) out.push_back({arg, arg, u});
+            if (files.empty() && unreadable.empty()) out.push_back({arg, arg, "pattern matches no file"});
             for (const std::string& f : files) add(f, arg);
         } else {
             // Kept even if missing: the replay reports it as an unreadable log.

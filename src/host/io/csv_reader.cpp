@@ -418,7 +418,9 @@ private:
                                  " fields");
                     return false;
                 }
-                throw InputError(info_.path, ln, 0,
+                // The column is the first field missing or the first one too many, as a
+                // manifest's CSV says it: "file:line" alone left a pipeline to count commas.
+                throw InputError(info_.path, ln, static_cast<long>(std::min(n, expected_fields_)) + 1,
                                  "expected " + count_text_ + ", found " + std::to_string(fields_.size()));
             }
             if (at_eof_no_newline && !trailing && rows_ > 0 && all_trailing_) {

@@ -707,12 +707,12 @@ private:
             const std::string cut = s.cut_at() < 0 ? std::string()
                                                    : "; the file ends inside a message at byte " + std::to_string(s.cut_at()) +
                                                          ": it is cut short, and the battery data may be in the part missing";
-            throw InputError(path_, 0, 0,
-                             (s.saw_subscription()
-                                  ? "no battery_status data (multi_id 0) in this ULog: the topic is subscribed but "
-                                    "never logged"
-                                  : "no battery_status data (multi_id 0) in this ULog: the topic is not logged") +
-                                 corrupt + cut);
+            // A file cut short may hold the topic in the part missing: "not logged" would
+            // contradict the cut it goes on to name, so it is said only of a whole file.
+            const std::string why = !cut.empty()          ? std::string()
+                                    : s.saw_subscription() ? ": the topic is subscribed but never logged"
+                                                           : ": the topic is not logged";
+            throw InputError(path_, 0, 0, "no battery_status data (multi_id 0) in this ULog" + why + corrupt + cut);
         }
         // PX4 fills every cell with pack / count when it cannot measure cells: such cells
         // say nothing of any cell, and their sum, rounded apart from the pack's, read as a
