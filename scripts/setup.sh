@@ -12,9 +12,10 @@ PACKAGES="build-essential cmake pkg-config
   libcli11-dev libfccp-dev nlohmann-json3-dev libeigen3-dev catch2
   libgnuplot-iostream-dev gnuplot-nox libboost-iostreams-dev libboost-system-dev libboost-filesystem-dev"
 # Extra tools the full test run uses (cross-compiler, sanitizers, fuzzers, benchmarks), and
-# python3 for the measurement scripts the docs quote (standard library only).
+# python3 for the measurement scripts the docs quote (standard library only), and capsh
+# (libcap2-bin) for the test of a directory root may not read.
 if [ "${BATTSIM_MINIMAL:-0}" != 1 ]; then
-  PACKAGES="$PACKAGES clang libclang-rt-14-dev gcc-xtensa-lx106 picolibc-xtensa-lx106-elf valgrind libbenchmark-dev python3"
+  PACKAGES="$PACKAGES clang libclang-rt-14-dev gcc-xtensa-lx106 picolibc-xtensa-lx106-elf valgrind libbenchmark-dev python3 libcap2-bin"
 fi
 
 missing=""
