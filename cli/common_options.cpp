@@ -350,6 +350,10 @@ void print_flight_brief(const nlohmann::json& s, std::ostream& out) {
     const auto began = [&](const char* key) -> std::string {
         const auto& t = f["remaining_time_s"].value(key, nlohmann::json());
         if (!t.is_number()) return std::string();
+        // On the landing sample itself (flight 29's last solve: 64 s to 57.6 s as it landed),
+        // "145.1 s into the flight" of a 145.1 s flight had read as a state flown in.
+        if (f["end_s"].is_number() && t.get<double>() >= f["end_s"].get<double>())
+            return fixed(t, 1) + " s (at the landing)";
         return fixed(t, 1) + " s (" + fixed(t.get<double>() - f["start_s"].get<double>(), 1) + " s into the flight)";
     };
     const std::string low = began("low_from_s"), critical = began("critical_from_s");

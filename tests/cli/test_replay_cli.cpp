@@ -127,6 +127,11 @@ TEST_CASE("replay says when the battery states LOW and CRITICAL began, which are
     CHECK_THAT(clitest::run("replay " + q(log)).out,
                Catch::Contains("  battery state (telemetry.low_time_s, critical_time_s): LOW from ") &&
                    Catch::Contains(", CRITICAL from "));
+    // On the landing sample itself it says so (the dissertation's flight 29: LOW as it lands,
+    // which had read "145.1 s into the flight" of a 145.1 s flight).
+    const std::string f29 = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/29.csv";
+    CHECK_THAT(clitest::run("replay " + q(f29) + " -c " + q(kSource + "/configs/sim-4s.json") + " --estimator joint").out,
+               Catch::Contains("LOW from 286.6 s (at the landing)"));
     // The example flight lands with minutes to spare: null, and no such line.
     const auto ex = clitest::run_json("replay " + q(kSource + "/logs/example-4s.csv") + " -c " +
                                       q(kSource + "/configs/sim-4s.json") + " --estimator joint --json");
