@@ -88,6 +88,10 @@ int run(const MakeConfigArgs& a) {
     pick(a.cutoff_v, "cutoff given", log.cutoff_voltage_v, "cutoff from " + log.cutoff_from, &r.cutoff_voltage_v);
     pick(a.cutoff_delay_s, "cutoff delay given", log.cutoff_delay_s, "cutoff delay from " + log.cutoff_delay_from,
          &r.cutoff_delay_s);
+    // Where each value came from, when a log gave some (from the command line alone it only
+    // repeated what was typed); before a refusal too, which had not said what the log did give.
+    for (const std::string& s : r.sources)
+        if (s.find(" given") == std::string::npos) std::cerr << me << ": " << s << "\n";
     const std::string where = a.from_log.empty() ? "" : " (the log does not say)";
     if (r.cells <= 0 && log.declared_cells_beyond > 0) {
         std::cerr << me << ": the log's pack has " << log.declared_cells_beyond << " cells in series; battsim handles at most "
@@ -102,10 +106,10 @@ int run(const MakeConfigArgs& a) {
         std::cerr << me << ": what is the rated capacity? give --capacity-mah" << where << "\n";
         return kExitUsage;
     }
-    // Where each value came from, when a log gave some (from the command line alone it only
-    // repeated what was typed).
-    for (const std::string& s : r.sources)
-        if (s.find(" given") == std::string::npos) std::cerr << me << ": " << s << "\n";
+    if (std::isfinite(a.resistance_mohm)) {
+        const std::string per_cell = host::per_cell_resistance_note(r);
+        if (!per_cell.empty()) std::cerr << me << ": note: " << per_cell << "\n";
+    }
     nlohmann::json j;
     try {
         j = host::pack_config_json(r);

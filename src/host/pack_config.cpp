@@ -236,6 +236,20 @@ json pack_config_json(const PackRating& r) {
     return j;
 }
 
+std::string per_cell_resistance_note(const PackRating& r) {
+    if (r.cells < 2 || !std::isfinite(r.resistance_ohm) || !(r.capacity_ah > 0.0)) return "";
+    // The reference LiPo scaled to this rating, per cell; a pack figure under 1.5 of those is
+    // closer to one cell's than to the pack's.
+    const double typical_cell_ohm = kCellResistanceOhm / (r.capacity_ah / kRefCapacityAh);
+    if (r.resistance_ohm >= 1.5 * typical_cell_ohm) return "";
+    return "--resistance-mohm is the whole pack's: " + number_text(r.resistance_ohm * 1e3, "%.3g") + " mOhm is " +
+           number_text(r.resistance_ohm * 1e3 / r.cells, "%.2g") + " mOhm per cell on " + std::to_string(r.cells) +
+           " cells, where the reference LiPo scaled to this rating has " + number_text(typical_cell_ohm * 1e3, "%.2g") +
+           " mOhm per cell. If your charger showed it per cell, give the sum of the cells' (e.g. " + std::to_string(r.cells) +
+           " x " + number_text(r.resistance_ohm * 1e3, "%.3g") + " = " +
+           number_text(r.resistance_ohm * 1e3 * r.cells, "%.3g") + ")";
+}
+
 LogPack log_pack(const SourceInfo& info, double resting_voltage_v, int cells_given) {
     LogPack p;
     double v = NAN;

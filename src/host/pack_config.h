@@ -32,6 +32,9 @@ struct PackRating {
 // configs/generic-3s.json and sim-4s-1800.json were by hand. Checked by config_from_json.
 // Throws std::invalid_argument naming the value out of range.
 nlohmann::json pack_config_json(const PackRating& rating);
+// A note when a given pack resistance looks like one cell's (a charger shows each cell's
+// internal resistance, and --resistance-mohm is the whole pack's); empty otherwise.
+std::string per_cell_resistance_note(const PackRating& rating);
 
 // What a log says about its pack; a field stays empty (0 / NaN) when the log does not say.
 struct LogPack {

@@ -299,3 +299,23 @@ TEST_CASE("Replay notes a config for another pack than the log's autopilot flew"
     CHECK(notes[0].rfind("the charge counted since full passed the config's capacity (1.55 Ah) 22.4 s into the log: the "
                          "model's voltage past there is not a battery's", 0) == 0);
 }
+
+TEST_CASE("make-config: a given pack resistance that looks like one cell's is noted", "[pack_config]") {
+    PackRating r;
+    r.cells = 4;
+    r.capacity_ah = 1.3;  // the reference's 5 mOhm per cell x 1.55 / 1.3 = 5.96 mOhm per cell
+    r.resistance_ohm = 0.004;
+    CHECK(per_cell_resistance_note(r) ==
+          "--resistance-mohm is the whole pack's: 4 mOhm is 1 mOhm per cell on 4 cells, where the reference LiPo scaled "
+          "to this rating has 6 mOhm per cell. If your charger showed it per cell, give the sum of the cells' (e.g. 4 x 4 "
+          "= 16)");
+    r.resistance_ohm = 0.0089;  // just under 1.5 x 5.96 mOhm: still a cell's
+    CHECK_FALSE(per_cell_resistance_note(r).empty());
+    r.resistance_ohm = 0.009;  // above: a low pack, not noted
+    CHECK(per_cell_resistance_note(r).empty());
+    r.resistance_ohm = 0.016;
+    CHECK(per_cell_resistance_note(r).empty());
+    r.cells = 1;  // one cell: the pack's is the cell's
+    r.resistance_ohm = 0.004;
+    CHECK(per_cell_resistance_note(r).empty());
+}
