@@ -273,6 +273,21 @@ LogPack log_pack(const SourceInfo& info, double resting_voltage_v, int cells_giv
         p.cells_from = "the pack resting at " + number_text(resting_voltage_v, "%.2f V") + " (" +
                        number_text(resting_voltage_v / n, "%.2f V") + " per cell)";
     }
+    // A count given against a log that rests outside a lithium cell's band on it: said before
+    // the config is written (replay said it only later, of every flight).
+    if (cells_given > 0 && std::isfinite(resting_voltage_v) && resting_voltage_v > 0.0) {
+        const double per_cell_v = resting_voltage_v / cells_given;
+        if (per_cell_v < kRestMinCellV || per_cell_v > kRestMaxCellV) {
+            std::string note = "the log's pack rests at " + number_text(resting_voltage_v, "%.2f V") + ", " +
+                               number_text(per_cell_v, "%.2f V") + " per cell on the " + std::to_string(cells_given) +
+                               " cells given, outside where a lithium cell rests (" + number_text(kRestMinCellV, "%.2f") +
+                               "-" + number_text(kRestMaxCellV, "%.2f") + " V)";
+            if (const int m = cells_from_resting_voltage(resting_voltage_v))
+                note += "; on " + std::to_string(m) + " cells it is " + number_text(resting_voltage_v / m, "%.2f V") +
+                        " per cell: check --cells";
+            p.notes.push_back(note);
+        }
+    }
     if (first_positive(info, {"BATT_CAPACITY", "BAT1_CAPACITY", "BAT_CAPACITY"}, &v, &from)) {
         p.capacity_ah = v / 1000.0;
         p.capacity_from = "the log's " + from + " mAh";

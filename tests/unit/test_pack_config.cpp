@@ -189,6 +189,18 @@ TEST_CASE("What an autopilot log says about its pack", "[pack_config]") {
         CHECK(q.ignored[0].find("BATT_LOW_VOLT 20") != std::string::npos);
         CHECK(q.cutoff_delay_s == 10.0);
     }
+    SECTION("a count given against the log's rest is noted when it puts a cell outside a lithium cell's") {
+        // 16.54 V as 6S: 2.76 V per cell; as 4S 4.135 V.
+        LogPack p = log_pack(with_parameters({{"BATT_CAPACITY", 5200}}), 16.54, 6);
+        REQUIRE(p.notes.size() == 1);
+        CHECK(p.notes[0] ==
+              "the log's pack rests at 16.54 V, 2.76 V per cell on the 6 cells given, outside where a lithium cell rests "
+              "(3.45-4.40 V); on 4 cells it is 4.13 V per cell: check --cells");
+        p = log_pack(with_parameters({{"BATT_CAPACITY", 5200}}), 16.54, 4);
+        CHECK(p.notes.empty());
+        p = log_pack(with_parameters({{"BATT_CAPACITY", 5200}}), NAN, 6);  // no rest: nothing to judge
+        CHECK(p.notes.empty());
+    }
     SECTION("PX4: cells, capacity and a per-cell resistance; -1 = unset") {
         const LogPack p = log_pack(with_parameters({{"BAT1_N_CELLS", 3}, {"BAT1_CAPACITY", 2200}, {"BAT1_R_INTERNAL", 0.005}}), NAN);
         CHECK(p.cells == 3);
