@@ -91,8 +91,49 @@ TEST_CASE("numbers without a header in an unknown layout are rejected", "[io]") 
 TEST_CASE("unknown binary content is rejected", "[io]") {
     TempDir t;
     const std::string p = t.write("junk.bin", std::string("\x7F" "ELF\x02\x01\x01\x00\x00\x00", 10));
-    CHECK(read_error(p) ==
-          p + ": unrecognised binary file: expected a ULog (.ulg), DataFlash (.bin) or text (CSV) log");
+    CHECK(read_error(p) == p + ": unrecognised binary file (byte 0x7F at offset 0 is not text, the first NUL at offset "
+                               "7): expected a ULog (.ulg), DataFlash (.bin) or text (CSV) log");
+    const std::string z = t.write("zeros.bin", std::string(16, '\0'));
+    CHECK(read_error(z) == z + ": unrecognised binary file (byte 0x00 at offset 0 is not text): expected a ULog (.ulg), "
+                               "DataFlash (.bin) or text (CSV) log");
+}
+
+TEST_CASE("a NUL in a text log is refused where it is: line, field and byte offset", "[io]") {
+    TempDir t;
+    // A logger that lost power pads its file with zeros; after a UTF-8 byte-order mark the
+    // offset still counts from the file's start.
+    const std::string p = t.write("padded.csv", std::string("\xEF\xBB\xBF" "time_s,voltage_v,current_a\n0,12.5,1\n1,\"1,2\",")
+                                                    + std::string(8, '\0'));
+    CHECK(read_error(p) == p + ":3:3: a NUL byte at byte offset 47: expected text (a CSV log holds no NUL bytes; a "
+                               "logger that lost power may have padded its file with them: cut the file before this line)");
+}
+
+TEST_CASE("UTF-16 and UTF-32 text is refused as such, with what to save it as", "[io]") {
+    TempDir t;
+    const std::string text = "time_s,voltage_v,current_a\n0,12.5,1\n";
+    const auto wide = [&text](bool little, size_t width) {
+        std::string w;
+        for (char c : text) {
+            std::string unit(width, '\0');
+            unit[little ? 0 : width - 1] = c;
+            w += unit;
+        }
+        return w;
+    };
+    const std::string le = t.write("le.csv", "\xFF\xFE" + wide(true, 2));
+    CHECK(read_error(le) == le + ": the file looks like UTF-16 (little-endian, with a byte-order mark) text; battsim "
+                                 "reads text logs in UTF-8 (or ASCII): save it as UTF-8 (a spreadsheet's \"CSV UTF-8\", "
+                                 "or iconv -f UTF-16 -t UTF-8)");
+    const std::string be = t.write("be.csv", "\xFE\xFF" + wide(false, 2));
+    CHECK_THAT(read_error(be), Catch::Contains("UTF-16 (big-endian, with a byte-order mark)"));
+    const std::string bare = t.write("bare.csv", wide(true, 2));
+    CHECK_THAT(read_error(bare), Catch::Contains("UTF-16 (little-endian, without a byte-order mark) text") &&
+                                     Catch::Contains("iconv -f UTF-16LE -t UTF-8"));
+    const std::string bare_be = t.write("bare-be.csv", wide(false, 2));
+    CHECK_THAT(read_error(bare_be), Catch::Contains("iconv -f UTF-16BE -t UTF-8"));
+    const std::string w32 = t.write("w32.csv", std::string("\xFF\xFE\0\0", 4) + wide(true, 4));
+    CHECK_THAT(read_error(w32), Catch::Contains("UTF-32 (little-endian, with a byte-order mark)") &&
+                                    Catch::Contains("iconv -f UTF-32 -t UTF-8"));
 }
 
 // ---------------------------------------------------------------------------------------
