@@ -336,6 +336,32 @@ TEST_CASE("replay notes a current of the other sign and a time column in millise
     CHECK(notes("sec.csv", " --time-unit s").empty());
 }
 
+TEST_CASE("replay reads through a temperature sensor's dropouts and says how many rows had none", "[cli]") {
+    // The flight of the test above with a temperature column that reads "nan" or nothing on
+    // some rows: replayed, not refused; the other rows' temperatures are counted.
+    const std::string dir = clitest::temp_dir();
+    std::string log = "time_s,voltage_v,current_a,temperature_c\n";
+    for (int k = 0; k < 300; ++k) {
+        const bool load = k >= 150;
+        const std::string temperature = k % 50 == 7 ? "nan" : k % 50 == 8 ? "" : "24.5";
+        log += std::to_string(0.63 + 0.067 * k) + "," + (load ? "15.93,20," : "16.52,0.25,") + temperature + "\n";
+    }
+    clitest::write_file(dir + "/drop.csv", log);
+    auto r = run("replay " + q(dir + "/drop.csv") + " -c " + q(kConfig) + " --json");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const auto input = nlohmann::json::parse(r.out)["input"];
+    CHECK(input["has_temperature"] == true);
+    REQUIRE(input["notes"].size() == 1);
+    CHECK(input["notes"][0] == "12 rows have no temperature (\"nan\", \"inf\" or an empty field in column 4 "
+                               "\"temperature_c\", first on line 9): kept, without a temperature");
+    // A NaN in a required column is still refused where it is.
+    clitest::write_file(dir + "/bad.csv", "time_s,voltage_v,current_a,temperature_c\n0,16.5,0.2,20\n0.1,nan,0.2,20\n");
+    r = run("replay " + q(dir + "/bad.csv") + " -c " + q(kConfig) + " --json");
+    CHECK(r.exit_code != 0);
+    CHECK_THAT(r.err, Catch::Contains(dir + "/bad.csv:3:2: expected a finite number, found \"nan\""));
+}
+
 TEST_CASE("replay reads a radio's telemetry log and says what its 0.1 V steps and a fast log cost", "[cli]") {
     const std::string dir = clitest::temp_dir();
     const std::string radio = dir + "/radio.csv";

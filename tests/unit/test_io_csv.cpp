@@ -277,12 +277,59 @@ TEST_CASE("bad input: NaN and infinity in any field", "[io]") {
     CHECK(read_error(q) == q + ":2:8: expected a finite number, found \"-inf\"");
     const std::string r = t.write("raw3.csv", "inf,16.57,4.14,4.14,4.14,4.16,173.53,0.44,\n");
     CHECK(read_error(r) == r + ":1:1: expected a finite number, found \"inf\"");
-    const std::string c = t.write("hdr.csv", "time_s,voltage_v,current_a,temperature_c\n0,12,1,NaN\n");
-    CHECK(read_error(c) == c + ":2:4: expected a finite number, found \"NaN\"");
+    const std::string c = t.write("hdr.csv", "time_s,voltage_v,current_a,temperature_c\n0,NaN,1,20\n");
+    CHECK(read_error(c) == c + ":2:2: expected a finite number, found \"NaN\"");
     const std::string big = t.write("big.csv", "time_s,voltage_v,current_a\n0,1e999,1\n");
     CHECK(read_error(big) == big + ":2:2: expected a number within range, found \"1e999\"");
     const std::string fl = t.write("float.csv", "time_s,voltage_v,current_a\n0,1e300,1\n");
     CHECK(read_error(fl) == fl + ":2:2: expected a number that fits a 32-bit float, found \"1e300\"");
+}
+
+TEST_CASE("a temperature sensor's dropout (nan, inf, empty) loses that sample's temperature, not the log", "[io]") {
+    TempDir t;
+    SourceInfo info;
+    const std::string p = t.write("drop.csv",
+                                  "time_s,voltage_v,current_a,temperature_c\n"
+                                  "0,12.5,1,21.5\n"
+                                  "1,12.4,1,nan\n"
+                                  "2,12.4,1,\n"
+                                  "3,12.3,1,-inf\n"
+                                  "4,12.3,1,22\n");
+    const auto s = read_all(p, ReaderOptions(), &info);
+    REQUIRE(s.size() == 5);
+    CHECK(info.has_temperature);
+    CHECK(s[0].has_temperature);
+    CHECK(s[0].temperature_c == 21.5f);
+    for (int k = 1; k <= 3; ++k) CHECK_FALSE(s[k].has_temperature);
+    CHECK(s[2].voltage_v == 12.4f);  // the rest of the row as read
+    CHECK(s[4].has_temperature);
+    CHECK(s[4].temperature_c == 22.0f);
+    REQUIRE(info.notes.size() == 1);
+    CHECK(info.notes[0] == "3 rows have no temperature (\"nan\", \"inf\" or an empty field in column 4 "
+                           "\"temperature_c\", first on line 3): kept, without a temperature");
+    // A column with no reading at all: a log without a temperature, as a ULog's all-NaN one.
+    SourceInfo none;
+    const std::string q = t.write("none.csv", "time_s,temperature_c,voltage_v,current_a\n0,NaN,12,1\n1,nan,12,1\n");
+    const auto n = read_all(q, ReaderOptions(), &none);
+    REQUIRE(n.size() == 2);
+    CHECK_FALSE(none.has_temperature);
+    CHECK(none.notes == std::vector<std::string>{"2 rows have no temperature (\"nan\", \"inf\" or an empty field in "
+                                                 "column 2 \"temperature_c\", first on line 2): read as a log "
+                                                 "without a temperature"});
+    // In the required columns NaN stays an error, and in the temperature column any other text.
+    CHECK(read_error(t.write("t.csv", "time_s,voltage_v,current_a,temperature_c\nnan,12,1,20\n")) ==
+          t.path("t.csv") + ":2:1: expected a finite number, found \"nan\"");
+    CHECK(read_error(t.write("a.csv", "time_s,voltage_v,current_a,temperature_c\n0,12,inf,20\n")) ==
+          t.path("a.csv") + ":2:3: expected a finite number, found \"inf\"");
+    CHECK(read_error(t.write("x.csv", "time_s,voltage_v,current_a,temperature_c\n0,12,1,hot\n")) ==
+          t.path("x.csv") + ":2:4: expected a number, found \"hot\"");
+    // The empty last field of a cut-off last line is still the cut, not a dropout.
+    SourceInfo cut;
+    const auto c = read_all(t.write("cut.csv", "time_s,voltage_v,current_a,temperature_c\n0,12,1,20\n1,12,1,"),
+                            ReaderOptions(), &cut);
+    CHECK(c.size() == 1);
+    REQUIRE(cut.notes.size() == 1);
+    CHECK_THAT(cut.notes[0], Catch::Contains("last line is cut off"));
 }
 
 TEST_CASE("bad input: time going backwards and negative time", "[io]") {
