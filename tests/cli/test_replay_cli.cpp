@@ -334,6 +334,45 @@ TEST_CASE("replay notes a current of the other sign and a time column in millise
                        "seconds, give --time-unit s (or --time-col with a column in seconds)");
     }
     CHECK(notes("sec.csv", " --time-unit s").empty());
+    // Advised only a unit the column was not read in. Under time_us the milliseconds are
+    // 0.067 ms apart: 67 ms in milliseconds, 67 s in seconds (no battery log's).
+    const auto flight = [](const std::string& time_header, const std::string& times_1000) {
+        std::string log = time_header + ",voltage_v,current_a\n";
+        for (int k = 0; k < 300; ++k)
+            log += std::to_string(630 + 67 * k) + times_1000 + "," + (k >= 150 ? "15.93,20" : "16.52,0.25") + "\n";
+        return log;
+    };
+    clitest::write_file(dir + "/us.csv", flight("time_us", ""));
+    const auto um = notes("us.csv", "");
+    REQUIRE(um.size() == 1);
+    CHECK(um[0] == "the samples are 0.067 ms apart (median) and the log spans 0.02 s: if the time column counts "
+                   "milliseconds, give --time-unit ms (or --time-col with a column in seconds)");
+    // A time_s column 1 us apart is in seconds already: no --time-unit helps, and that is said.
+    std::string micro = "time_s,voltage_v,current_a\n";
+    for (int k = 0; k < 300; ++k)
+        micro += std::to_string(k) + "e-6," + (k >= 150 ? "15.93,20" : "16.52,0.25") + "\n";
+    clitest::write_file(dir + "/micro.csv", micro);
+    for (const std::string unit : {"", " --time-unit s"}) {
+        const auto mu = notes("micro.csv", unit);
+        REQUIRE(mu.size() == 1);
+        CHECK(mu[0] == "the samples are 0.001 ms apart (median) and the log spans 0.000299 s, faster and shorter than a "
+                       "battery log, though the time column \"time_s\" is read in seconds, the coarsest unit --time-unit "
+                       "takes: if it counts a coarser one (hours, or a spreadsheet's days), convert it to seconds; if it "
+                       "is not the log's clock, give --time-col NAME");
+        CHECK_THAT(mu[0].get<std::string>(), !Catch::Contains("give --time-unit s"));
+    }
+    // The slow way: 67 s apart under time_ms is microseconds, not "give --time-unit ms".
+    clitest::write_file(dir + "/slow-ms.csv", flight("time_ms", "000"));
+    const auto sl = notes("slow-ms.csv", "");
+    REQUIRE(sl.size() == 1);
+    CHECK(sl[0] == "the samples are 67 s apart (median): if the time column counts microseconds, give --time-unit us (or "
+                   "--time-col with a column in seconds)");
+    clitest::write_file(dir + "/slow-us.csv", flight("time_us", "000000"));
+    const auto su = notes("slow-us.csv", "");
+    REQUIRE(su.size() == 1);
+    CHECK(su[0] == "the samples are 67 s apart (median), slower than a battery logger writes, though the time column "
+                   "\"time_us\" is read in microseconds, the finest unit --time-unit takes: if it counts a finer one "
+                   "(nanoseconds), convert it to microseconds; if it is not the log's clock, give --time-col NAME");
 }
 
 TEST_CASE("replay reads through a temperature sensor's dropouts and says how many rows had none", "[cli]") {

@@ -763,6 +763,11 @@ private:
                                  "\": expected a name ending in _s, _ms or _us (or (s), (ms), (us)), or give the unit: --time-unit s, ms or us (manifest: columns.time_unit or time_unit)");
         }
 
+        if (date_col_ < 0) {
+            info_.time_scale_to_s = time_factor_us_ * 1e-6;
+            info_.time_column = names_[static_cast<std::size_t>(time_col_)];
+        }
+
         // Voltage (volts unless the name ends in _mv).
         voltage_col_ = m.voltage.empty() ? require("voltage", "voltage_v") : require("voltage", m.voltage);
         voltage_scale_ = has_unit(lower_names_[static_cast<std::size_t>(voltage_col_)], "mv") ? 1e-3 : 1.0;
