@@ -9,6 +9,62 @@
 namespace battsim {
 namespace host {
 
+namespace {
+// The units --time-unit takes.
+struct TimeUnit {
+    const char* option;
+    const char* words;
+    double scale_s;
+};
+constexpr TimeUnit kTimeUnits[] = {{"s", "seconds", 1.0}, {"ms", "milliseconds", 1e-3}, {"us", "microseconds", 1e-6}};
+
+const TimeUnit* time_unit_of(double scale_s) {
+    for (const TimeUnit& u : kTimeUnits)
+        if (std::fabs(scale_s / u.scale_s - 1.0) < 1e-6) return &u;
+    return nullptr;
+}
+
+// The units a time column read at `read_s` seconds per unit may count instead, `coarser` or
+// finer than that: those that put its median interval `dt_s` among battery logs' (from
+// `fastest_s` to `slowest_s`), nearest first; else the nearest one that way. None when no
+// unit lies that way: advising the unit the column was read in helps no one (a time_s column
+// 1 us apart had been told "give --time-unit s").
+std::vector<const TimeUnit*> other_time_units(double read_s, double dt_s, bool coarser, double fastest_s,
+                                              double slowest_s) {
+    std::vector<const TimeUnit*> way;
+    for (const TimeUnit& u : kTimeUnits)
+        if (coarser ? u.scale_s > 1.5 * read_s : u.scale_s < read_s / 1.5) way.push_back(&u);
+    std::sort(way.begin(), way.end(), [read_s](const TimeUnit* a, const TimeUnit* b) {
+        return std::fabs(std::log(a->scale_s / read_s)) < std::fabs(std::log(b->scale_s / read_s));
+    });
+    std::vector<const TimeUnit*> fits;
+    for (const TimeUnit* u : way) {
+        const double as_u_s = dt_s * u->scale_s / read_s;
+        if (as_u_s >= fastest_s && as_u_s <= slowest_s) fits.push_back(u);
+    }
+    if (fits.empty() && !way.empty()) fits.push_back(way.front());
+    return fits;
+}
+
+// "if the time column counts seconds, give --time-unit s; if milliseconds, --time-unit ms"
+std::string time_unit_advice(const std::vector<const TimeUnit*>& units) {
+    std::string s;
+    for (size_t k = 0; k < units.size(); ++k)
+        s += (k == 0 ? std::string("if the time column counts ") + units[k]->words + ", give --time-unit "
+                     : std::string("; if ") + units[k]->words + ", --time-unit ") +
+             units[k]->option;
+    return s;
+}
+
+// "the time column "time_s" is read in seconds"
+std::string time_column_read(const ColumnUnits& units) {
+    const TimeUnit* u = time_unit_of(units.time_scale_to_s);
+    char scale[48];
+    std::snprintf(scale, sizeof scale, "as %.3g s a unit", units.time_scale_to_s);
+    return "the time column \"" + units.time_column + "\" is read " + (u ? std::string("in ") + u->words : scale);
+}
+}  // namespace
+
 void InputShape::add(const core::Sample& s) {
     if (std::isfinite(s.voltage_v) && s.voltage_v != 0.0f) {
         const double tenths = 10.0 * static_cast<double>(s.voltage_v);
@@ -59,7 +115,7 @@ void InputShape::add(const core::Sample& s) {
 }
 
 std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const Lags& lags, double window_s, bool csv,
-                                           bool merged, bool milliamperes) const {
+                                           bool merged, bool milliamperes, const ColumnUnits& units) const {
     const double fastest_s = lags.fastest_s;
     std::vector<std::string> out;
     char buf[512];
@@ -102,12 +158,23 @@ std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const La
     // Battery logs are written a few times a second to once every few seconds.
     const double dt_s = median(intervals_s_);
     // Unless the user's own --average-ms windows spaced them so.
+    // The units advised are those the time column was not read in: a column read in
+    // milliseconds may count microseconds; one in microseconds has no finer unit to try.
+    const bool time_unit_known = units.time_scale_to_s > 0.0 && !units.time_column.empty();
     if (dt_s > kSlowestIntervalS && !(dt_s <= 1.5 * window_s)) {
-        std::snprintf(buf, sizeof buf,
-                      "the samples are %.4g s apart (median): if the time column counts milliseconds, give "
-                      "--time-unit ms (or --time-col with a column in seconds)",
-                      dt_s);
-        out.push_back(buf);
+        std::snprintf(buf, sizeof buf, "the samples are %.4g s apart (median)", dt_s);
+        const auto finer = time_unit_known ? other_time_units(units.time_scale_to_s, dt_s, false, kFastestIntervalS,
+                                                              kSlowestIntervalS)
+                                           : std::vector<const TimeUnit*>();
+        if (!time_unit_known)
+            out.push_back(std::string(buf) + ", slower than a battery logger writes: the log's time stamps may be in "
+                                             "another unit than its format's");
+        else if (!finer.empty())
+            out.push_back(std::string(buf) + ": " + time_unit_advice(finer) + " (or --time-col with a column in seconds)");
+        else
+            out.push_back(std::string(buf) + ", slower than a battery logger writes, though " + time_column_read(units) +
+                          ", the finest unit --time-unit takes: if it counts a finer one (nanoseconds), convert it to "
+                          "microseconds; if it is not the log's clock, give --time-col NAME");
     }
     // The other way round: seconds read as milliseconds squeeze a flight into a fraction
     // of a second, too short for any take-off (a CMU flight as time_ms: 200 s in 0.2 s).
@@ -115,11 +182,23 @@ std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const La
     const bool seconds_as_ms = dt_s > 0.0 && dt_s < kFastestIntervalS && span_s < kShortestSpanS && !flew &&
                                intervals_s_.size() >= static_cast<size_t>(kCoarseMinSamples);
     if (seconds_as_ms) {
-        std::snprintf(buf, sizeof buf,
-                      "the samples are %.3g ms apart (median) and the log spans %.3g s: if the time column "
-                      "counts seconds, give --time-unit s (or --time-col with a column in seconds)",
-                      dt_s * 1e3, span_s);
-        out.push_back(buf);
+        std::snprintf(buf, sizeof buf, "the samples are %.3g ms apart (median) and the log spans %.3g s", dt_s * 1e3,
+                      span_s);
+        // A column read in seconds is in the coarsest unit there is: what may be wrong is the
+        // unit it was written in (hours; a spreadsheet's days put 0.1 s 1.16 us apart), or the
+        // column.
+        const auto coarser = time_unit_known ? other_time_units(units.time_scale_to_s, dt_s, true, kFastestIntervalS,
+                                                                kSlowestIntervalS)
+                                             : std::vector<const TimeUnit*>();
+        if (!time_unit_known)
+            out.push_back(std::string(buf) + ", faster and shorter than a battery log: its time stamps may be in "
+                                             "another unit than its format's");
+        else if (!coarser.empty())
+            out.push_back(std::string(buf) + ": " + time_unit_advice(coarser) + " (or --time-col with a column in seconds)");
+        else
+            out.push_back(std::string(buf) + ", faster and shorter than a battery log, though " + time_column_read(units) +
+                          ", the coarsest unit --time-unit takes: if it counts a coarser one (hours, or a spreadsheet's "
+                          "days), convert it to seconds; if it is not the log's clock, give --time-col NAME");
     }
     // A time or current unit a thousand times too small that still flies: a 1 ms spacing is a
     // blackbox log's too, so the spacing alone cannot tell; the charge the pack emptied on can.
@@ -130,11 +209,27 @@ std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const La
         std::fabs(counted_mah_) < kEmptiedMaxCapacityShare * capacity_mah) {
         std::snprintf(buf, sizeof buf,
                       "the pack voltage fell from %.4g to %.4g V (the config's range: %.4g to %.4g V) on %.3g mAh "
-                      "counted over %.4g s, %.2g %% of the config's %.4g Ah: if the time column counts seconds, give "
-                      "--time-unit s; if the current column counts amperes, --current-unit A",
+                      "counted over %.4g s, %.2g %% of the config's %.4g Ah",
                       static_cast<double>(first_v_), static_cast<double>(last_v_), pack_.full_v, pack_.empty_v,
                       std::fabs(counted_mah_), span_s, 100.0 * std::fabs(counted_mah_) / capacity_mah, pack_.capacity_ah);
-        out.push_back(buf);
+        // Only the units the columns were not read in: a coarser time unit, amperes for a
+        // current read in milliamperes.
+        const auto coarser = time_unit_known ? other_time_units(units.time_scale_to_s, dt_s, true, kFastestIntervalS,
+                                                                kSlowestIntervalS)
+                                             : std::vector<const TimeUnit*>();
+        const bool current_known = units.current_scale_to_a > 0.0;
+        const bool amperes_advised = current_known && units.current_scale_to_a < 0.01;
+        std::string advice = time_unit_advice(coarser);
+        if (amperes_advised)
+            advice += advice.empty() ? "if the current column counts amperes, give --current-unit A"
+                                     : "; if the current column counts amperes, --current-unit A";
+        if (!time_unit_known)
+            advice = "the log's time or current may be in another unit than its format's, or the config another pack's";
+        else if (advice.empty())
+            advice = "no coarser unit to read them in, as " + time_column_read(units) +
+                     (current_known ? " and the current in amperes" : "") +
+                     ": check that they are the log's time and current columns, and that the config is this pack's";
+        out.push_back(std::string(buf) + ": " + advice);
     }
     // A temperature in kelvin reads as a pack far past burning: a model's temperature terms
     // then run it hot (its resistance near nothing).

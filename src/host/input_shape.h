@@ -22,6 +22,15 @@ struct ShapePack {
     double capacity_ah = NAN;
 };
 
+// The units a headered CSV log's columns were read in, for the notes that advise another
+// unit: they advise only units the column was not read in. 0: not known (another format, whose
+// units no option changes).
+struct ColumnUnits {
+    double time_scale_to_s = 0.0;     // seconds per unit of the time column (1, 1e-3, 1e-6)
+    std::string time_column;          // its name in the header
+    double current_scale_to_a = 0.0;  // amperes per unit of the current column (1, 1e-3)
+};
+
 class InputShape {
 public:
     // `negated`: --negative-discharge given; `ground_a`: the take-off current (below it, the
@@ -39,9 +48,10 @@ public:
     // `flew`: the monitor saw a take-off; `csv`: the log is a headered CSV (the only format
     // --negative-discharge flips); `merged`: the --average-ms windows held more than one
     // sample on average; `milliamperes`: the log's current column was read in mA (a CSV log's
-    // name or --current-unit).
+    // name or --current-unit), for the note on a log that never flies; `units`: the units its
+    // columns were read in, for the notes on a clock or a charge that looks misread.
     std::vector<std::string> notes(bool flew, double takeoff_a, const Lags& lags, double window_s, bool csv,
-                                   bool merged, bool milliamperes = false) const;
+                                   bool merged, bool milliamperes = false, const ColumnUnits& units = ColumnUnits()) const;
 
 private:
     static constexpr double kSlowestIntervalS = 10.0;

@@ -162,7 +162,8 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
                                               static_cast<double>(options.reader.average_us) * 1e-6,
                                               info.format == LogFormat::Csv, merged,
                                               info.format == LogFormat::Csv && info.current_scale_to_a > 0.0 &&
-                                                  info.current_scale_to_a < 0.01))
+                                                  info.current_scale_to_a < 0.01,
+                                              ColumnUnits{info.time_scale_to_s, info.time_column, info.current_scale_to_a}))
         input_notes.push_back(n);
     // A log whose flight starts with its first samples never showed the ground: opened in the air
     // or armed, or a craft that draws the take-off current disarmed, which then reads as one

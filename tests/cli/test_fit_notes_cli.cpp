@@ -131,6 +131,24 @@ TEST_CASE("replay and fit say a pack emptied on a thousandth of its charge: seco
     // Read in seconds, the same log says nothing of it.
     r = run("replay " + q(log) + " -c " + q(kCell) + " --negative-discharge --time-unit s --json");
     CHECK_THAT(r.err, !Catch::Contains("fell from"));
+    // Only the units the columns were not read in are advised: with the current read in mA
+    // too, both; in seconds, the current's alone; in seconds and amperes, neither.
+    r = run("replay " + q(log) + " -c " + q(kCell) + " --negative-discharge --current-unit mA --json");
+    CHECK_THAT(r.err, Catch::Contains("if the time column counts seconds, give --time-unit s; if the current column "
+                                      "counts amperes, --current-unit A"));
+    r = run("replay " + q(log) + " -c " + q(kCell) + " --negative-discharge --time-unit s --current-unit mA --json");
+    CHECK_THAT(r.err, Catch::Contains("fell from") &&
+                          Catch::Contains(": if the current column counts amperes, give --current-unit A\n") &&
+                          !Catch::Contains("--time-unit s"));
+    d.time_header = "time_s";
+    d.current_scale = 1e-3;  // 3 mA under an ampere header: no unit explains it
+    clitest::write_file(log, discharge_csv(d));
+    r = run("replay " + q(log) + " -c " + q(kCell) + " --negative-discharge --json");
+    CHECK_THAT(r.err, Catch::Contains("fell from") &&
+                          Catch::Contains(": no coarser unit to read them in, as the time column \"time_s\" is read in "
+                                          "seconds and the current in amperes: check that they are the log's time and "
+                                          "current columns, and that the config is this pack's") &&
+                          !Catch::Contains("--time-unit") && !Catch::Contains("--current-unit"));
 }
 
 TEST_CASE("a config with a temperature dependence is noted on a log without a temperature", "[cli][fit]") {

@@ -339,6 +339,71 @@ TEST_CASE("replay notes a current of the other sign and a time column in millise
                        "seconds, give --time-unit s (or --time-col with a column in seconds)");
     }
     CHECK(notes("sec.csv", " --time-unit s").empty());
+    // Advised only a unit the column was not read in. Under time_us the milliseconds are
+    // 0.067 ms apart: 67 ms in milliseconds, 67 s in seconds (no battery log's).
+    const auto flight = [](const std::string& time_header, const std::string& times_1000) {
+        std::string log = time_header + ",voltage_v,current_a\n";
+        for (int k = 0; k < 300; ++k)
+            log += std::to_string(630 + 67 * k) + times_1000 + "," + (k >= 150 ? "15.93,20" : "16.52,0.25") + "\n";
+        return log;
+    };
+    clitest::write_file(dir + "/us.csv", flight("time_us", ""));
+    const auto um = notes("us.csv", "");
+    REQUIRE(um.size() == 1);
+    CHECK(um[0] == "the samples are 0.067 ms apart (median) and the log spans 0.02 s: if the time column counts "
+                   "milliseconds, give --time-unit ms (or --time-col with a column in seconds)");
+    // A time_s column 1 us apart is in seconds already: no --time-unit helps, and that is said.
+    std::string micro = "time_s,voltage_v,current_a\n";
+    for (int k = 0; k < 300; ++k)
+        micro += std::to_string(k) + "e-6," + (k >= 150 ? "15.93,20" : "16.52,0.25") + "\n";
+    clitest::write_file(dir + "/micro.csv", micro);
+    for (const std::string unit : {"", " --time-unit s"}) {
+        const auto mu = notes("micro.csv", unit);
+        REQUIRE(mu.size() == 1);
+        CHECK(mu[0] == "the samples are 0.001 ms apart (median) and the log spans 0.000299 s, faster and shorter than a "
+                       "battery log, though the time column \"time_s\" is read in seconds, the coarsest unit --time-unit "
+                       "takes: if it counts a coarser one (hours, or a spreadsheet's days), convert it to seconds; if it "
+                       "is not the log's clock, give --time-col NAME");
+        CHECK_THAT(mu[0].get<std::string>(), !Catch::Contains("give --time-unit s"));
+    }
+    // The slow way: 67 s apart under time_ms is microseconds, not "give --time-unit ms".
+    clitest::write_file(dir + "/slow-ms.csv", flight("time_ms", "000"));
+    const auto sl = notes("slow-ms.csv", "");
+    REQUIRE(sl.size() == 1);
+    CHECK(sl[0] == "the samples are 67 s apart (median): if the time column counts microseconds, give --time-unit us (or "
+                   "--time-col with a column in seconds)");
+    clitest::write_file(dir + "/slow-us.csv", flight("time_us", "000000"));
+    const auto su = notes("slow-us.csv", "");
+    REQUIRE(su.size() == 1);
+    CHECK(su[0] == "the samples are 67 s apart (median), slower than a battery logger writes, though the time column "
+                   "\"time_us\" is read in microseconds, the finest unit --time-unit takes: if it counts a finer one "
+                   "(nanoseconds), convert it to microseconds; if it is not the log's clock, give --time-col NAME");
+}
+
+TEST_CASE("replay reads through a temperature sensor's dropouts and says how many rows had none", "[cli]") {
+    // The flight of the test above with a temperature column that reads "nan" or nothing on
+    // some rows: replayed, not refused; the other rows' temperatures are counted.
+    const std::string dir = clitest::temp_dir();
+    std::string log = "time_s,voltage_v,current_a,temperature_c\n";
+    for (int k = 0; k < 300; ++k) {
+        const bool load = k >= 150;
+        const std::string temperature = k % 50 == 7 ? "nan" : k % 50 == 8 ? "" : "24.5";
+        log += std::to_string(0.63 + 0.067 * k) + "," + (load ? "15.93,20," : "16.52,0.25,") + temperature + "\n";
+    }
+    clitest::write_file(dir + "/drop.csv", log);
+    auto r = run("replay " + q(dir + "/drop.csv") + " -c " + q(kConfig) + " --json");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const auto input = nlohmann::json::parse(r.out)["input"];
+    CHECK(input["has_temperature"] == true);
+    REQUIRE(input["notes"].size() == 1);
+    CHECK(input["notes"][0] == "12 rows have no temperature (\"nan\", \"inf\" or an empty field in column 4 "
+                               "\"temperature_c\", first on line 9): kept, without a temperature");
+    // A NaN in a required column is still refused where it is.
+    clitest::write_file(dir + "/bad.csv", "time_s,voltage_v,current_a,temperature_c\n0,16.5,0.2,20\n0.1,nan,0.2,20\n");
+    r = run("replay " + q(dir + "/bad.csv") + " -c " + q(kConfig) + " --json");
+    CHECK(r.exit_code != 0);
+    CHECK_THAT(r.err, Catch::Contains(dir + "/bad.csv:3:2: expected a finite number, found \"nan\""));
 }
 
 TEST_CASE("replay reads a radio's telemetry log and says what its 0.1 V steps and a fast log cost", "[cli]") {

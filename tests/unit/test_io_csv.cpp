@@ -91,8 +91,49 @@ TEST_CASE("numbers without a header in an unknown layout are rejected", "[io]") 
 TEST_CASE("unknown binary content is rejected", "[io]") {
     TempDir t;
     const std::string p = t.write("junk.bin", std::string("\x7F" "ELF\x02\x01\x01\x00\x00\x00", 10));
-    CHECK(read_error(p) ==
-          p + ": unrecognised binary file: expected a ULog (.ulg), DataFlash (.bin) or text (CSV) log");
+    CHECK(read_error(p) == p + ": unrecognised binary file (byte 0x7F at offset 0 is not text, the first NUL at offset "
+                               "7): expected a ULog (.ulg), DataFlash (.bin) or text (CSV) log");
+    const std::string z = t.write("zeros.bin", std::string(16, '\0'));
+    CHECK(read_error(z) == z + ": unrecognised binary file (byte 0x00 at offset 0 is not text): expected a ULog (.ulg), "
+                               "DataFlash (.bin) or text (CSV) log");
+}
+
+TEST_CASE("a NUL in a text log is refused where it is: line, field and byte offset", "[io]") {
+    TempDir t;
+    // A logger that lost power pads its file with zeros; after a UTF-8 byte-order mark the
+    // offset still counts from the file's start.
+    const std::string p = t.write("padded.csv", std::string("\xEF\xBB\xBF" "time_s,voltage_v,current_a\n0,12.5,1\n1,\"1,2\",")
+                                                    + std::string(8, '\0'));
+    CHECK(read_error(p) == p + ":3:3: a NUL byte at byte offset 47: expected text (a CSV log holds no NUL bytes; a "
+                               "logger that lost power may have padded its file with them: cut the file before this line)");
+}
+
+TEST_CASE("UTF-16 and UTF-32 text is refused as such, with what to save it as", "[io]") {
+    TempDir t;
+    const std::string text = "time_s,voltage_v,current_a\n0,12.5,1\n";
+    const auto wide = [&text](bool little, size_t width) {
+        std::string w;
+        for (char c : text) {
+            std::string unit(width, '\0');
+            unit[little ? 0 : width - 1] = c;
+            w += unit;
+        }
+        return w;
+    };
+    const std::string le = t.write("le.csv", "\xFF\xFE" + wide(true, 2));
+    CHECK(read_error(le) == le + ": the file looks like UTF-16 (little-endian, with a byte-order mark) text; battsim "
+                                 "reads text logs in UTF-8 (or ASCII): save it as UTF-8 (a spreadsheet's \"CSV UTF-8\", "
+                                 "or iconv -f UTF-16 -t UTF-8)");
+    const std::string be = t.write("be.csv", "\xFE\xFF" + wide(false, 2));
+    CHECK_THAT(read_error(be), Catch::Contains("UTF-16 (big-endian, with a byte-order mark)"));
+    const std::string bare = t.write("bare.csv", wide(true, 2));
+    CHECK_THAT(read_error(bare), Catch::Contains("UTF-16 (little-endian, without a byte-order mark) text") &&
+                                     Catch::Contains("iconv -f UTF-16LE -t UTF-8"));
+    const std::string bare_be = t.write("bare-be.csv", wide(false, 2));
+    CHECK_THAT(read_error(bare_be), Catch::Contains("iconv -f UTF-16BE -t UTF-8"));
+    const std::string w32 = t.write("w32.csv", std::string("\xFF\xFE\0\0", 4) + wide(true, 4));
+    CHECK_THAT(read_error(w32), Catch::Contains("UTF-32 (little-endian, with a byte-order mark)") &&
+                                    Catch::Contains("iconv -f UTF-32 -t UTF-8"));
 }
 
 // ---------------------------------------------------------------------------------------
@@ -236,12 +277,59 @@ TEST_CASE("bad input: NaN and infinity in any field", "[io]") {
     CHECK(read_error(q) == q + ":2:8: expected a finite number, found \"-inf\"");
     const std::string r = t.write("raw3.csv", "inf,16.57,4.14,4.14,4.14,4.16,173.53,0.44,\n");
     CHECK(read_error(r) == r + ":1:1: expected a finite number, found \"inf\"");
-    const std::string c = t.write("hdr.csv", "time_s,voltage_v,current_a,temperature_c\n0,12,1,NaN\n");
-    CHECK(read_error(c) == c + ":2:4: expected a finite number, found \"NaN\"");
+    const std::string c = t.write("hdr.csv", "time_s,voltage_v,current_a,temperature_c\n0,NaN,1,20\n");
+    CHECK(read_error(c) == c + ":2:2: expected a finite number, found \"NaN\"");
     const std::string big = t.write("big.csv", "time_s,voltage_v,current_a\n0,1e999,1\n");
     CHECK(read_error(big) == big + ":2:2: expected a number within range, found \"1e999\"");
     const std::string fl = t.write("float.csv", "time_s,voltage_v,current_a\n0,1e300,1\n");
     CHECK(read_error(fl) == fl + ":2:2: expected a number that fits a 32-bit float, found \"1e300\"");
+}
+
+TEST_CASE("a temperature sensor's dropout (nan, inf, empty) loses that sample's temperature, not the log", "[io]") {
+    TempDir t;
+    SourceInfo info;
+    const std::string p = t.write("drop.csv",
+                                  "time_s,voltage_v,current_a,temperature_c\n"
+                                  "0,12.5,1,21.5\n"
+                                  "1,12.4,1,nan\n"
+                                  "2,12.4,1,\n"
+                                  "3,12.3,1,-inf\n"
+                                  "4,12.3,1,22\n");
+    const auto s = read_all(p, ReaderOptions(), &info);
+    REQUIRE(s.size() == 5);
+    CHECK(info.has_temperature);
+    CHECK(s[0].has_temperature);
+    CHECK(s[0].temperature_c == 21.5f);
+    for (int k = 1; k <= 3; ++k) CHECK_FALSE(s[k].has_temperature);
+    CHECK(s[2].voltage_v == 12.4f);  // the rest of the row as read
+    CHECK(s[4].has_temperature);
+    CHECK(s[4].temperature_c == 22.0f);
+    REQUIRE(info.notes.size() == 1);
+    CHECK(info.notes[0] == "3 rows have no temperature (\"nan\", \"inf\" or an empty field in column 4 "
+                           "\"temperature_c\", first on line 3): kept, without a temperature");
+    // A column with no reading at all: a log without a temperature, as a ULog's all-NaN one.
+    SourceInfo none;
+    const std::string q = t.write("none.csv", "time_s,temperature_c,voltage_v,current_a\n0,NaN,12,1\n1,nan,12,1\n");
+    const auto n = read_all(q, ReaderOptions(), &none);
+    REQUIRE(n.size() == 2);
+    CHECK_FALSE(none.has_temperature);
+    CHECK(none.notes == std::vector<std::string>{"2 rows have no temperature (\"nan\", \"inf\" or an empty field in "
+                                                 "column 2 \"temperature_c\", first on line 2): read as a log "
+                                                 "without a temperature"});
+    // In the required columns NaN stays an error, and in the temperature column any other text.
+    CHECK(read_error(t.write("t.csv", "time_s,voltage_v,current_a,temperature_c\nnan,12,1,20\n")) ==
+          t.path("t.csv") + ":2:1: expected a finite number, found \"nan\"");
+    CHECK(read_error(t.write("a.csv", "time_s,voltage_v,current_a,temperature_c\n0,12,inf,20\n")) ==
+          t.path("a.csv") + ":2:3: expected a finite number, found \"inf\"");
+    CHECK(read_error(t.write("x.csv", "time_s,voltage_v,current_a,temperature_c\n0,12,1,hot\n")) ==
+          t.path("x.csv") + ":2:4: expected a number, found \"hot\"");
+    // The empty last field of a cut-off last line is still the cut, not a dropout.
+    SourceInfo cut;
+    const auto c = read_all(t.write("cut.csv", "time_s,voltage_v,current_a,temperature_c\n0,12,1,20\n1,12,1,"),
+                            ReaderOptions(), &cut);
+    CHECK(c.size() == 1);
+    REQUIRE(cut.notes.size() == 1);
+    CHECK_THAT(cut.notes[0], Catch::Contains("last line is cut off"));
 }
 
 TEST_CASE("bad input: time going backwards and negative time", "[io]") {

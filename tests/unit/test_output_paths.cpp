@@ -1,10 +1,16 @@
 // The output-path check (an output naming an input or another output) and AtomicFile on
 // symlinks and devices.
 #include <catch2/catch.hpp>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <climits>
+#include <csignal>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 
 #include "host/io/atomic_file.h"
@@ -151,4 +157,109 @@ TEST_CASE("AtomicFile writes through a symlink and keeps it; writes a device str
     fs::create_symlink("loop-b", d.path("loop-a"));
     fs::create_symlink("loop-a", d.path("loop-b"));
     CHECK_THROWS_WITH(AtomicFile(d.path("loop-a")), Catch::Contains("too many levels of symbolic links"));
+}
+
+TEST_CASE("AtomicFile removes the temporaries a killed writer left beside its target, and nothing else", "[output_paths]") {
+    // SIGKILL runs no handler: its temporary stays, and the next write to the target takes it.
+    testsupport::TempDir d("stale");
+    // A PID no process can have: above the kernel's pid_max (at most 2^22).
+    long pid_max = 4194304;
+    std::ifstream("/proc/sys/kernel/pid_max") >> pid_max;
+    REQUIRE(pid_max < INT_MAX);
+    const std::string never = std::to_string(pid_max + 1);
+    // A PID that was a process's and is gone: a child reaped.
+    const pid_t child = ::fork();
+    REQUIRE(child >= 0);
+    if (child == 0) ::_exit(0);
+    REQUIRE(::waitpid(child, nullptr, 0) == child);
+    const std::string reaped = std::to_string(child);
+    const std::string self = std::to_string(::getpid());
+    // And one dead but not reaped: kill() still finds a zombie (`timeout -s KILL` kills
+    // itself too, and its child waits for an init to reap it).
+    const pid_t unreaped = ::fork();
+    REQUIRE(unreaped >= 0);
+    if (unreaped == 0) ::_exit(0);
+    siginfo_t exited {};
+    REQUIRE(::waitid(P_PID, static_cast<id_t>(unreaped), &exited, WEXITED | WNOWAIT) == 0);  // a zombie now
+    const std::string zombie = std::to_string(unreaped);
+
+    const std::string target = d.write("out.csv", "old\n");
+    const std::vector<std::string> stale = {"out.csv.tmp." + never + ".0", "out.csv.tmp." + reaped + ".17",
+                                            "out.csv.tmp." + zombie + ".4"};
+    const std::vector<std::string> kept = {
+        "out.csv.tmp." + self + ".999",      // this process's, alive
+        "out.csv.tmp.1.0",                   // init's, alive (EPERM or not)
+        "other.csv.tmp." + never + ".0",     // another target's
+        "xout.csv.tmp." + never + ".0",
+        "out.csv.tmp." + never + ".0.bak",   // not the pattern exactly
+        "out.csv.tmp." + never,
+        "out.csv.tmp." + never + ".x",
+        "out.csv.tmp.0" + never + ".0",      // a leading zero: not std::to_string's
+        "out.csv.tmp.0.0",                   // PID 0: kill() would ask about the process group
+        "out.csv.tmp.-" + never + ".0",
+        "out.csv.tmp..0",
+        "out.csv.tmp." + never + ".",
+        "out.csv.tmp.99999999999.0",         // beyond any pid_t
+        "out.csv.bak",
+        "notes.txt",
+    };
+    for (const auto& n : stale) d.write(n, "stale");
+    for (const auto& n : kept) d.write(n, "keep");
+    // A directory and a symlink by a stale name: not regular files of ours.
+    fs::create_directory(d.path("out.csv.tmp." + never + ".1"));
+    fs::create_symlink("notes.txt", d.path("out.csv.tmp." + never + ".2"));
+    // A dead-looking PID whose temporary is locked: a writer alive in another PID namespace
+    // (or on another host), which every writer's flock() tells.
+    const std::string locked = d.write("out.csv.tmp." + never + ".3", "writing");
+    const int lock_fd = ::open(locked.c_str(), O_RDONLY | O_CLOEXEC);
+    REQUIRE(lock_fd >= 0);
+    REQUIRE(::flock(lock_fd, LOCK_EX | LOCK_NB) == 0);
+
+    write_file_atomic(target, "new\n");
+    REQUIRE(::waitpid(unreaped, nullptr, 0) == unreaped);
+    CHECK(testsupport::read_file(target) == "new\n");
+    for (const auto& n : stale) CHECK_FALSE(fs::exists(d.path(n)));
+    for (const auto& n : kept) CHECK(testsupport::read_file(d.path(n)) == "keep");
+    CHECK(fs::is_directory(d.path("out.csv.tmp." + never + ".1")));
+    CHECK(fs::is_symlink(d.path("out.csv.tmp." + never + ".2")));
+    CHECK(testsupport::read_file(d.path("notes.txt")) == "keep");
+    CHECK(testsupport::read_file(locked) == "writing");
+    // Unlocked (its writer gone), it goes with the next write.
+    ::close(lock_fd);
+    write_file_atomic(target, "again\n");
+    CHECK_FALSE(fs::exists(locked));
+    CHECK(testsupport::read_file(target) == "again\n");
+    // Nothing of its own left behind, and the kept ones still there.
+    size_t temporaries = 0;
+    for (const auto& e : fs::directory_iterator(d.path()))
+        temporaries += e.path().filename().string().rfind("out.csv.tmp." + self + ".", 0) == 0 ? 1 : 0;
+    CHECK(temporaries == 1);  // the kept ".999"
+
+    // A long target name: temp_name() cuts it so the temporary's name is 255 bytes; the cut
+    // name of a dead writer's is found too, a cut name of another target's is not.
+    const std::string long_name(250, 'n');
+    const std::string long_target = d.write(long_name, "old\n");
+    const std::string suffix = ".tmp." + never + ".5";
+    const std::string cut = long_name.substr(0, 255 - suffix.size()) + suffix;
+    d.write(cut, "stale");
+    std::string other_cut = cut;
+    other_cut[0] = 'm';
+    d.write(other_cut, "keep");
+    write_file_atomic(long_target, "new\n");
+    CHECK_FALSE(fs::exists(d.path(cut)));
+    CHECK(testsupport::read_file(d.path(other_cut)) == "keep");
+}
+
+TEST_CASE("AtomicFile holds a lock on its temporary until the commit", "[output_paths]") {
+    testsupport::TempDir d("locked");
+    AtomicFile f(d.path("out.txt"));
+    f.write("x");
+    // Another open file description cannot take it while the writer lives.
+    const int fd = ::open(f.temp_path().c_str(), O_RDONLY | O_CLOEXEC);
+    REQUIRE(fd >= 0);
+    CHECK(::flock(fd, LOCK_EX | LOCK_NB) != 0);
+    f.commit();
+    CHECK(::flock(fd, LOCK_EX | LOCK_NB) == 0);  // the same inode, now the target, released
+    ::close(fd);
+    CHECK(testsupport::read_file(d.path("out.txt")) == "x");
 }

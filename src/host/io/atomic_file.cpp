@@ -1,12 +1,16 @@
 #include "host/io/atomic_file.h"
 
+#include <dirent.h>
 #include <fcntl.h>
+#include <signal.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
+#include <climits>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -22,18 +26,123 @@ namespace host {
 namespace fs = std::filesystem;
 
 namespace {
+// The name beside a target whose own name is near the file system's limit (255 bytes)
+// is cut, or a name the user may create could not be written.
+constexpr size_t kNameMax = 255;
+
 std::string temp_name(const std::string& path) {
     // Unique per process and per call, so parallel writers never share a temporary.
     static std::atomic<unsigned> counter{0};
     const std::string suffix = ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
-    // The name beside a target whose own name is near the file system's limit (255 bytes)
-    // is cut, or a name the user may create could not be written.
-    constexpr size_t kNameMax = 255;
     const size_t slash = path.rfind('/');
     const size_t name_start = slash == std::string::npos ? 0 : slash + 1;
     const size_t name_size = path.size() - name_start;
     if (name_size + suffix.size() <= kNameMax) return path + suffix;
     return path.substr(0, name_start + kNameMax - suffix.size()) + suffix;
+}
+
+// Stale temporaries. A signal the handler below catches removes the temporaries, but SIGKILL
+// (`timeout -s KILL`, the OOM killer) and a power cut leave theirs beside the target, and
+// every such run added one more. So a write to a target first removes the temporaries
+// beside it that temp_name() made for that same target in a process that has died.
+// O_TMPFILE + linkat() would leave no name to clean, but the temporary must have a name
+// (gnuplot writes it by temp_path()), linkat() cannot replace an existing target (a named
+// step and its rename were needed anyway), and not every file system has O_TMPFILE (NFS).
+//
+// A file is removed only when all of these hold, so nothing of anyone else's goes:
+//  * its name is exactly <target name>.tmp.<pid>.<n> as temp_name() writes it (decimal, no
+//    sign or leading zero; <target name> cut only as temp_name() cuts it);
+//  * kill(<pid>, 0) fails with ESRCH (EPERM: alive, another user's), or /proc shows a zombie,
+//    before and after the lock;
+//  * it is a regular file (not a link) owned by this user, and no one holds the flock()
+//    every writer takes on its temporary: a writer alive in another PID namespace (a
+//    container) or on another host over NFS has a PID kill() cannot see, but holds that lock
+//    until it exits, however it dies;
+//  * the name still names the file that was locked when it is unlinked.
+// Writers create their temporaries with O_EXCL, so a process that took a dead one's PID
+// never writes into a file being removed.
+
+// The PID in `entry` when it is one of temp_name()'s temporaries for the target named
+// `name` (the last component of its path); 0 if not.
+pid_t temp_owner(const std::string& entry, const std::string& name) {
+    // Trailing "<digits>" (the count), then ".<digits>" (the PID), then ".tmp.".
+    const auto digits_before = [&entry](size_t end, size_t& begin) {
+        begin = end;
+        while (begin > 0 && entry[begin - 1] >= '0' && entry[begin - 1] <= '9') --begin;
+        const size_t n = end - begin;
+        // as std::to_string writes them: no leading zero
+        return n >= 1 && n <= 10 && (n == 1 || entry[begin] != '0');
+    };
+    size_t count_begin = 0, pid_begin = 0;
+    if (!digits_before(entry.size(), count_begin) || count_begin == 0 || entry[count_begin - 1] != '.') return 0;
+    if (!digits_before(count_begin - 1, pid_begin)) return 0;
+    static const std::string kTag = ".tmp.";
+    if (pid_begin < kTag.size() || entry.compare(pid_begin - kTag.size(), kTag.size(), kTag) != 0) return 0;
+    const size_t prefix_size = pid_begin - kTag.size();
+    const bool whole = prefix_size == name.size() && entry.compare(0, prefix_size, name) == 0;
+    // temp_name() cuts a long name so that the temporary's is exactly kNameMax bytes.
+    const bool cut = entry.size() == kNameMax && prefix_size > 0 && prefix_size < name.size() &&
+                     name.compare(0, prefix_size, entry, 0, prefix_size) == 0;
+    if (!whole && !cut) return 0;
+    const long long pid = std::stoll(entry.substr(pid_begin, count_begin - 1 - pid_begin));
+    // Never 0 or negative: kill() would ask about a whole process group.
+    if (pid < 1 || pid > INT_MAX) return 0;
+    return static_cast<pid_t>(pid);
+}
+
+// A zombie has closed its files and will write nothing more, but kill() still finds it until
+// it is reaped, and its parent may be gone (`timeout -s KILL` kills itself too, leaving the
+// child to an init that may reap late). Linux's /proc tells; elsewhere it is taken as alive.
+bool zombie(pid_t pid) {
+    char path[32];
+    std::snprintf(path, sizeof path, "/proc/%d/stat", static_cast<int>(pid));
+    std::FILE* f = std::fopen(path, "re");
+    if (!f) return false;
+    char buf[512];
+    const size_t got = std::fread(buf, 1, sizeof buf - 1, f);
+    std::fclose(f);
+    buf[got] = '\0';
+    // "pid (comm) S ...": the command may hold ") ", so the state follows the last ')'.
+    const char* end = std::strrchr(buf, ')');
+    return end && end[1] == ' ' && (end[2] == 'Z' || end[2] == 'X');
+}
+
+bool process_gone(pid_t pid) {
+    if (pid <= 0) return false;
+    if (::kill(pid, 0) != 0) return errno == ESRCH;
+    return zombie(pid);
+}
+
+// Best effort: whatever cannot be read, opened or locked is left as it is.
+void remove_stale_temps(const std::string& target) {
+    const size_t slash = target.rfind('/');
+    const std::string dir = slash == std::string::npos ? "." : slash == 0 ? "/" : target.substr(0, slash);
+    const std::string name = slash == std::string::npos ? target : target.substr(slash + 1);
+    if (name.empty()) return;
+    DIR* d = ::opendir(dir.c_str());
+    if (!d) return;
+    const int dfd = ::dirfd(d);
+    const pid_t self = ::getpid();
+    while (const struct dirent* e = ::readdir(d)) {
+        const std::string entry = e->d_name;
+        const pid_t pid = temp_owner(entry, name);
+        if (pid == 0 || pid == self || !process_gone(pid)) continue;
+        // Nothing but a regular file is opened (opening a device may act on it).
+        struct stat named {};
+        if (::fstatat(dfd, entry.c_str(), &named, AT_SYMLINK_NOFOLLOW) != 0 || !S_ISREG(named.st_mode)) continue;
+        // Read-write where allowed: over NFS an exclusive flock() needs a file open for writing.
+        int fd = ::openat(dfd, entry.c_str(), O_RDWR | O_NOFOLLOW | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+        if (fd < 0) fd = ::openat(dfd, entry.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+        if (fd < 0) continue;
+        struct stat locked {};
+        if (::fstat(fd, &locked) == 0 && S_ISREG(locked.st_mode) && locked.st_uid == ::geteuid() &&
+            ::flock(fd, LOCK_EX | LOCK_NB) == 0 && process_gone(pid) &&
+            ::fstatat(dfd, entry.c_str(), &named, AT_SYMLINK_NOFOLLOW) == 0 && named.st_dev == locked.st_dev &&
+            named.st_ino == locked.st_ino)
+            (void)::unlinkat(dfd, entry.c_str(), 0);
+        ::close(fd);  // releases the lock
+    }
+    ::closedir(d);
 }
 
 // The temporaries alive now, for the signal handler: it may neither lock nor allocate, so a
@@ -172,19 +281,46 @@ AtomicFile::AtomicFile(const std::string& path) : path_(path) {
                        resolved.st_ino != given.st_ino))
             direct_ = true;
     }
+    if (!direct_) remove_stale_temps(target_);
     CreationGuard creating;
     if (direct_) {
         target_ = temp_path_ = path;
+        file_ = std::fopen(temp_path_.c_str(), "wb");
     } else {
-        temp_path_ = temp_name(target_);
-        // Registered before it exists, so no moment has it on disk unknown to the handler.
-        temp_slot_ = register_temp(temp_path_);
+        // O_EXCL: a file already by that name (a dead process's of the same PID) is never
+        // written into, so remove_stale_temps() cannot take a live temporary for it.
+        for (int attempt = 0; attempt < 100 && !file_; ++attempt) {
+            temp_path_ = temp_name(target_);
+            // Registered before it exists, so no moment has it on disk unknown to the handler.
+            temp_slot_ = register_temp(temp_path_);
+            const int fd = ::open(temp_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+            if (fd >= 0) {
+                file_ = ::fdopen(fd, "wb");
+                if (!file_) {
+                    const int err = errno;
+                    ::close(fd);
+                    ::unlink(temp_path_.c_str());
+                    errno = err;
+                }
+            }
+            if (file_) break;
+            const int err = errno;
+            unregister_temp(temp_slot_);
+            temp_slot_ = -1;
+            errno = err;
+            if (err != EEXIST) break;
+        }
     }
-    file_ = std::fopen(temp_path_.c_str(), "wb");
     if (!file_) {
         const int err = errno;
-        unregister_temp(temp_slot_);
         throw std::runtime_error(path + ": cannot create output (" + std::strerror(err) + ")");
+    }
+    if (!direct_) {
+        // Held until the temporary is renamed or removed (a duplicate, so it outlives the
+        // fclose() before the rename), and released by the kernel however this process
+        // dies: remove_stale_temps() of another process leaves a locked temporary alone.
+        lock_fd_ = ::fcntl(::fileno(file_), F_DUPFD_CLOEXEC, 0);
+        if (lock_fd_ >= 0) (void)::flock(lock_fd_, LOCK_EX | LOCK_NB);
     }
     // The file it replaces keeps its permissions (a config made private stays private).
     struct stat old_target {};
@@ -196,6 +332,7 @@ AtomicFile::~AtomicFile() {
     if (file_ && !stdout_) std::fclose(file_);
     if (!committed_ && !direct_) std::remove(temp_path_.c_str());
     unregister_temp(temp_slot_);
+    if (lock_fd_ >= 0) ::close(lock_fd_);
 }
 
 void AtomicFile::write(const std::string& text) { write(text.data(), text.size()); }
@@ -227,6 +364,8 @@ void AtomicFile::commit() {
     committed_ = true;
     unregister_temp(temp_slot_);
     temp_slot_ = -1;
+    if (lock_fd_ >= 0) ::close(lock_fd_);
+    lock_fd_ = -1;
 }
 
 ScratchFile::ScratchFile(const std::string& prefix) {

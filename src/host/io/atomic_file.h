@@ -1,5 +1,6 @@
 // Outputs are written to a temporary file beside the target and renamed into place on
-// commit, so a crash or a bad input never leaves a half-written file behind.
+// commit, so a crash or a bad input never leaves a half-written file behind. A temporary a
+// killed process left (SIGKILL) is removed by the next write to the same target.
 #pragma once
 #include <cstdio>
 #include <string>
@@ -39,6 +40,7 @@ private:
     bool direct_ = false;  // a device or FIFO: no temporary, no rename
     bool stdout_ = false;  // "-": never closed here
     int temp_slot_ = -1;   // in the registry the signal handler cleans, -1 = not in it
+    int lock_fd_ = -1;     // holds the temporary's flock() until it is renamed or removed
     bool committed_ = false;
 };
 

@@ -2,6 +2,8 @@
 // tests/unit/test_io_csv.cpp):
 //  * wrong field count, a field that is not a number, NaN/inf, a negative time or a time
 //    earlier than the row before: InputError with line and field number;
+//  * NaN/inf or an empty field in the temperature column (a sensor's dropout): that sample
+//    has no temperature, with a note counting such rows;
 //  * the last line of the file, when it has no newline and is visibly cut off (fewer
 //    fields, or its last field does not parse, or it lacks the trailing comma every
 //    earlier row had): skipped, with a note in SourceInfo::notes;
@@ -761,6 +763,11 @@ private:
                                  "\": expected a name ending in _s, _ms or _us (or (s), (ms), (us)), or give the unit: --time-unit s, ms or us (manifest: columns.time_unit or time_unit)");
         }
 
+        if (date_col_ < 0) {
+            info_.time_scale_to_s = time_factor_us_ * 1e-6;
+            info_.time_column = names_[static_cast<std::size_t>(time_col_)];
+        }
+
         // Voltage (volts unless the name ends in _mv).
         voltage_col_ = m.voltage.empty() ? require("voltage", "voltage_v") : require("voltage", m.voltage);
         voltage_scale_ = has_unit(lower_names_[static_cast<std::size_t>(voltage_col_)], "mv") ? 1e-3 : 1.0;
@@ -944,9 +951,20 @@ private:
         }
         if (temp_col_ >= 0) {
             const std::size_t tc = static_cast<std::size_t>(temp_col_);
-            if (!get_number(tc, v)) return Row::CutOff;
-            out.temperature_c = to_float(v, tc);
-            out.has_temperature = true;
+            const NumberStatus st = text::parse_number(fields_[tc], v);
+            // A temperature sensor's dropout ("nan", "inf", an empty field) loses that sample's
+            // temperature, not the flight: the sample goes on without one, as a ULog's NaN
+            // temperature does, and the monitor's model holds or models it meanwhile. An
+            // empty last field of a cut-off last line stays a cut (get_number below).
+            const bool cut_here = tc + 1 == cut_field_ && st == NumberStatus::Empty;
+            if ((st == NumberStatus::NotFinite || st == NumberStatus::Empty) && !cut_here) {
+                if (no_temperature_rows_++ == 0) first_no_temperature_line_ = lines_.line_number();
+            } else {
+                if (!get_number(tc, v)) return Row::CutOff;
+                out.temperature_c = to_float(v, tc);
+                out.has_temperature = true;
+                ++temperature_rows_;
+            }
         }
         return Row::Kept;
     }
@@ -964,6 +982,17 @@ private:
                                   " without battery telemetry skipped (first on line " +
                                   std::to_string(first_skipped_line_) + ")");
         }
+        if (no_temperature_rows_ > 0) {
+            const std::string& column = names_[static_cast<std::size_t>(temp_col_)];
+            info_.notes.push_back(std::to_string(no_temperature_rows_) + (no_temperature_rows_ == 1 ? " row has" : " rows have") +
+                                  " no temperature (\"nan\", \"inf\" or an empty field in column " +
+                                  std::to_string(temp_col_ + 1) + " \"" + column + "\", first on line " +
+                                  std::to_string(first_no_temperature_line_) + "): " +
+                                  (temperature_rows_ == 0 ? "read as a log without a temperature"
+                                                          : "kept, without a temperature"));
+            // As a ULog whose temperatures are all NaN: the summary says the log has none.
+            if (temperature_rows_ == 0) info_.has_temperature = false;
+        }
     }
 
     long header_line_ = 0;
@@ -973,6 +1002,9 @@ private:
     bool have_first_day_ = false;
     long skipped_rows_ = 0;
     long first_skipped_line_ = 0;
+    long no_temperature_rows_ = 0;  // a temperature column's dropouts (parse_row)
+    long first_no_temperature_line_ = 0;
+    long temperature_rows_ = 0;
     std::vector<std::string> names_;
     std::vector<std::string> lower_names_;
     int time_col_ = -1;

@@ -83,11 +83,74 @@ std::vector<unsigned char> peek(const std::string& path) {
     return buf;
 }
 
+// A byte no text log holds: a control character other than tab, CR and LF, or DEL.
+bool odd_byte(unsigned char c) { return (c < 0x20 && c != '\t' && c != '\r' && c != '\n') || c == 0x7F; }
+
+// Text in UTF-16 or UTF-32 ("Unicode" in a spreadsheet's or Windows' save dialogue): each
+// ASCII character followed or preceded by NULs. "" if `head` does not look like it, else what
+// it looks like ("UTF-16 (little-endian, with a byte-order mark)").
+// `charset`: its name for iconv -f.
+std::string wide_text(const std::vector<unsigned char>& head, std::string& charset) {
+    const size_t n = head.size();
+    charset = "UTF-32";
+    if (n >= 4 && head[0] == 0xFF && head[1] == 0xFE && head[2] == 0 && head[3] == 0)
+        return "UTF-32 (little-endian, with a byte-order mark)";
+    if (n >= 4 && head[0] == 0 && head[1] == 0 && head[2] == 0xFE && head[3] == 0xFF)
+        return "UTF-32 (big-endian, with a byte-order mark)";
+    charset = "UTF-16";
+    if (n >= 2 && head[0] == 0xFF && head[1] == 0xFE) return "UTF-16 (little-endian, with a byte-order mark)";
+    if (n >= 2 && head[0] == 0xFE && head[1] == 0xFF) return "UTF-16 (big-endian, with a byte-order mark)";
+    // Without a mark: nine pairs in ten an ASCII character beside a NUL, in the first 1 KiB.
+    const size_t pairs = std::min<size_t>(n, 1024) / 2;
+    if (pairs < 4) return "";
+    size_t little = 0, big = 0;
+    for (size_t k = 0; k < pairs; ++k) {
+        const unsigned char a = head[2 * k], b = head[2 * k + 1];
+        if (b == 0 && a != 0 && a < 0x80 && !odd_byte(a)) ++little;
+        if (a == 0 && b != 0 && b < 0x80 && !odd_byte(b)) ++big;
+    }
+    // Named so: without a mark iconv's "UTF-16" is big-endian.
+    charset = little > big ? "UTF-16LE" : "UTF-16BE";
+    if (10 * little >= 9 * pairs) return "UTF-16 (little-endian, without a byte-order mark)";
+    if (10 * big >= 9 * pairs) return "UTF-16 (big-endian, without a byte-order mark)";
+    return "";
+}
+
+// Where a text log stops being text: the NUL at `nul` (an offset in `head`), on the line and
+// field it falls in (fields counted as split_fields() does, quotes and all).
+[[noreturn]] void refuse_nul_in_text(const std::string& path, const std::vector<unsigned char>& head, size_t begin,
+                                     size_t nul) {
+    long line = 1, field = 1;
+    bool quoted = false;
+    for (size_t i = begin; i < nul; ++i) {
+        if (head[i] == '\n') {
+            ++line;
+            field = 1;
+            quoted = false;
+        } else if (head[i] == '"') {
+            quoted = !quoted;
+        } else if (head[i] == ',' && !quoted) {
+            ++field;
+        }
+    }
+    throw InputError(path, line, field,
+                     "a NUL byte at byte offset " + std::to_string(nul) +
+                         ": expected text (a CSV log holds no NUL bytes; a logger that lost power may have padded "
+                         "its file with them: cut the file before this line)");
+}
+
 LogFormat detect(const std::string& path, const std::vector<unsigned char>& head) {
     static const unsigned char kUlogMagic[7] = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35};
     if (head.size() >= sizeof kUlogMagic && std::memcmp(head.data(), kUlogMagic, sizeof kUlogMagic) == 0)
         return LogFormat::Ulog;
     if (head.size() >= 2 && head[0] == 0xA3 && head[1] == 0x95) return LogFormat::DataflashBinary;
+    std::string charset;
+    const std::string wide = wide_text(head, charset);
+    if (!wide.empty())
+        throw InputError(path, 0, 0,
+                         "the file looks like " + wide +
+                             " text; battsim reads text logs in UTF-8 (or ASCII): save it as UTF-8 (a spreadsheet's "
+                             "\"CSV UTF-8\", or iconv -f " + charset + " -t UTF-8)");
 
     std::string_view txt(reinterpret_cast<const char*>(head.data()), head.size());
     if (txt.size() >= 3 && txt.compare(0, 3, "\xEF\xBB\xBF") == 0) txt.remove_prefix(3);
@@ -109,9 +172,20 @@ LogFormat detect(const std::string& path, const std::vector<unsigned char>& head
         const std::size_t b = l.find_first_not_of(" \t");
         if (b != std::string_view::npos && l.compare(b, 4, "FMT,") == 0) return LogFormat::DataflashText;
     }
-    if (txt.find('\0') != std::string_view::npos) {
+    if (const size_t nul_in_txt = txt.find('\0'); nul_in_txt != std::string_view::npos) {
+        // Said where: text up to a NUL is a text log with a damaged stretch; otherwise the
+        // first byte that is no text's is where it stops looking like a log.
+        const size_t begin = head.size() - txt.size();  // after a UTF-8 byte-order mark
+        const size_t nul = begin + nul_in_txt;
+        size_t odd = begin;
+        while (odd < nul && !odd_byte(head[odd])) ++odd;
+        if (odd == nul && nul > begin) refuse_nul_in_text(path, head, begin, nul);
+        char what[96];
+        std::snprintf(what, sizeof what, "byte 0x%02X at offset %zu is not text", static_cast<unsigned>(head[odd]), odd);
         throw InputError(path, 0, 0,
-                         "unrecognised binary file: expected a ULog (.ulg), DataFlash (.bin) or text (CSV) log");
+                         std::string("unrecognised binary file (") + what +
+                             (odd == nul ? "" : ", the first NUL at offset " + std::to_string(nul)) +
+                             "): expected a ULog (.ulg), DataFlash (.bin) or text (CSV) log");
     }
 
     // First non-blank line: all numbers means no header row.

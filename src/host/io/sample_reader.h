@@ -93,6 +93,11 @@ struct SourceInfo {
     // A CSV log's current column: the amperes one of its units was read as (1e-3: milliamperes;
     // 0: another format), for the note when a log in amperes read as milliamperes never flies.
     double current_scale_to_a = 0.0;
+    // A CSV log's time column and the seconds one of its units was read as (1e-3: its name's
+    // _ms, or --time-unit ms; 0: another format, or a wall clock), for the notes that judge
+    // whether the log's clock was read in its unit.
+    double time_scale_to_s = 0.0;
+    std::string time_column;
     // With --average-ms: the samples read and the averaged samples made of them (0: none).
     long averaged_in = 0, averaged_out = 0;
 };
