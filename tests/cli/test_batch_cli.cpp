@@ -107,14 +107,15 @@ TEST_CASE("batch: a bad log becomes an error row, the rest are replayed and kept
 
 TEST_CASE("batch: a config for another pack than the logs' is said, not only counted", "[cli][batch]") {
     // A 6S flight replayed with the 4S reference config: every row said "ok", and the note
-    // that `replay` prints reached only the table's notes column (then a count).
+    // that `replay` prints reached only the table's notes column (then a count). Its limits
+    // keep every sample out: the row is no_valid_samples (it had read "ok"), the notes said.
     const std::string dir = clitest::temp_dir();
     REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/6s-hover-healthy.json") + " -o " + q(dir + "/six.csv"))
                 .exit_code == 0);
     const auto r = run("batch " + q(dir + "/six.csv") + " -c " + q(kConfig) + " --no-progress --format json");
     INFO(r.err);
-    REQUIRE(r.exit_code == 0);
-    CHECK(nlohmann::json::parse(r.out)["rows"][0]["status"] == "ok");
+    REQUIRE(r.exit_code == 1);
+    CHECK(nlohmann::json::parse(r.out)["rows"][0]["status"] == "no_valid_samples");
     CHECK_THAT(r.err, Catch::Contains("battsim batch: note: " + dir + "/six.csv: the pack rests at") &&
                           Catch::Contains("does the config match this pack?"));
     // With its own config, no such note.
@@ -189,6 +190,60 @@ TEST_CASE("batch: two logs of one stem are refused naming only the options given
     r = run("batch " + logs + " --out " + q(dir + "/out") + " --compare " + q(dir));
     CHECK(r.exit_code == 2);
     CHECK_THAT(r.err, Catch::StartsWith("battsim batch: --out and --compare name summaries <stem>.json"));
+}
+
+TEST_CASE("batch: a log the config keeps wholly out is a failed row, not ok, its summary kept", "[cli][batch]") {
+    const std::string dir = fleet_dir(2, false);
+    nlohmann::json cfg = nlohmann::json::parse(read_file(kConfig));
+    cfg["sensor"]["max_pack_voltage_v"] = 10.0;  // below every reading of these 4S logs
+    clitest::write_file(dir + "/low.json", cfg.dump());
+    const std::string manifest = dir + "/m.csv";
+    clitest::write_file(manifest, "path,pack,config\ng1.csv,P,low.json\ng2.csv,P," + kConfig + "\n");
+    auto r = run("batch -m " + q(manifest) + " --no-progress --format json --out " + q(dir + "/out"));
+    INFO(r.err);
+    CHECK(r.exit_code == 1);
+    const auto table = nlohmann::json::parse(r.out);
+    CHECK(table["schema_version"] == 3);
+    CHECK(table["version"] == 3);
+    const auto& row = table["rows"][0];
+    CHECK(row["status"] == "no_valid_samples");
+    const std::string why = "the config's sensor limits kept out all " + row["samples"].dump() + " samples: " +
+                            row["samples"].dump() + " pack_voltage_high (sensor.max_pack_voltage_v); does the config match this pack?";
+    CHECK(row["error"] == why);
+    CHECK(row["samples"].get<int>() > 0);
+    CHECK(row["sensor_fault_samples"] == row["samples"]);
+    CHECK(row["flight"] == false);
+    CHECK(table["rows"][1]["status"] == "ok");
+    CHECK(table["packs"][0]["failed"] == 1);  // counted in the summaries as failed
+    CHECK_THAT(r.err, Catch::Contains("battsim batch: failed: " + dir + "/g1.csv: no valid samples: " + why + "\n") &&
+                          Catch::Contains("1 of 2 logs failed"));
+    // The summary computed is kept, as replay writes it; replay itself exits 1 on it.
+    REQUIRE(exists(dir + "/out/g1.json"));
+    CHECK(nlohmann::json::parse(read_file(dir + "/out/g1.json"))["samples"]["valid"] == 0);
+    const auto rep = run("replay " + q(dir + "/g1.csv") + " -c " + q(dir + "/low.json") + " --summary " + q(dir + "/rep.json"));
+    CHECK(rep.exit_code == 1);
+    CHECK(read_file(dir + "/rep.json") == read_file(dir + "/out/g1.json"));
+    // Markdown names it in the status column; merge takes such rows and fails as the run does.
+    auto md = run("batch -m " + q(manifest) + " --no-progress");
+    CHECK(md.exit_code == 1);
+    CHECK_THAT(md.out, Catch::Contains("| no valid samples: " + why + " |"));
+    for (const char* k : {"1", "2"})
+        REQUIRE(run("batch -m " + q(manifest) + " --no-progress --format json --shard " + k + "/2 -o " + q(dir + "/s" + k + ".json"))
+                    .exit_code == (k[0] == '1' ? 1 : 0));
+    const auto merged = run("merge " + q(dir + "/s1.json") + " " + q(dir + "/s2.json") + " --format json");
+    CHECK(merged.exit_code == 1);
+    CHECK(nlohmann::json::parse(merged.out) == table);
+}
+
+TEST_CASE("batch: a Matrice 100 flight read with the default 4S config is no valid samples, not ok", "[cli][batch][data]") {
+    // The 6S flight's every sample breaks the 4S config's sensor limits: it had read "ok".
+    const auto r = run("batch " + q(kData + "/cmu-m100/flights/1.csv") + " --no-progress --format json");
+    INFO(r.err);
+    CHECK(r.exit_code == 1);
+    const auto row = nlohmann::json::parse(r.out)["rows"][0];
+    CHECK(row["status"] == "no_valid_samples");
+    CHECK(row["sensor_fault_samples"] == row["samples"]);
+    CHECK_THAT(row["error"].get<std::string>(), Catch::StartsWith("the config's sensor limits kept out all "));
 }
 
 TEST_CASE("batch: an output that cannot be written is said before the run; one that fails spares the others",

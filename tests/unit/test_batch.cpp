@@ -732,7 +732,26 @@ TEST_CASE("merge rebuilds the single run's table and refuses incomplete or forei
     json weird = shards[0];
     weird["rows"][0]["status"] = "weird";
     const std::string pw = t.write("w.json", weird.dump());
-    CHECK(input_error([&] { read_table_file(pw); }) == pw + ": rows[0].status: expected \"ok\" or \"error\", found \"weird\"");
+    CHECK(input_error([&] { read_table_file(pw); }) ==
+          pw + ": rows[0].status: expected \"ok\", \"error\" or \"no_valid_samples\", found \"weird\"");
+    // The version under both keys, as the summaries name it and as version 2 did; either read.
+    CHECK(shards[0]["schema_version"] == kBatchVersion);
+    CHECK(shards[0]["version"] == kBatchVersion);
+    json only_version = shards[0];
+    only_version.erase("schema_version");
+    CHECK_NOTHROW(read_table_file(t.write("v1.json", only_version.dump())));
+    json only_schema_version = shards[0];
+    only_schema_version.erase("version");
+    CHECK_NOTHROW(read_table_file(t.write("v2.json", only_schema_version.dump())));
+    json older = shards[0];
+    older["version"] = older["schema_version"] = 2;
+    const std::string pv = t.write("v3.json", older.dump());
+    CHECK(input_error([&] { read_table_file(pv); }) == pv + ": unsupported table version 2; expected 3 (rerun the shards with this battsim)");
+    json split = shards[0];
+    split["version"] = 2;
+    const std::string ps = t.write("v4.json", split.dump());
+    CHECK(input_error([&] { read_table_file(ps); }) == ps + ": \"schema_version\" 3 and \"version\" 2 disagree");
+
 
     const std::string notjson = t.write("x.json", "{\"schema\": \"battsim.batch\",\n \"rows\": [}");
     CHECK(input_error([&] { read_table_file(notjson); }) ==

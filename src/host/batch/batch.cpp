@@ -10,6 +10,7 @@
 #include <optional>
 #include <thread>
 
+#include "host/batch/table.h"
 #include "host/config_json.h"
 #include "host/io/atomic_file.h"
 #include "host/io/json_text.h"
@@ -226,8 +227,12 @@ json make_row(const BatchItem& item, const json& summary) {
     row["monitor"] = item.monitor.empty() ? json(nullptr) : json(item.monitor);
     row["config"] = summary.value("config", item.replay.config.name);
     row["estimator"] = summary.value("estimator", std::string(to_string(item.replay.config.monitor.estimator)));
-    row["status"] = "ok";
-    row["error"] = nullptr;
+    // A log the config kept wholly out replays without an error and reads null everywhere: its
+    // row fails (with the reason) and keeps what the summary says, so a pipeline need not
+    // compare sensor_fault_samples with samples itself.
+    const std::string no_valid = no_valid_samples_text(summary);
+    row["status"] = no_valid.empty() ? kRowOk : kRowNoValidSamples;
+    row["error"] = no_valid.empty() ? json(nullptr) : json(no_valid);
     // Missing members give null rather than an exception: a summary without a flight
     // (or from an older schema) still makes a row.
     auto pick = [&summary](const char* pointer) -> json {
@@ -294,7 +299,7 @@ json make_error_row(const BatchItem& item, const std::string& reason) {
     row["monitor"] = item.monitor.empty() ? json(nullptr) : json(item.monitor);
     row["config"] = item.replay.config.name;
     row["estimator"] = to_string(item.replay.config.monitor.estimator);
-    row["status"] = "error";
+    row["status"] = kRowError;
     row["error"] = reason;
     row["flight"] = false;
     for (const char* k : {"flight_duration_s", "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah",
@@ -350,7 +355,8 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
                 try {
                     summary = replay_log(item.path, item.replay);
                     std::string check_error;
-                    if (item.charged_mah > 0) {
+                    // Without a valid sample there is no charge to check: the row says why.
+                    if (item.charged_mah > 0 && no_valid_samples_text(summary).empty()) {
                         try {
                             add_charger_check(summary, item.charged_mah, ChargerCheckOptions().tolerance,
                                               item.replay.config.monitor);
