@@ -175,21 +175,71 @@ TEST_CASE("batch: an empty directory's error row names it in the Markdown table,
     CHECK_THAT(r.out, Catch::Contains("| T7 | spring | – |") && Catch::Contains("error: directory holds no log files"));
 }
 
-TEST_CASE("batch: two logs of one stem are refused naming only the options given", "[cli][batch]") {
-    const std::string dir = fleet_dir(1, false);
-    REQUIRE(::mkdir((dir + "/b").c_str(), 0755) == 0);
-    clitest::write_file(dir + "/b/g1.csv", read_file(dir + "/g1.csv"));
-    const std::string logs = q(dir + "/g1.csv") + " " + q(dir + "/b/g1.csv") + " -c " + q(kConfig) + " --no-progress";
+TEST_CASE("batch: logs of one stem get summaries named by their paths, the same for any order and --jobs",
+          "[cli][batch]") {
+    // ArduPilot writes 00000001.BIN on every card: one folder per drone had refused the run (exit 2).
+    const std::string dir = fleet_dir(0, false);
+    for (const char* drone : {"quad-a", "quad-b"}) {
+        REQUIRE(::mkdir((dir + "/" + drone).c_str(), 0755) == 0);
+        clitest::write_file(dir + "/" + drone + "/00000001.csv", raw_flight(15, drone[5] == 'a' ? 0.0006 : 0.0012));
+    }
+    clitest::write_file(dir + "/quad-b/00000002.csv", raw_flight(18, 0.0009));
+    const std::string a = q(dir + "/quad-a/00000001.csv"), b = q(dir + "/quad-b/00000001.csv"),
+                      c = q(dir + "/quad-b/00000002.csv"), opts = " -c " + q(kConfig) + " --no-progress";
+    auto r = run("batch " + a + " " + b + " " + c + opts + " --out " + q(dir + "/out") + " --jobs 2");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("battsim batch: note: stem shared, summary named by its path: " + dir +
+                                      "/quad-a/00000001.csv: quad-a__00000001.csv.json"));
+    // Each is the replay's own summary of that log; a stem of its own keeps its name.
+    for (const auto& [log, name] : std::vector<std::pair<std::string, std::string>>{
+             {"quad-a/00000001.csv", "quad-a__00000001.csv"}, {"quad-b/00000001.csv", "quad-b__00000001.csv"},
+             {"quad-b/00000002.csv", "00000002"}}) {
+        INFO(log);
+        REQUIRE(run("replay " + q(dir + "/" + log) + " -c " + q(kConfig) + " --summary " + q(dir + "/rep.json")).exit_code == 0);
+        CHECK(read_file(dir + "/out/" + name + ".json") == read_file(dir + "/rep.json"));
+    }
+    // Another order, one job, the directories given instead: the same names, the same bytes.
+    const std::string first = read_file(dir + "/out/quad-b__00000001.csv.json");
+    r = run("batch " + q(dir + "/quad-b") + " " + q(dir + "/quad-a") + opts + " --out " + q(dir + "/out2") + " --jobs 1");
+    REQUIRE(r.exit_code == 0);
+    for (const char* name : {"quad-a__00000001.csv", "quad-b__00000001.csv", "00000002"})
+        CHECK(read_file(dir + "/out2/" + name + ".json") == read_file(dir + "/out/" + name + ".json"));
+    CHECK(std::distance(std::filesystem::directory_iterator(dir + "/out2"), std::filesystem::directory_iterator()) == 3);
+    // --compare finds each golden by the same name.
+    r = run("batch " + a + " " + b + " " + c + opts + " --compare " + q(dir + "/out"));
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("compare: 3 compared, 0 changed"));
+    // A shard names them as the whole run does.
+    r = run("batch " + a + " " + b + " " + c + opts + " --shard 2/2 --out " + q(dir + "/out3"));
+    CHECK(r.exit_code == 0);
+    CHECK(read_file(dir + "/out3/quad-b__00000001.csv.json") == first);
+}
+
+TEST_CASE("batch: logs no name can part are refused naming only the options given", "[cli][batch]") {
+    // "a__b/x.csv" and "a/b/x.csv" are both a__b__x.csv: the one clash left, and its remedy.
+    const std::string dir = fleet_dir(0, false);
+    std::filesystem::create_directories(dir + "/a__b");
+    std::filesystem::create_directories(dir + "/a/b");
+    clitest::write_file(dir + "/a__b/x.csv", raw_flight(15, 0.0006));
+    clitest::write_file(dir + "/a/b/x.csv", raw_flight(15, 0.0006));
+    const std::string logs = q(dir + "/a__b/x.csv") + " " + q(dir + "/a/b/x.csv") + " -c " + q(kConfig) + " --no-progress";
+    const std::string said = " summaries <log stem>.json (logs of one stem: <path below their common directory, / as __>.json), "
+                             "but these logs would share one:\n  a__b__x.csv: " + dir + "/a__b/x.csv, " + dir + "/a/b/x.csv\n"
+                             "battsim batch: give each log once, by one spelling, or rename one of the files (or its directory)\n";
     auto r = run("batch " + logs + " --out " + q(dir + "/out"));
     CHECK(r.exit_code == 2);
     // It had said "--out and --compare name summaries" without a --compare.
-    CHECK_THAT(r.err, Catch::StartsWith("battsim batch: --out names summaries <stem>.json, but these logs share a stem:\n"));
+    CHECK(r.err == "battsim batch: --out names" + said);
     r = run("batch " + logs + " --compare " + q(dir));
     CHECK(r.exit_code == 2);
-    CHECK_THAT(r.err, Catch::StartsWith("battsim batch: --compare names summaries <stem>.json"));
+    CHECK(r.err == "battsim batch: --compare names" + said);
     r = run("batch " + logs + " --out " + q(dir + "/out") + " --compare " + q(dir));
     CHECK(r.exit_code == 2);
-    CHECK_THAT(r.err, Catch::StartsWith("battsim batch: --out and --compare name summaries <stem>.json"));
+    CHECK(r.err == "battsim batch: --out and --compare name" + said);
+    CHECK_FALSE(exists(dir + "/out"));
+    // Without --out or --compare no summary is named: the table is made.
+    CHECK(run("batch " + logs).exit_code == 0);
 }
 
 TEST_CASE("batch: a log the config keeps wholly out is a failed row, not ok, its summary kept", "[cli][batch]") {
@@ -383,11 +433,11 @@ TEST_CASE("batch: manifest and option errors are clear and exit non-zero", "[cli
     CHECK(run("batch " + q(dir) + " --format xml").exit_code == 2);
     CHECK(run("batch " + q(dir) + " --time-unit hours").exit_code == 2);
     CHECK(run("batch " + q(dir) + " --estimator fancy").exit_code == 2);
-    // Two logs with one stem cannot both be <stem>.json in --out.
+    // Two logs with one stem are both written to --out, each named by its path.
     const std::string other = fleet_dir(1, false);
-    r = run("batch " + q(dir + "/g1.csv") + " " + q(other + "/g1.csv") + " --out " + q(dir + "/o"));
-    CHECK(r.exit_code == 2);
-    CHECK(r.err.find("g1: " + dir + "/g1.csv, " + other + "/g1.csv") != std::string::npos);
+    r = run("batch " + q(dir + "/g1.csv") + " " + q(other + "/g1.csv") + " -c " + q(kConfig) + " --out " + q(dir + "/o"));
+    CHECK(r.exit_code == 0);
+    CHECK(std::distance(std::filesystem::directory_iterator(dir + "/o"), std::filesystem::directory_iterator()) == 2);
     // Outputs that cannot be written: exit 5, and no half-written file.
     clitest::write_file(dir + "/plain", "x");
     r = run("batch " + q(dir + "/g1.csv") + " --out " + q(dir + "/plain/sub"));
