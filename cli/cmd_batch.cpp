@@ -82,16 +82,28 @@ int run(const BatchArgs& a) {
         return kExitUsage;
     }
     if (!a.out_dir.empty() || !a.compare.empty()) {
-        const std::vector<std::string> dups = host::duplicate_stems(all);
+        // Logs of one stem (ArduPilot's 00000001.BIN on every card) are named by their paths
+        // (plan_batch); only names that still clash, which no rule can part, are refused.
+        const std::vector<std::string> dups = host::duplicate_summary_names(all);
         if (!dups.empty()) {
             // Only the options given: "--compare" had been named in a run without it.
             const std::string given = !a.out_dir.empty() && !a.compare.empty() ? "--out and --compare name"
                                       : !a.out_dir.empty()                      ? "--out names"
                                                                                 : "--compare names";
-            std::cerr << me << given << " summaries <stem>.json, but these logs share a stem:\n";
+            std::cerr << me << given
+                      << " summaries <log stem>.json (logs of one stem: <path below their common directory, / as __>.json), "
+                         "but these logs would share one:\n";
             for (const std::string& d : dups) std::cerr << "  " << d << "\n";
+            std::cerr << me << "give each log once, by one spelling, or rename one of the files (or its directory)\n";
             return kExitUsage;
         }
+        // Said, the first few, so the operator finds each log's summary (and names its golden).
+        const std::vector<std::string> renamed = host::renamed_summaries(all);
+        constexpr size_t kRenamedShown = 5;
+        for (size_t k = 0; k < renamed.size() && k < kRenamedShown; ++k)
+            std::cerr << me << "note: stem shared, summary named by its path: " << renamed[k] << "\n";
+        if (renamed.size() > kRenamedShown)
+            std::cerr << me << "note: " << renamed.size() - kRenamedShown << " more summaries named by their paths\n";
     }
     const std::string digest = host::inputs_digest(all);
     std::vector<host::BatchItem> items;
@@ -112,9 +124,10 @@ int run(const BatchArgs& a) {
         {"--out", a.out_dir, false, host::Dash::Refused, true}};
     for (const host::BatchItem& it : items) {
         if (!a.compare.empty())
-            inputs.push_back({"--compare's " + it.stem + ".json", (fs::path(a.compare) / (it.stem + ".json")).string()});
+            inputs.push_back({"--compare's " + it.summary_stem() + ".json",
+                              (fs::path(a.compare) / (it.summary_stem() + ".json")).string()});
         if (!a.out_dir.empty())
-            outputs.push_back({"--out's " + it.stem + ".json", (fs::path(a.out_dir) / (it.stem + ".json")).string()});
+            outputs.push_back({"--out's " + it.summary_stem() + ".json", (fs::path(a.out_dir) / (it.summary_stem() + ".json")).string()});
     }
     if (int rc = check_outputs("battsim batch", inputs, outputs)) return rc;
     // What each config makes unreliable, once per config (every row's notes repeat it): a
@@ -201,9 +214,12 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--monitors", a->monitors,
                    "Also write the per-monitor table (charger checks pooled per current sensor) here, in --format "
                    "(\"-\" = standard output)");
-    sub.add_option("--out", a->out_dir, "Write each log's summary JSON here as <log stem>.json, as it completes");
+    sub.add_option("--out", a->out_dir,
+                   "Write each log's summary JSON here as <log stem>.json, as it completes (logs of one stem: "
+                   "<path below their common directory, / as __>.json)");
     sub.add_option("--shard", a->shard, "Replay only shard K of N (K/N, 1-based): inputs whose index mod N is K-1");
-    sub.add_option("--compare", a->compare, "Compare each summary with GOLDEN_DIR/<log stem>.json; exit 1 on a change");
+    sub.add_option("--compare", a->compare,
+                   "Compare each summary with GOLDEN_DIR/<log stem>.json (named as --out names it); exit 1 on a change");
     sub.add_option("--tolerance", a->tolerance, "--compare: relative tolerance (plus 1e-9 absolute)")->capture_default_str();
     sub.add_flag("--no-progress", a->no_progress, "No progress bar (it is shown only when stderr is a terminal)");
     add_input_options(sub, a->input);

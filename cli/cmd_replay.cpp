@@ -133,8 +133,12 @@ std::function<int()> setup(CLI::App& sub) {
                 return kExitConfigError;
             }
         }
-        // Given at all (a zero or negative count is refused below, not taken as "none").
-        const bool check = charged->count() > 0;
+        // Nothing valid to report (a config for another pack kept every sample out): the outputs
+        // are written all the same, to show it, but the run fails (exit 1), as batch's row does.
+        const std::string no_valid = host::no_valid_samples_text(summary);
+        // Given at all (a zero or negative count is refused below, not taken as "none"); without a
+        // valid sample there is no charge to check (it had exited 2, as for a bad count).
+        const bool check = charged->count() > 0 && no_valid.empty();
         if (check) {
             try {
                 host::add_charger_check(summary, a->charged_mah, a->charger_tolerance, opt.config.monitor);
@@ -159,7 +163,7 @@ std::function<int()> setup(CLI::App& sub) {
             if (stream) stream->commit();
             if (!a->config_out.empty() && !refuse_config)
                 host::write_file_atomic(a->config_out, host::json_text(host::config_to_json(corrected), 2) + "\n");
-            if (!a->plot.empty()) {
+            if (!a->plot.empty() && no_valid.empty()) {  // no sample to draw
                 const std::string title = "battsim replay: " + a->log + " (config " + summary["config"].get<std::string>() +
                                           ", " + summary["estimator"].get<std::string>() + " estimator)";
                 host::plot::plot_replay(plotted, title, a->plot);
@@ -176,9 +180,15 @@ std::function<int()> setup(CLI::App& sub) {
             print_brief(summary, people);
         if (!a->json && a->said) print_said(summary["said"], summary["flight"], people);
         if (!a->json && summary.contains("charger_check")) print_charger_check(summary["charger_check"], people);
+        if (!no_valid.empty())
+            std::cerr << "battsim replay: no valid samples: " << no_valid
+                      << (a->plot.empty() ? "" : "; --plot not drawn")
+                      << (charged->count() > 0 ? "; --charged-mah not checked" : "") << " (exit 1)\n";
         if (refuse_config) {
             std::cerr << "battsim replay: --config-out: no correction found ("
-                      << (check ? "the charger check suggests no gain, see its notes; " : "no --charged-mah; ")
+                      << (check                  ? "the charger check suggests no gain, see its notes; "
+                          : charged->count() > 0 ? "no charger check without a valid sample; "
+                                                 : "no --charged-mah; ")
                       << "no current-sensor offset learnt as a sensor fault); " << a->config_out << " not written\n";
             return kExitFailure;
         }
@@ -186,7 +196,7 @@ std::function<int()> setup(CLI::App& sub) {
             std::cerr << "battsim replay: --config-out: extensions.current_sensor.offset_a "
                       << corrected.monitor.extensions.current_sensor.offset_a << " A (the " << offset_taken_a
                       << " A offset learnt on the ground taken out) in " << a->config_out << "\n";
-        return kExitOk;
+        return no_valid.empty() ? kExitOk : kExitFailure;
     };
 }
 

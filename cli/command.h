@@ -6,18 +6,10 @@
 #include <string>
 #include <vector>
 
+#include "exit_codes.h"
+
 namespace battsim {
 namespace cli {
-
-// Exit codes shared by every subcommand (documented in the README).
-enum ExitCode : int {
-    kExitOk = 0,
-    kExitFailure = 1,      // the job ran but found failures (batch rows in error, regressions)
-    kExitUsage = 2,        // bad command line
-    kExitInputError = 3,   // unreadable or malformed input file
-    kExitConfigError = 4,  // bad configuration file
-    kExitOutputError = 5,  // could not write an output
-};
 
 struct Command {
     std::string name;

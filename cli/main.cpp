@@ -7,6 +7,7 @@
 #include <string>
 
 #include "command.h"
+#include "run_guarded.h"
 #include "host/io/atomic_file.h"
 
 namespace battsim {
@@ -54,23 +55,18 @@ int main(int argc, char** argv) {
     }
     for (auto& a : actions) {
         if (a.first->parsed()) {
-            try {
-                const int code = a.second();
-                // What went to standard output (a report, "-o -", --json) is an output like a
-                // file: a full disk or a closed pipe had exited 0 with the numbers lost.
-                errno = 0;
-                std::cout.flush();
-                if (!std::cout) {
-                    const int err = errno;
-                    std::cerr << "battsim " << a.first->get_name() << ": error: writing to standard output failed"
-                              << (err ? std::string(" (") + std::strerror(err) + ")" : std::string()) << "\n";
-                    return kExitOutputError;
-                }
-                return code;
-            } catch (const std::exception& e) {
-                std::cerr << "battsim " << a.first->get_name() << ": error: " << e.what() << "\n";
-                return kExitFailure;
+            const int code = run_guarded(a.first->get_name(), a.second, std::cerr);
+            // What went to standard output (a report, "-o -", --json) is an output like a
+            // file: a full disk or a closed pipe had exited 0 with the numbers lost.
+            errno = 0;
+            std::cout.flush();
+            if (!std::cout) {
+                const int err = errno;
+                std::cerr << "battsim " << a.first->get_name() << ": error: writing to standard output failed"
+                          << (err ? std::string(" (") + std::strerror(err) + ")" : std::string()) << "\n";
+                return kExitOutputError;
             }
+            return code;
         }
     }
     return kExitUsage;

@@ -59,6 +59,17 @@ std::string kept_out_text(const nlohmann::json& summary) {
     return out;
 }
 
+std::string no_valid_samples_text(const nlohmann::json& summary) {
+    const nlohmann::json samples = summary.value("samples", nlohmann::json::object());
+    const nlohmann::json valid = samples.value("valid", nlohmann::json()), total = samples.value("total", nlohmann::json());
+    // A summary without the counts (another schema) is not judged here.
+    if (!valid.is_number_unsigned() || !total.is_number_unsigned() || valid.get<uint64_t>() > 0) return std::string();
+    if (total.get<uint64_t>() == 0) return "the log holds no sample";
+    const std::string kept_out = kept_out_text(summary);
+    return "the config's sensor limits kept out all " + total.dump() + " samples" +
+           (kept_out.empty() ? std::string() : ": " + kept_out);
+}
+
 std::vector<std::string> log_notes(const nlohmann::json& summary) {
     std::vector<std::string> out;
     for (const nlohmann::json& note : summary["input"].value("notes", nlohmann::json::array()))

@@ -35,6 +35,14 @@ std::vector<std::string> other_pack_notes(const nlohmann::json& summary);
 // mA read as amperes (give --current-unit mA)?; does the config match this pack?").
 std::string kept_out_text(const nlohmann::json& summary);
 
+// Why a replay has nothing to report, in words; empty when at least one sample was valid.
+// A log whose every sample the config's sensor limits kept out (a 4S config on a 6S log)
+// replays without an error but reads null everywhere: batch makes its row
+// "no_valid_samples" and replay exits 1, so no pipeline takes it for a replayed log.
+// E.g. "the config's sensor limits kept out all 1339 samples: 1339 pack_voltage_high
+// (sensor.max_pack_voltage_v); does the config match this pack?".
+std::string no_valid_samples_text(const nlohmann::json& summary);
+
 // What a replay's summary says of its log that the commands fitting along replays (fit,
 // residual, fit-ocv, calibrate) must say too, as replay does: the input's notes (the reader's
 // and the log's shape: a current of the other sign, a clock that jumps, a time unit that does

@@ -107,14 +107,15 @@ TEST_CASE("batch: a bad log becomes an error row, the rest are replayed and kept
 
 TEST_CASE("batch: a config for another pack than the logs' is said, not only counted", "[cli][batch]") {
     // A 6S flight replayed with the 4S reference config: every row said "ok", and the note
-    // that `replay` prints reached only the table's notes column (then a count).
+    // that `replay` prints reached only the table's notes column (then a count). Its limits
+    // keep every sample out: the row is no_valid_samples (it had read "ok"), the notes said.
     const std::string dir = clitest::temp_dir();
     REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/6s-hover-healthy.json") + " -o " + q(dir + "/six.csv"))
                 .exit_code == 0);
     const auto r = run("batch " + q(dir + "/six.csv") + " -c " + q(kConfig) + " --no-progress --format json");
     INFO(r.err);
-    REQUIRE(r.exit_code == 0);
-    CHECK(nlohmann::json::parse(r.out)["rows"][0]["status"] == "ok");
+    REQUIRE(r.exit_code == 1);
+    CHECK(nlohmann::json::parse(r.out)["rows"][0]["status"] == "no_valid_samples");
     CHECK_THAT(r.err, Catch::Contains("battsim batch: note: " + dir + "/six.csv: the pack rests at") &&
                           Catch::Contains("does the config match this pack?"));
     // With its own config, no such note.
@@ -174,21 +175,125 @@ TEST_CASE("batch: an empty directory's error row names it in the Markdown table,
     CHECK_THAT(r.out, Catch::Contains("| T7 | spring | – |") && Catch::Contains("error: directory holds no log files"));
 }
 
-TEST_CASE("batch: two logs of one stem are refused naming only the options given", "[cli][batch]") {
-    const std::string dir = fleet_dir(1, false);
-    REQUIRE(::mkdir((dir + "/b").c_str(), 0755) == 0);
-    clitest::write_file(dir + "/b/g1.csv", read_file(dir + "/g1.csv"));
-    const std::string logs = q(dir + "/g1.csv") + " " + q(dir + "/b/g1.csv") + " -c " + q(kConfig) + " --no-progress";
+TEST_CASE("batch: logs of one stem get summaries named by their paths, the same for any order and --jobs",
+          "[cli][batch]") {
+    // ArduPilot writes 00000001.BIN on every card: one folder per drone had refused the run (exit 2).
+    const std::string dir = fleet_dir(0, false);
+    for (const char* drone : {"quad-a", "quad-b"}) {
+        REQUIRE(::mkdir((dir + "/" + drone).c_str(), 0755) == 0);
+        clitest::write_file(dir + "/" + drone + "/00000001.csv", raw_flight(15, drone[5] == 'a' ? 0.0006 : 0.0012));
+    }
+    clitest::write_file(dir + "/quad-b/00000002.csv", raw_flight(18, 0.0009));
+    const std::string a = q(dir + "/quad-a/00000001.csv"), b = q(dir + "/quad-b/00000001.csv"),
+                      c = q(dir + "/quad-b/00000002.csv"), opts = " -c " + q(kConfig) + " --no-progress";
+    auto r = run("batch " + a + " " + b + " " + c + opts + " --out " + q(dir + "/out") + " --jobs 2");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("battsim batch: note: stem shared, summary named by its path: " + dir +
+                                      "/quad-a/00000001.csv: quad-a__00000001.csv.json"));
+    // Each is the replay's own summary of that log; a stem of its own keeps its name.
+    for (const auto& [log, name] : std::vector<std::pair<std::string, std::string>>{
+             {"quad-a/00000001.csv", "quad-a__00000001.csv"}, {"quad-b/00000001.csv", "quad-b__00000001.csv"},
+             {"quad-b/00000002.csv", "00000002"}}) {
+        INFO(log);
+        REQUIRE(run("replay " + q(dir + "/" + log) + " -c " + q(kConfig) + " --summary " + q(dir + "/rep.json")).exit_code == 0);
+        CHECK(read_file(dir + "/out/" + name + ".json") == read_file(dir + "/rep.json"));
+    }
+    // Another order, one job, the directories given instead: the same names, the same bytes.
+    const std::string first = read_file(dir + "/out/quad-b__00000001.csv.json");
+    r = run("batch " + q(dir + "/quad-b") + " " + q(dir + "/quad-a") + opts + " --out " + q(dir + "/out2") + " --jobs 1");
+    REQUIRE(r.exit_code == 0);
+    for (const char* name : {"quad-a__00000001.csv", "quad-b__00000001.csv", "00000002"})
+        CHECK(read_file(dir + "/out2/" + name + ".json") == read_file(dir + "/out/" + name + ".json"));
+    CHECK(std::distance(std::filesystem::directory_iterator(dir + "/out2"), std::filesystem::directory_iterator()) == 3);
+    // --compare finds each golden by the same name.
+    r = run("batch " + a + " " + b + " " + c + opts + " --compare " + q(dir + "/out"));
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("compare: 3 compared, 0 changed"));
+    // A shard names them as the whole run does.
+    r = run("batch " + a + " " + b + " " + c + opts + " --shard 2/2 --out " + q(dir + "/out3"));
+    CHECK(r.exit_code == 0);
+    CHECK(read_file(dir + "/out3/quad-b__00000001.csv.json") == first);
+}
+
+TEST_CASE("batch: logs no name can part are refused naming only the options given", "[cli][batch]") {
+    // "a__b/x.csv" and "a/b/x.csv" are both a__b__x.csv: the one clash left, and its remedy.
+    const std::string dir = fleet_dir(0, false);
+    std::filesystem::create_directories(dir + "/a__b");
+    std::filesystem::create_directories(dir + "/a/b");
+    clitest::write_file(dir + "/a__b/x.csv", raw_flight(15, 0.0006));
+    clitest::write_file(dir + "/a/b/x.csv", raw_flight(15, 0.0006));
+    const std::string logs = q(dir + "/a__b/x.csv") + " " + q(dir + "/a/b/x.csv") + " -c " + q(kConfig) + " --no-progress";
+    const std::string said = " summaries <log stem>.json (logs of one stem: <path below their common directory, / as __>.json), "
+                             "but these logs would share one:\n  a__b__x.csv: " + dir + "/a__b/x.csv, " + dir + "/a/b/x.csv\n"
+                             "battsim batch: give each log once, by one spelling, or rename one of the files (or its directory)\n";
     auto r = run("batch " + logs + " --out " + q(dir + "/out"));
     CHECK(r.exit_code == 2);
     // It had said "--out and --compare name summaries" without a --compare.
-    CHECK_THAT(r.err, Catch::StartsWith("battsim batch: --out names summaries <stem>.json, but these logs share a stem:\n"));
+    CHECK(r.err == "battsim batch: --out names" + said);
     r = run("batch " + logs + " --compare " + q(dir));
     CHECK(r.exit_code == 2);
-    CHECK_THAT(r.err, Catch::StartsWith("battsim batch: --compare names summaries <stem>.json"));
+    CHECK(r.err == "battsim batch: --compare names" + said);
     r = run("batch " + logs + " --out " + q(dir + "/out") + " --compare " + q(dir));
     CHECK(r.exit_code == 2);
-    CHECK_THAT(r.err, Catch::StartsWith("battsim batch: --out and --compare name summaries <stem>.json"));
+    CHECK(r.err == "battsim batch: --out and --compare name" + said);
+    CHECK_FALSE(exists(dir + "/out"));
+    // Without --out or --compare no summary is named: the table is made.
+    CHECK(run("batch " + logs).exit_code == 0);
+}
+
+TEST_CASE("batch: a log the config keeps wholly out is a failed row, not ok, its summary kept", "[cli][batch]") {
+    const std::string dir = fleet_dir(2, false);
+    nlohmann::json cfg = nlohmann::json::parse(read_file(kConfig));
+    cfg["sensor"]["max_pack_voltage_v"] = 10.0;  // below every reading of these 4S logs
+    clitest::write_file(dir + "/low.json", cfg.dump());
+    const std::string manifest = dir + "/m.csv";
+    clitest::write_file(manifest, "path,pack,config\ng1.csv,P,low.json\ng2.csv,P," + kConfig + "\n");
+    auto r = run("batch -m " + q(manifest) + " --no-progress --format json --out " + q(dir + "/out"));
+    INFO(r.err);
+    CHECK(r.exit_code == 1);
+    const auto table = nlohmann::json::parse(r.out);
+    CHECK(table["schema_version"] == 3);
+    CHECK(table["version"] == 3);
+    const auto& row = table["rows"][0];
+    CHECK(row["status"] == "no_valid_samples");
+    const std::string why = "the config's sensor limits kept out all " + row["samples"].dump() + " samples: " +
+                            row["samples"].dump() + " pack_voltage_high (sensor.max_pack_voltage_v); does the config match this pack?";
+    CHECK(row["error"] == why);
+    CHECK(row["samples"].get<int>() > 0);
+    CHECK(row["sensor_fault_samples"] == row["samples"]);
+    CHECK(row["flight"] == false);
+    CHECK(table["rows"][1]["status"] == "ok");
+    CHECK(table["packs"][0]["failed"] == 1);  // counted in the summaries as failed
+    CHECK_THAT(r.err, Catch::Contains("battsim batch: failed: " + dir + "/g1.csv: no valid samples: " + why + "\n") &&
+                          Catch::Contains("1 of 2 logs failed"));
+    // The summary computed is kept, as replay writes it; replay itself exits 1 on it.
+    REQUIRE(exists(dir + "/out/g1.json"));
+    CHECK(nlohmann::json::parse(read_file(dir + "/out/g1.json"))["samples"]["valid"] == 0);
+    const auto rep = run("replay " + q(dir + "/g1.csv") + " -c " + q(dir + "/low.json") + " --summary " + q(dir + "/rep.json"));
+    CHECK(rep.exit_code == 1);
+    CHECK(read_file(dir + "/rep.json") == read_file(dir + "/out/g1.json"));
+    // Markdown names it in the status column; merge takes such rows and fails as the run does.
+    auto md = run("batch -m " + q(manifest) + " --no-progress");
+    CHECK(md.exit_code == 1);
+    CHECK_THAT(md.out, Catch::Contains("| no valid samples: " + why + " |"));
+    for (const char* k : {"1", "2"})
+        REQUIRE(run("batch -m " + q(manifest) + " --no-progress --format json --shard " + k + "/2 -o " + q(dir + "/s" + k + ".json"))
+                    .exit_code == (k[0] == '1' ? 1 : 0));
+    const auto merged = run("merge " + q(dir + "/s1.json") + " " + q(dir + "/s2.json") + " --format json");
+    CHECK(merged.exit_code == 1);
+    CHECK(nlohmann::json::parse(merged.out) == table);
+}
+
+TEST_CASE("batch: a Matrice 100 flight read with the default 4S config is no valid samples, not ok", "[cli][batch][data]") {
+    // The 6S flight's every sample breaks the 4S config's sensor limits: it had read "ok".
+    const auto r = run("batch " + q(kData + "/cmu-m100/flights/1.csv") + " --no-progress --format json");
+    INFO(r.err);
+    CHECK(r.exit_code == 1);
+    const auto row = nlohmann::json::parse(r.out)["rows"][0];
+    CHECK(row["status"] == "no_valid_samples");
+    CHECK(row["sensor_fault_samples"] == row["samples"]);
+    CHECK_THAT(row["error"].get<std::string>(), Catch::StartsWith("the config's sensor limits kept out all "));
 }
 
 TEST_CASE("batch: an output that cannot be written is said before the run; one that fails spares the others",
@@ -328,11 +433,11 @@ TEST_CASE("batch: manifest and option errors are clear and exit non-zero", "[cli
     CHECK(run("batch " + q(dir) + " --format xml").exit_code == 2);
     CHECK(run("batch " + q(dir) + " --time-unit hours").exit_code == 2);
     CHECK(run("batch " + q(dir) + " --estimator fancy").exit_code == 2);
-    // Two logs with one stem cannot both be <stem>.json in --out.
+    // Two logs with one stem are both written to --out, each named by its path.
     const std::string other = fleet_dir(1, false);
-    r = run("batch " + q(dir + "/g1.csv") + " " + q(other + "/g1.csv") + " --out " + q(dir + "/o"));
-    CHECK(r.exit_code == 2);
-    CHECK(r.err.find("g1: " + dir + "/g1.csv, " + other + "/g1.csv") != std::string::npos);
+    r = run("batch " + q(dir + "/g1.csv") + " " + q(other + "/g1.csv") + " -c " + q(kConfig) + " --out " + q(dir + "/o"));
+    CHECK(r.exit_code == 0);
+    CHECK(std::distance(std::filesystem::directory_iterator(dir + "/o"), std::filesystem::directory_iterator()) == 2);
     // Outputs that cannot be written: exit 5, and no half-written file.
     clitest::write_file(dir + "/plain", "x");
     r = run("batch " + q(dir + "/g1.csv") + " --out " + q(dir + "/plain/sub"));

@@ -33,6 +33,10 @@ TEST_CASE("calibrate raises the slow share for a pack whose polarisation builds 
     const std::string out = dir + "/calibrated.json";
     const auto j = clitest::run_json("calibrate " + q(log) + " -c " + q(kConfig) + " -o " + q(out) + " --json");
     CHECK(j["schema"] == "battsim.shape_calibration");
+    CHECK(j["schema_version"] == 1);
+    // Which release wrote it, as the summaries say (`battsim --version` prints "battsim X").
+    const std::string version = run("--version").out;
+    CHECK("battsim " + j["battsim_version"].get<std::string>() + "\n" == version);
     CHECK(j["configured_slow_share"].get<double>() == Approx(0.2));
     CHECK(j["changed"] == true);
     const double chosen = j["chosen_slow_share"].get<double>();

@@ -168,6 +168,10 @@ TEST_CASE("fit-ocv's report is rounded as the other reports are", "[cli]") {
     const auto j = clitest::run_json("fit-ocv " + q(kSource + "/logs/example-4s.csv") + " -c " +
                                      q(kSource + "/configs/sim-4s.json") + " --json");
     CHECK(most_figures(j) <= 6);
+    CHECK(j["schema"] == "battsim.ocv_stitch");
+    CHECK(j["schema_version"] == 1);
+    // Which release wrote it, as the summaries say (`battsim --version` prints "battsim X").
+    CHECK("battsim " + j["battsim_version"].get<std::string>() + "\n" == run("--version").out);
     CHECK(j["ocv_cell_voltage_v"]["fitted"].size() == 21u);
 }
 

@@ -107,11 +107,29 @@ TEST_CASE("replay of a log whose every sample is kept out says so, not 'no fligh
     clitest::write_file(dir + "/low.json", cfg.dump());
     clitest::write_file(dir + "/log.csv", raw_log());
     const auto r = run("replay " + q(dir + "/log.csv") + " -c " + q(dir + "/low.json"));
-    CHECK(r.exit_code == 0);
+    // Nothing to report is a failure (exit 1, as batch's row "no_valid_samples"), said on stderr.
+    CHECK(r.exit_code == 1);
     CHECK_THAT(r.out, Catch::Contains("no valid sample (every one kept out, above)"));
     CHECK_THAT(r.out, !Catch::Contains("no flight (the current never"));
-    const auto j = clitest::run_json("replay " + q(dir + "/log.csv") + " -c " + q(dir + "/low.json") + " --json");
+    CHECK_THAT(r.err, Catch::EndsWith("\nbattsim replay: no valid samples: the config's sensor limits kept out all 300 "
+                                      "samples: 300 pack_voltage_high (sensor.max_pack_voltage_v); does the config match "
+                                      "this pack? (exit 1)\n"));
+    // The summary is printed all the same.
+    const auto js = run("replay " + q(dir + "/log.csv") + " -c " + q(dir + "/low.json") + " --json");
+    CHECK(js.exit_code == 1);
+    const auto j = nlohmann::json::parse(js.out);
     CHECK(j["duration_s"].is_null());  // no valid sample spans no time (it had read 0.0 s)
+    CHECK(j["samples"]["valid"] == 0);
+    // No plot to draw: said, not an input error (it had exited 3 with the plot's message).
+    const auto plot = run("replay " + q(dir + "/log.csv") + " -c " + q(dir + "/low.json") + " --plot " + q(dir + "/p.svg"));
+    CHECK(plot.exit_code == 1);
+    CHECK_THAT(plot.err, Catch::EndsWith("; --plot not drawn (exit 1)\n"));
+    CHECK_FALSE(std::filesystem::exists(dir + "/p.svg"));
+    // No charge to check against the charger: the same failure, not a bad count (it had exited 2).
+    const auto charged = run("replay " + q(dir + "/log.csv") + " -c " + q(dir + "/low.json") + " --charged-mah 1000 --json");
+    CHECK(charged.exit_code == 1);
+    CHECK_THAT(charged.err, Catch::EndsWith("; --charged-mah not checked (exit 1)\n"));
+    CHECK_FALSE(nlohmann::json::parse(charged.out).contains("charger_check"));
 }
 
 TEST_CASE("replay says when the battery states LOW and CRITICAL began, which are no warnings", "[cli][data]") {

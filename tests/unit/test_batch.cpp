@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -732,7 +733,25 @@ TEST_CASE("merge rebuilds the single run's table and refuses incomplete or forei
     json weird = shards[0];
     weird["rows"][0]["status"] = "weird";
     const std::string pw = t.write("w.json", weird.dump());
-    CHECK(input_error([&] { read_table_file(pw); }) == pw + ": rows[0].status: expected \"ok\" or \"error\", found \"weird\"");
+    CHECK(input_error([&] { read_table_file(pw); }) ==
+          pw + ": rows[0].status: expected \"ok\", \"error\" or \"no_valid_samples\", found \"weird\"");
+    // The version under both keys, as the summaries name it and as version 2 did; either read.
+    CHECK(shards[0]["schema_version"] == kBatchVersion);
+    CHECK(shards[0]["version"] == kBatchVersion);
+    json only_version = shards[0];
+    only_version.erase("schema_version");
+    CHECK_NOTHROW(read_table_file(t.write("v1.json", only_version.dump())));
+    json only_schema_version = shards[0];
+    only_schema_version.erase("version");
+    CHECK_NOTHROW(read_table_file(t.write("v2.json", only_schema_version.dump())));
+    json older = shards[0];
+    older["version"] = older["schema_version"] = 2;
+    const std::string pv = t.write("v3.json", older.dump());
+    CHECK(input_error([&] { read_table_file(pv); }) == pv + ": unsupported table version 2; expected 3 (rerun the shards with this battsim)");
+    json split = shards[0];
+    split["version"] = 2;
+    const std::string ps = t.write("v4.json", split.dump());
+    CHECK(input_error([&] { read_table_file(ps); }) == ps + ": \"schema_version\" 3 and \"version\" 2 disagree");
 
     const std::string notjson = t.write("x.json", "{\"schema\": \"battsim.batch\",\n \"rows\": [}");
     CHECK(input_error([&] { read_table_file(notjson); }) ==
@@ -810,6 +829,49 @@ TEST_CASE("inputs digest and duplicate stems", "[batch]") {
     CHECK(inputs_digest(items) != named);
     items[1].replay.reader.columns.cells.clear();
     CHECK(inputs_digest(items) == named);
-    CHECK(duplicate_stems(items) == std::vector<std::string>{"30: a/30.csv, b/30.csv"});
+    // Items made by hand are named by their stems, and these two clash.
+    CHECK(duplicate_summary_names(items) == std::vector<std::string>{"30: a/30.csv, b/30.csv"});
+    assign_summary_names(items);
+    CHECK(items[0].summary_stem() == "a__30.csv");
+    CHECK(items[1].summary_stem() == "b__30.csv");
+    CHECK(duplicate_summary_names(items).empty());
     CHECK(progress_line(3, 12, 1, 8) == "[##......] 3/12 logs, 1 failed");
+}
+
+TEST_CASE("summaries of logs of one stem are named by their paths, whatever the order", "[batch]") {
+    // ArduPilot names its logs 00000001.BIN on every card: one folder per drone.
+    const auto named = [](const std::vector<std::string>& paths) {
+        std::vector<BatchItem> items(paths.size());
+        for (size_t k = 0; k < paths.size(); ++k) {
+            items[k].path = paths[k];
+            items[k].stem = path_stem(paths[k]);
+        }
+        assign_summary_names(items);
+        std::map<std::string, std::string> out;
+        for (const BatchItem& it : items) out[it.path] = it.summary_stem();
+        return out;
+    };
+    const std::map<std::string, std::string> fleet = named(
+        {"/fleet/quad-a/00000001.BIN", "/fleet/quad-b/00000001.BIN", "/fleet/quad-b/00000002.BIN", "/fleet/hex/logs/00000001.BIN"});
+    CHECK(fleet.at("/fleet/quad-a/00000001.BIN") == "quad-a__00000001.BIN");
+    CHECK(fleet.at("/fleet/quad-b/00000001.BIN") == "quad-b__00000001.BIN");
+    CHECK(fleet.at("/fleet/hex/logs/00000001.BIN") == "hex__logs__00000001.BIN");
+    CHECK(fleet.at("/fleet/quad-b/00000002.BIN") == "00000002");  // a stem of its own keeps it
+    // The same names in any order of the inputs.
+    CHECK(named({"/fleet/hex/logs/00000001.BIN", "/fleet/quad-b/00000002.BIN", "/fleet/quad-b/00000001.BIN",
+                 "/fleet/quad-a/00000001.BIN"}) == fleet);
+    // One directory, two formats of one flight: the extension parts them.
+    const auto formats = named({"/d/30.csv", "/d/30.bin"});
+    CHECK(formats.at("/d/30.csv") == "30.csv");
+    CHECK(formats.at("/d/30.bin") == "30.bin");
+    // Relative paths are read from the working directory, made normal: "./a/../b" is "b".
+    const auto relative = named({"./a/../b/7.csv", "c/7.csv"});
+    CHECK(relative.at("./a/../b/7.csv") == "b__7.csv");
+    CHECK(relative.at("c/7.csv") == "c__7.csv");
+    // What no rule can part is left for the command to refuse: one path given twice.
+    std::vector<BatchItem> twice(2);
+    twice[0].path = twice[1].path = "/p/*.csv";  // a pattern that matched nothing, as error rows
+    twice[0].stem = twice[1].stem = "*";
+    assign_summary_names(twice);
+    CHECK(duplicate_summary_names(twice) == std::vector<std::string>{"*.csv: /p/*.csv, /p/*.csv"});
 }

@@ -218,6 +218,8 @@ TEST_CASE("battsim discharge writes its outputs and exits with the documented co
     std::ifstream js(dir + "-out.json");
     const nlohmann::json j = nlohmann::json::parse(js);
     CHECK(j["table"].size() == 171);
+    CHECK(j["schema_version"] == 1);
+    CHECK(j["battsim_version"] == BATTSIM_VERSION);  // as every report says which release wrote it
     for (const char* suffix : {"-table.csv", "-plot.svg", "-out.json"}) std::remove((dir + suffix).c_str());
     CHECK(WEXITSTATUS(std::system((bin + " discharge /nonexistent.csv > /dev/null 2>&1").c_str())) == 3);
     CHECK(WEXITSTATUS(std::system((bin + " discharge " + log + " --plot x.pdf > /dev/null 2>&1").c_str())) == 2);

@@ -10,6 +10,7 @@
 #include <optional>
 #include <thread>
 
+#include "host/batch/table.h"
 #include "host/config_json.h"
 #include "host/io/atomic_file.h"
 #include "host/io/json_text.h"
@@ -140,7 +141,42 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
         if (p.settings.estimator) item.replay.config.monitor.estimator = *p.settings.estimator;
         items.push_back(std::move(item));
     }
+    assign_summary_names(items);
     return items;
+}
+
+void assign_summary_names(std::vector<BatchItem>& items) {
+    std::map<std::string, std::vector<size_t>> by_stem;
+    for (size_t k = 0; k < items.size(); ++k) by_stem[items[k].stem].push_back(k);
+    for (const auto& group : by_stem) {
+        if (group.second.size() < 2) {
+            items[group.second[0]].summary_name = items[group.second[0]].stem;
+            continue;
+        }
+        // Absolute and lexically normal, symlinks not followed: the names read as the paths were
+        // given, and a fleet copied elsewhere keeps them (only what lies below the common part counts).
+        std::vector<fs::path> paths;
+        for (size_t k : group.second) {
+            std::error_code ec;
+            const fs::path abs = fs::absolute(items[k].path, ec);
+            paths.push_back((ec ? fs::path(items[k].path) : abs).lexically_normal());
+        }
+        fs::path common = paths[0].parent_path();
+        for (const fs::path& p : paths) {
+            fs::path shared;
+            const fs::path dir = p.parent_path();
+            for (auto a = common.begin(), b = dir.begin(); a != common.end() && b != dir.end() && *a == *b; ++a, ++b)
+                shared /= *a;
+            common = shared;
+        }
+        for (size_t i = 0; i < group.second.size(); ++i) {
+            std::string rel = paths[i].lexically_relative(common).generic_string();
+            if (rel.empty() || rel == ".") rel = paths[i].filename().string();
+            std::string name;
+            for (char c : rel) name += c == '/' ? std::string("__") : std::string(1, c);
+            items[group.second[i]].summary_name = name;
+        }
+    }
 }
 
 std::string inputs_digest(const std::vector<BatchItem>& items) {
@@ -189,23 +225,30 @@ std::string inputs_digest(const std::vector<BatchItem>& items) {
     return buf;
 }
 
-std::vector<std::string> duplicate_stems(const std::vector<BatchItem>& items) {
-    std::map<std::string, std::vector<std::string>> by_stem;
+std::vector<std::string> duplicate_summary_names(const std::vector<BatchItem>& items) {
+    // Every item, failed ones too: a failed log's run removes an earlier run's summary of that name.
+    std::map<std::string, std::vector<std::string>> by_name;
     std::vector<std::string> order;
     for (const BatchItem& it : items) {
-        if (!it.error.empty()) continue;
-        auto& v = by_stem[it.stem];
-        if (v.empty()) order.push_back(it.stem);
+        auto& v = by_name[it.summary_stem()];
+        if (v.empty()) order.push_back(it.summary_stem());
         v.push_back(it.path);
     }
     std::vector<std::string> out;
-    for (const std::string& stem : order) {
-        const auto& v = by_stem[stem];
+    for (const std::string& name : order) {
+        const auto& v = by_name[name];
         if (v.size() < 2) continue;
-        std::string line = stem + ":";
+        std::string line = name + ":";
         for (size_t i = 0; i < v.size(); ++i) line += (i ? ", " : " ") + v[i];
         out.push_back(line);
     }
+    return out;
+}
+
+std::vector<std::string> renamed_summaries(const std::vector<BatchItem>& items) {
+    std::vector<std::string> out;
+    for (const BatchItem& it : items)
+        if (it.summary_stem() != it.stem) out.push_back(it.path + ": " + it.summary_stem() + ".json");
     return out;
 }
 
@@ -226,8 +269,12 @@ json make_row(const BatchItem& item, const json& summary) {
     row["monitor"] = item.monitor.empty() ? json(nullptr) : json(item.monitor);
     row["config"] = summary.value("config", item.replay.config.name);
     row["estimator"] = summary.value("estimator", std::string(to_string(item.replay.config.monitor.estimator)));
-    row["status"] = "ok";
-    row["error"] = nullptr;
+    // A log the config kept wholly out replays without an error and reads null everywhere: its
+    // row fails (with the reason) and keeps what the summary says, so a pipeline need not
+    // compare sensor_fault_samples with samples itself.
+    const std::string no_valid = no_valid_samples_text(summary);
+    row["status"] = no_valid.empty() ? kRowOk : kRowNoValidSamples;
+    row["error"] = no_valid.empty() ? json(nullptr) : json(no_valid);
     // Missing members give null rather than an exception: a summary without a flight
     // (or from an older schema) still makes a row.
     auto pick = [&summary](const char* pointer) -> json {
@@ -294,7 +341,7 @@ json make_error_row(const BatchItem& item, const std::string& reason) {
     row["monitor"] = item.monitor.empty() ? json(nullptr) : json(item.monitor);
     row["config"] = item.replay.config.name;
     row["estimator"] = to_string(item.replay.config.monitor.estimator);
-    row["status"] = "error";
+    row["status"] = kRowError;
     row["error"] = reason;
     row["flight"] = false;
     for (const char* k : {"flight_duration_s", "capacity_mean_ah", "capacity_first20_ah", "capacity_final_ah",
@@ -332,7 +379,7 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
     size_t done = 0;
     // A log with no summary this run: an earlier run's summary of it would read as this run's.
     auto forget_old_summary = [&](size_t k) {
-        const fs::path old_summary = fs::path(options.out_dir) / (items[k].stem + ".json");
+        const fs::path old_summary = fs::path(options.out_dir) / (items[k].summary_stem() + ".json");
         std::error_code ec;
         if (!fs::remove(old_summary, ec) && ec && ec != std::errc::no_such_file_or_directory)
             unwritten[k] = items[k].path + ": an earlier run's summary " + old_summary.string() + " could not be removed (" +
@@ -350,7 +397,8 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
                 try {
                     summary = replay_log(item.path, item.replay);
                     std::string check_error;
-                    if (item.charged_mah > 0) {
+                    // Without a valid sample there is no charge to check: the row says why.
+                    if (item.charged_mah > 0 && no_valid_samples_text(summary).empty()) {
                         try {
                             add_charger_check(summary, item.charged_mah, ChargerCheckOptions().tolerance,
                                               item.replay.config.monitor);
@@ -379,7 +427,7 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
                 } else if (!options.out_dir.empty()) {
                     // Written now, not at the end: a crash later loses nothing done so far.
                     try {
-                        write_file_atomic((fs::path(options.out_dir) / (item.stem + ".json")).string(),
+                        write_file_atomic((fs::path(options.out_dir) / (item.summary_stem() + ".json")).string(),
                                           json_text(summary, 2) + "\n");
                     } catch (const std::exception& e) {
                         // The replay's numbers stand; only the file is missing (exit 5).
@@ -426,7 +474,7 @@ GoldenComparison compare_to_goldens(const std::vector<BatchItem>& items, const s
     GoldenComparison c;
     for (size_t k = 0; k < items.size(); ++k) {
         const BatchItem& item = items[k];
-        const std::string golden = (fs::path(golden_dir) / (item.stem + ".json")).string();
+        const std::string golden = (fs::path(golden_dir) / (item.summary_stem() + ".json")).string();
         if (k >= summaries.size() || summaries[k].is_null()) {
             ++c.failed;
             c.lines.push_back(item.path + ": not compared, the replay failed");

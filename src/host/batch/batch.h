@@ -20,7 +20,11 @@ namespace host {
 struct BatchItem {
     std::size_t index = 0;   // place in the full, unsharded list
     std::string path;        // log path as given or resolved from the manifest
-    std::string stem;        // file stem: names the --out summary and the golden file
+    std::string stem;        // file stem: the row's default label
+    // Names the --out summary and the golden (summary_stem()): the stem, unless other logs of
+    // the list share it (ArduPilot's 00000001.BIN on every drone's card): then the log's path
+    // below those logs' common directory, '/' written "__" (see assign_summary_names).
+    std::string summary_name;
     std::string test;        // row label (default: the stem)
     std::string pack;        // empty = none
     std::string monitor;     // empty = none
@@ -28,6 +32,9 @@ struct BatchItem {
     std::string error;       // non-empty: failed before replay (a pattern that matched nothing)
     std::string config_path; // the config file read (empty = the built-in one), an input of the run
     ReplayOptions replay;    // reader settings and the loaded config
+    // <summary_stem()>.json is the log's --out summary and its golden; an item made by hand
+    // without a summary_name uses its stem.
+    const std::string& summary_stem() const { return summary_name.empty() ? stem : summary_name; }
 };
 
 struct BatchPlanRequest {
@@ -47,13 +54,26 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request);
 // one run from shards of another. 16 hex digits (FNV-1a 64).
 std::string inputs_digest(const std::vector<BatchItem>& items);
 
-// Stems shared by more than one item ("30: a/30.csv, b/30.csv"), which would overwrite
-// each other's summaries in --out and match the same golden file.
-std::vector<std::string> duplicate_stems(const std::vector<BatchItem>& items);
+// Sets each item's summary_name: its stem where no other item has that stem; otherwise, for
+// every item of a shared stem, its path (made absolute, lexically normal) relative to the
+// deepest directory holding all the items of that stem, with '/' written "__":
+// d1/00000001.BIN and d2/00000001.BIN are "d1__00000001.BIN" and "d2__00000001.BIN";
+// a/x.csv and a/x.bin "x.csv" and "x.bin". Depends only on the set of paths, so it is the same
+// for any input order, --jobs and shard (plan_batch calls it on the full list).
+void assign_summary_names(std::vector<BatchItem>& items);
+
+// Summary names still shared by more than one item after assign_summary_names ("30: a/30.csv,
+// a/30.csv"; only paths that spell one file alike, or "__" in a directory's name, get there),
+// which would overwrite each other's summaries in --out and match the same golden file.
+std::vector<std::string> duplicate_summary_names(const std::vector<BatchItem>& items);
+
+// Items whose summary is not named by their stem alone ("d1/00000001.BIN: d1__00000001.BIN.json"),
+// in item order: said on stderr, so the operator knows where to look.
+std::vector<std::string> renamed_summaries(const std::vector<BatchItem>& items);
 
 struct BatchRunOptions {
     unsigned jobs = 1;
-    std::string out_dir;          // non-empty: write <stem>.json there as each log completes
+    std::string out_dir;          // non-empty: write <summary_stem()>.json there as each log completes
     bool keep_summaries = false;  // return the summaries (for --compare)
     // After each log: logs done, total, failed so far. Called with a lock held, in
     // completion order (which varies with --jobs; nothing written to the table depends on it).
@@ -86,7 +106,7 @@ std::string progress_line(std::size_t done, std::size_t total, std::size_t faile
 nlohmann::json make_row(const BatchItem& item, const nlohmann::json& summary);
 nlohmann::json make_error_row(const BatchItem& item, const std::string& reason);
 
-// --compare: each replayed summary against GOLDEN_DIR/<stem>.json.
+// --compare: each replayed summary against GOLDEN_DIR/<summary_stem()>.json.
 struct GoldenComparison {
     std::vector<std::string> lines;  // one per difference or problem, in item order
     std::size_t compared = 0;        // summaries that had a golden

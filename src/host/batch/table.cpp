@@ -167,7 +167,8 @@ std::string render_rows_md(const json& table) {
             }
         }
         std::string status = text(r["status"]);
-        if (status == "ok" && !r["flight"].get<bool>()) status = "ok (no flight)";
+        if (status == kRowOk && !r["flight"].get<bool>()) status = "ok (no flight)";
+        if (status == kRowNoValidSamples) status = "no valid samples";
         if (status != "ok" && r["error"].is_string()) status += ": " + r["error"].get<std::string>();
         o << "| " << md_cell(text(r["test"])) << " | " << md_cell(file_name(text(r["log"]))) << " | "
           << md_cell(r["pack"].is_string() ? text(r["pack"]) : "–") << " | " << fixed(r["capacity_mean_ah"], 3) << " | "
@@ -545,6 +546,8 @@ std::vector<json> monitor_rows(const std::vector<json>& rows, double tolerance) 
 json make_table(std::vector<json> rows, size_t inputs, const std::string& digest, const ShardSpec& shard) {
     json t;
     t["schema"] = kBatchSchema;
+    // "schema_version" as in every other report; "version" kept for the readers of version 2.
+    t["schema_version"] = kBatchVersion;
     t["version"] = kBatchVersion;
     t["battsim_version"] = BATTSIM_VERSION;
     t["inputs"] = {{"count", inputs}, {"digest", digest}};
@@ -557,7 +560,10 @@ json make_table(std::vector<json> rows, size_t inputs, const std::string& digest
 }
 
 std::string failed_row_text(const json& row) {
-    const std::string log = row.value("log", std::string()), error = row.value("error", std::string());
+    const std::string log = row.value("log", std::string());
+    std::string error = row.value("error", std::string());
+    // An error says itself what went wrong; a log replayed without a valid sample is said as such.
+    if (row.value("status", std::string()) == kRowNoValidSamples) error = "no valid samples: " + error;
     return error.rfind(log, 0) == 0 ? error : log + ": " + error;
 }
 
@@ -626,8 +632,13 @@ json read_table_file(const std::string& path) {
     try {
         if (!t.is_object() || t.value("schema", std::string()) != kBatchSchema)
             fail(std::string("expected a JSON table with \"schema\": \"") + kBatchSchema + "\" (from `battsim batch --format json`)");
-        if (t.value("version", 0) != kBatchVersion)
-            fail("unsupported table version " + json_brief(t.value("version", json())) + "; expected " + std::to_string(kBatchVersion));
+        // Either key will do (a table made by hand may carry one); both must agree.
+        const json version = t.contains("schema_version") ? t["schema_version"] : t.value("version", json());
+        if (t.contains("schema_version") && t.contains("version") && t["version"] != version)
+            fail("\"schema_version\" " + json_brief(version) + " and \"version\" " + json_brief(t["version"]) + " disagree");
+        if (version != kBatchVersion)
+            fail("unsupported table version " + json_brief(version) + "; expected " + std::to_string(kBatchVersion) +
+                 " (rerun the shards with this battsim)");
         if (!t.contains("inputs") || !t["inputs"].is_object() || !t["inputs"].value("count", json()).is_number_unsigned() ||
             !t["inputs"].value("digest", json()).is_string())
             fail("expected \"inputs\": {\"count\": N, \"digest\": \"…\"}");
@@ -650,8 +661,8 @@ json read_table_file(const std::string& path) {
                 fail(where + ".index: expected a whole number below the input count " + std::to_string(count));
             if (!r["status"].is_string() || !r["flight"].is_boolean())
                 fail(where + ": expected \"status\" text and \"flight\" true/false");
-            if (r["status"] != "ok" && r["status"] != "error")
-                fail(where + ".status: expected \"ok\" or \"error\", found " + json_brief(r["status"]));
+            if (r["status"] != kRowOk && r["status"] != kRowError && r["status"] != kRowNoValidSamples)
+                fail(where + ".status: expected \"ok\", \"error\" or \"no_valid_samples\", found " + json_brief(r["status"]));
             if (!r["cell_scores"].is_array() || !r["warnings"].is_array() || !r["sensor_fault_cause"].is_array() ||
                 !r["notes"].is_array())
                 fail(where + ": expected \"cell_scores\", \"warnings\", \"sensor_fault_cause\" and \"notes\" arrays");

@@ -15,7 +15,16 @@ namespace battsim {
 namespace host {
 
 constexpr const char* kBatchSchema = "battsim.batch";
-constexpr int kBatchVersion = 2;  // 2: a row's notes are their text, no longer a count
+// 2: a row's notes are their text, no longer a count. 3: a row's status may be
+// "no_valid_samples"; the version is also written as "schema_version", as in the summaries.
+constexpr int kBatchVersion = 3;
+
+// A row's status: replayed; failed before or during the replay (error: why); replayed, but
+// the config's sensor limits kept every sample out (error: how many, by which limit). Any
+// status but "ok" is a failed log (exit 1, "failed" in the pack and monitor tables).
+constexpr const char* kRowOk = "ok";
+constexpr const char* kRowError = "error";
+constexpr const char* kRowNoValidSamples = "no_valid_samples";
 
 enum class TableFormat { Markdown, Csv, Json };
 // "md", "csv", "json"; throws std::invalid_argument.

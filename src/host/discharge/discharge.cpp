@@ -367,6 +367,7 @@ nlohmann::json discharge_to_json(const DischargeResult& r, bool with_table) {
     nlohmann::json j;
     j["schema"] = "battsim.discharge";
     j["schema_version"] = 1;
+    j["battsim_version"] = BATTSIM_VERSION;  // as every other report: which release wrote it
     j["input"] = {{"path", r.path}, {"format", to_string(r.info.format)}, {"notes", r.info.notes}};
     j["samples"] = {{"read", r.samples_read}, {"kept", r.samples_kept}, {"curve_points", r.curve.size()}};
     j["kept_from_s"] = round_sig(r.start_time_s, 9);

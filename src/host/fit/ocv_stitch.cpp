@@ -743,6 +743,7 @@ nlohmann::json to_json(const OcvStitch& s) {
                            {"pack_resistance_ohm", {{"config_curve", r(f.resistance_before_ohm)}, {"fitted", r(f.resistance_ohm)}}}});
     return {{"schema", "battsim.ocv_stitch"},
             {"schema_version", 1},
+            {"battsim_version", BATTSIM_VERSION},  // as every other report: which release wrote it
             {"cells", s.cells},
             {"capacity_ah", r(s.capacity_ah)},
             {"ocv_cell_voltage_v", {{"config_curve", rs(s.prior_v)}, {"fitted", rs(s.table_v)}}},

@@ -123,6 +123,7 @@ nlohmann::json to_json(const ShapeCalibration& c) {
     for (double v : c.rest_ah) rest.push_back(round_sig(v));
     return {{"schema", "battsim.shape_calibration"},
             {"schema_version", 1},
+            {"battsim_version", BATTSIM_VERSION},  // as every other report: which release wrote it
             {"configured_slow_share", round_sig(c.configured_share)},
             {"chosen_slow_share", round_sig(c.chosen_share)},
             {"changed", c.changed},
