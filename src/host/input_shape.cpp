@@ -161,20 +161,24 @@ std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const La
     // The units advised are those the time column was not read in: a column read in
     // milliseconds may count microseconds; one in microseconds has no finer unit to try.
     const bool time_unit_known = units.time_scale_to_s > 0.0 && !units.time_column.empty();
+    // `odd`: what is odd about the spacing; `coarser`: which way the other units lie; `last`:
+    // what to say when --time-unit has no unit further that way.
+    const auto time_note = [&](const std::string& head, const char* odd, bool coarser, const char* last) {
+        const auto others = time_unit_known ? other_time_units(units.time_scale_to_s, dt_s, coarser, kFastestIntervalS,
+                                                               kSlowestIntervalS)
+                                            : std::vector<const TimeUnit*>();
+        if (!time_unit_known)
+            out.push_back(head + ", " + odd + ": its time stamps may be in another unit than its format's");
+        else if (!others.empty())
+            out.push_back(head + ": " + time_unit_advice(others) + " (or --time-col with a column in seconds)");
+        else
+            out.push_back(head + ", " + odd + ", though " + time_column_read(units) + ", " + last +
+                          "; if it is not the log's clock, give --time-col NAME");
+    };
     if (dt_s > kSlowestIntervalS && !(dt_s <= 1.5 * window_s)) {
         std::snprintf(buf, sizeof buf, "the samples are %.4g s apart (median)", dt_s);
-        const auto finer = time_unit_known ? other_time_units(units.time_scale_to_s, dt_s, false, kFastestIntervalS,
-                                                              kSlowestIntervalS)
-                                           : std::vector<const TimeUnit*>();
-        if (!time_unit_known)
-            out.push_back(std::string(buf) + ", slower than a battery logger writes: the log's time stamps may be in "
-                                             "another unit than its format's");
-        else if (!finer.empty())
-            out.push_back(std::string(buf) + ": " + time_unit_advice(finer) + " (or --time-col with a column in seconds)");
-        else
-            out.push_back(std::string(buf) + ", slower than a battery logger writes, though " + time_column_read(units) +
-                          ", the finest unit --time-unit takes: if it counts a finer one (nanoseconds), convert it to "
-                          "microseconds; if it is not the log's clock, give --time-col NAME");
+        time_note(buf, "slower than a battery logger writes", false,
+                  "the finest unit --time-unit takes: if it counts a finer one (nanoseconds), convert it to microseconds");
     }
     // The other way round: seconds read as milliseconds squeeze a flight into a fraction
     // of a second, too short for any take-off (a CMU flight as time_ms: 200 s in 0.2 s).
@@ -187,18 +191,9 @@ std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const La
         // A column read in seconds is in the coarsest unit there is: what may be wrong is the
         // unit it was written in (hours; a spreadsheet's days put 0.1 s 1.16 us apart), or the
         // column.
-        const auto coarser = time_unit_known ? other_time_units(units.time_scale_to_s, dt_s, true, kFastestIntervalS,
-                                                                kSlowestIntervalS)
-                                             : std::vector<const TimeUnit*>();
-        if (!time_unit_known)
-            out.push_back(std::string(buf) + ", faster and shorter than a battery log: its time stamps may be in "
-                                             "another unit than its format's");
-        else if (!coarser.empty())
-            out.push_back(std::string(buf) + ": " + time_unit_advice(coarser) + " (or --time-col with a column in seconds)");
-        else
-            out.push_back(std::string(buf) + ", faster and shorter than a battery log, though " + time_column_read(units) +
-                          ", the coarsest unit --time-unit takes: if it counts a coarser one (hours, or a spreadsheet's "
-                          "days), convert it to seconds; if it is not the log's clock, give --time-col NAME");
+        time_note(buf, "faster and shorter than a battery log", true,
+                  "the coarsest unit --time-unit takes: if it counts a coarser one (hours, or a spreadsheet's days), "
+                  "convert it to seconds");
     }
     // A time or current unit a thousand times too small that still flies: a 1 ms spacing is a
     // blackbox log's too, so the spacing alone cannot tell; the charge the pack emptied on can.
