@@ -236,18 +236,21 @@ TEST_CASE("AtomicFile removes the temporaries a killed writer left beside its ta
     CHECK(temporaries == 1);  // the kept ".999"
 
     // A long target name: temp_name() cuts it so the temporary's name is 255 bytes; the cut
-    // name of a dead writer's is found too, a cut name of another target's is not.
+    // name of a dead writer's is found too, a cut name of another target's is not. (In a
+    // directory of its own: a process lists each directory once, so a temporary left in one
+    // it has listed goes with the next process's writes.)
     const std::string long_name(250, 'n');
-    const std::string long_target = d.write(long_name, "old\n");
+    fs::create_directory(d.path("long"));
+    const std::string long_target = d.write("long/" + long_name, "old\n");
     const std::string suffix = ".tmp." + never + ".5";
     const std::string cut = long_name.substr(0, 255 - suffix.size()) + suffix;
-    d.write(cut, "stale");
+    d.write("long/" + cut, "stale");
     std::string other_cut = cut;
     other_cut[0] = 'm';
-    d.write(other_cut, "keep");
+    d.write("long/" + other_cut, "keep");
     write_file_atomic(long_target, "new\n");
-    CHECK_FALSE(fs::exists(d.path(cut)));
-    CHECK(testsupport::read_file(d.path(other_cut)) == "keep");
+    CHECK_FALSE(fs::exists(d.path("long/" + cut)));
+    CHECK(testsupport::read_file(d.path("long/" + other_cut)) == "keep");
 }
 
 TEST_CASE("AtomicFile holds a lock on its temporary until the commit", "[output_paths]") {

@@ -16,7 +16,9 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <mutex>
+#include <vector>
 #include <random>
 #include <stdexcept>
 
@@ -62,9 +64,9 @@ std::string temp_name(const std::string& path) {
 // Writers create their temporaries with O_EXCL, so a process that took a dead one's PID
 // never writes into a file being removed.
 
-// The PID in `entry` when it is one of temp_name()'s temporaries for the target named
-// `name` (the last component of its path); 0 if not.
-pid_t temp_owner(const std::string& entry, const std::string& name) {
+// The PID in `entry` when its name ends as temp_name()'s temporaries do (".tmp.<pid>.<n>"),
+// with the size of what comes before that; 0 if not.
+pid_t temp_tail(const std::string& entry, size_t& prefix_size) {
     // Trailing "<digits>" (the count), then ".<digits>" (the PID), then ".tmp.".
     const auto digits_before = [&entry](size_t end, size_t& begin) {
         begin = end;
@@ -78,16 +80,24 @@ pid_t temp_owner(const std::string& entry, const std::string& name) {
     if (!digits_before(count_begin - 1, pid_begin)) return 0;
     static const std::string kTag = ".tmp.";
     if (pid_begin < kTag.size() || entry.compare(pid_begin - kTag.size(), kTag.size(), kTag) != 0) return 0;
-    const size_t prefix_size = pid_begin - kTag.size();
-    const bool whole = prefix_size == name.size() && entry.compare(0, prefix_size, name) == 0;
-    // temp_name() cuts a long name so that the temporary's is exactly kNameMax bytes.
-    const bool cut = entry.size() == kNameMax && prefix_size > 0 && prefix_size < name.size() &&
-                     name.compare(0, prefix_size, entry, 0, prefix_size) == 0;
-    if (!whole && !cut) return 0;
+    prefix_size = pid_begin - kTag.size();
     const long long pid = std::stoll(entry.substr(pid_begin, count_begin - 1 - pid_begin));
     // Never 0 or negative: kill() would ask about a whole process group.
     if (pid < 1 || pid > INT_MAX) return 0;
     return static_cast<pid_t>(pid);
+}
+
+// The PID in `entry` when it is one of temp_name()'s temporaries for the target named
+// `name` (the last component of its path); 0 if not.
+pid_t temp_owner(const std::string& entry, const std::string& name) {
+    size_t prefix_size = 0;
+    const pid_t pid = temp_tail(entry, prefix_size);
+    if (pid == 0) return 0;
+    const bool whole = prefix_size == name.size() && entry.compare(0, prefix_size, name) == 0;
+    // temp_name() cuts a long name so that the temporary's is exactly kNameMax bytes.
+    const bool cut = entry.size() == kNameMax && prefix_size > 0 && prefix_size < name.size() &&
+                     name.compare(0, prefix_size, entry, 0, prefix_size) == 0;
+    return whole || cut ? pid : 0;
 }
 
 // A zombie has closed its files and will write nothing more, but kill() still finds it until
@@ -113,36 +123,69 @@ bool process_gone(pid_t pid) {
     return zombie(pid);
 }
 
+// Each directory is listed once per process: the names in it shaped like a temporary. A
+// batch writing thousands of summaries into one directory had listed it for every one
+// (20,000 files: 4 ms a summary). A temporary left there later, by a writer that died while
+// this process ran, goes with the next process's writes.
+std::mutex g_candidates_lock;
+std::map<std::string, std::vector<std::string>> g_candidates;  // directory -> names shaped like temporaries
+
 // Best effort: whatever cannot be read, opened or locked is left as it is.
 void remove_stale_temps(const std::string& target) {
     const size_t slash = target.rfind('/');
     const std::string dir = slash == std::string::npos ? "." : slash == 0 ? "/" : target.substr(0, slash);
     const std::string name = slash == std::string::npos ? target : target.substr(slash + 1);
     if (name.empty()) return;
-    DIR* d = ::opendir(dir.c_str());
-    if (!d) return;
-    const int dfd = ::dirfd(d);
+    std::lock_guard<std::mutex> hold(g_candidates_lock);
+    auto listed = g_candidates.find(dir);
+    if (listed == g_candidates.end()) {
+        std::vector<std::string> shaped;
+        if (DIR* d = ::opendir(dir.c_str())) {
+            size_t prefix_size = 0;
+            while (const struct dirent* e = ::readdir(d))
+                if (temp_tail(e->d_name, prefix_size) != 0) shaped.emplace_back(e->d_name);
+            ::closedir(d);
+        }
+        listed = g_candidates.emplace(dir, std::move(shaped)).first;
+    }
+    std::vector<std::string>& candidates = listed->second;
     const pid_t self = ::getpid();
-    while (const struct dirent* e = ::readdir(d)) {
-        const std::string entry = e->d_name;
+    DIR* d = nullptr;
+    int dfd = -1;
+    for (size_t k = 0; k < candidates.size();) {
+        const std::string& entry = candidates[k];
         const pid_t pid = temp_owner(entry, name);
-        if (pid == 0 || pid == self || !process_gone(pid)) continue;
+        if (pid == 0 || pid == self || !process_gone(pid)) {
+            ++k;
+            continue;
+        }
+        if (!d && !(d = ::opendir(dir.c_str()))) return;
+        dfd = ::dirfd(d);
+        bool removed = false;
         // Nothing but a regular file is opened (opening a device may act on it).
         struct stat named {};
-        if (::fstatat(dfd, entry.c_str(), &named, AT_SYMLINK_NOFOLLOW) != 0 || !S_ISREG(named.st_mode)) continue;
-        // Read-write where allowed: over NFS an exclusive flock() needs a file open for writing.
-        int fd = ::openat(dfd, entry.c_str(), O_RDWR | O_NOFOLLOW | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
-        if (fd < 0) fd = ::openat(dfd, entry.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
-        if (fd < 0) continue;
-        struct stat locked {};
-        if (::fstat(fd, &locked) == 0 && S_ISREG(locked.st_mode) && locked.st_uid == ::geteuid() &&
-            ::flock(fd, LOCK_EX | LOCK_NB) == 0 && process_gone(pid) &&
-            ::fstatat(dfd, entry.c_str(), &named, AT_SYMLINK_NOFOLLOW) == 0 && named.st_dev == locked.st_dev &&
-            named.st_ino == locked.st_ino)
-            (void)::unlinkat(dfd, entry.c_str(), 0);
-        ::close(fd);  // releases the lock
+        if (::fstatat(dfd, entry.c_str(), &named, AT_SYMLINK_NOFOLLOW) == 0 && S_ISREG(named.st_mode)) {
+            // Read-write where allowed: over NFS an exclusive flock() needs a file open for writing.
+            int fd = ::openat(dfd, entry.c_str(), O_RDWR | O_NOFOLLOW | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+            if (fd < 0) fd = ::openat(dfd, entry.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+            if (fd >= 0) {
+                struct stat locked {};
+                if (::fstat(fd, &locked) == 0 && S_ISREG(locked.st_mode) && locked.st_uid == ::geteuid() &&
+                    ::flock(fd, LOCK_EX | LOCK_NB) == 0 && process_gone(pid) &&
+                    ::fstatat(dfd, entry.c_str(), &named, AT_SYMLINK_NOFOLLOW) == 0 && named.st_dev == locked.st_dev &&
+                    named.st_ino == locked.st_ino)
+                    removed = ::unlinkat(dfd, entry.c_str(), 0) == 0;
+                ::close(fd);  // releases the lock
+            }
+        }
+        // A locked one (its writer alive where kill() cannot see) is asked again next time;
+        // one gone, or no file of ours to remove, is not.
+        if (removed || ::fstatat(dfd, entry.c_str(), &named, AT_SYMLINK_NOFOLLOW) != 0 || !S_ISREG(named.st_mode))
+            candidates.erase(candidates.begin() + static_cast<std::ptrdiff_t>(k));
+        else
+            ++k;
     }
-    ::closedir(d);
+    if (d) ::closedir(d);
 }
 
 // The temporaries alive now, for the signal handler: it may neither lock nor allocate, so a
