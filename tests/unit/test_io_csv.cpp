@@ -304,6 +304,16 @@ TEST_CASE("a temperature sensor's dropout (nan, inf, empty) loses that sample's 
     CHECK(s[2].voltage_v == 12.4f);  // the rest of the row as read
     CHECK(s[4].has_temperature);
     CHECK(s[4].temperature_c == 22.0f);
+    // --average-ms: a window keeps the mean of the temperatures it has, and has none only
+    // when none of its samples has one (windows of 2 s: rows 0-1, 2-3, 4).
+    ReaderOptions averaged;
+    averaged.average_us = 2000000;
+    const auto w = read_all(p, averaged);
+    REQUIRE(w.size() == 3);
+    CHECK(w[0].has_temperature);
+    CHECK(w[0].temperature_c == 21.5f);
+    CHECK_FALSE(w[1].has_temperature);
+    CHECK(w[2].temperature_c == 22.0f);
     REQUIRE(info.notes.size() == 1);
     CHECK(info.notes[0] == "3 rows have no temperature (\"nan\", \"inf\" or an empty field in column 4 "
                            "\"temperature_c\", first on line 3): kept, without a temperature");

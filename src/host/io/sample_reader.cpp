@@ -241,8 +241,7 @@ public:
         if (!have_next_) return false;
         const core::Sample first = next_;
         double v = 0.0, a = 0.0, t = 0.0, cells[core::kMaxCells] = {};
-        bool all_temperature = true;
-        long n = 0;
+        long n = 0, n_temperature = 0;
         core::Sample last = first;
         // Samples with another cell count start a new window: they are not one sensor's.
         while (have_next_ && next_.time_us - first.time_us < window_us_ && next_.cell_count == first.cell_count) {
@@ -250,8 +249,12 @@ public:
             v += next_.voltage_v;
             a += next_.current_a;
             for (int c = 0; c < next_.cell_count; ++c) cells[c] += next_.cell_voltage_v[c];
-            all_temperature = all_temperature && next_.has_temperature;
-            t += next_.temperature_c;
+            // A window keeps the mean of the temperatures it has: one dropped reading (nan,
+            // empty) had cost the whole window its temperature.
+            if (next_.has_temperature) {
+                t += next_.temperature_c;
+                ++n_temperature;
+            }
             ++n;
             have_next_ = inner_->next(next_);
         }
@@ -259,8 +262,8 @@ public:
         out.voltage_v = static_cast<float>(v / static_cast<double>(n));
         out.current_a = static_cast<float>(a / static_cast<double>(n));
         for (int c = 0; c < out.cell_count; ++c) out.cell_voltage_v[c] = static_cast<float>(cells[c] / static_cast<double>(n));
-        out.has_temperature = all_temperature;
-        out.temperature_c = all_temperature ? static_cast<float>(t / static_cast<double>(n)) : 0.0f;
+        out.has_temperature = n_temperature > 0;
+        out.temperature_c = n_temperature > 0 ? static_cast<float>(t / static_cast<double>(n_temperature)) : 0.0f;
         samples_in_ += n;
         ++samples_out_;
         return true;
