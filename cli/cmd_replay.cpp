@@ -70,7 +70,7 @@ std::function<int()> setup(CLI::App& sub) {
     add_input_options(sub, a->input);
     return [a, charged]() -> int {
         host::ReplayOptions opt;
-        if (int rc = resolve_input(a->input, opt.reader, opt.config)) return rc;
+        if (int rc = resolve_input(a->input, opt.reader, opt.config, "battsim replay")) return rc;
         if (int rc = check_plot_option("battsim replay", a->plot)) return rc;
         // The texts may go to standard output ("-"), one of them; the MAVLink stream, the
         // tlog and the plot are binary (or drawn by gnuplot) and need a file.

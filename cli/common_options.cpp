@@ -1,6 +1,5 @@
 #include "common_options.h"
 
-#include <cmath>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -81,65 +80,24 @@ void add_model_job_options(CLI::App& sub, ModelJobArgs& a, const std::string& re
 }
 
 int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedConfig& config, const std::string& command) {
+    // Read by the same code as batch's command line and a manifest's fields, so that each
+    // option accepts and means the same everywhere (each quantity only its own units: a
+    // shared table had read "--current-unit us" as 1e-6 A).
+    host::LogSettings settings;
     try {
-        reader.format = host::parse_log_format(a.format);
-    } catch (const std::exception& e) {
-        std::cerr << "battsim: " << e.what() << "\n";
-        return kExitUsage;
-    }
-    if (a.current_source == "auto") {
-        reader.current_source = host::CurrentSource::Auto;
-    } else if (a.current_source == "current") {
-        reader.current_source = host::CurrentSource::Current;
-    } else if (a.current_source == "shunt") {
-        reader.current_source = host::CurrentSource::Shunt;
-    } else {
-        std::cerr << "battsim: --current-source: expected auto, current or shunt, found \"" << a.current_source << "\"\n";
-        return kExitUsage;
-    }
-    // Each quantity takes only its own units, as a manifest's columns do: a shared table had
-    // read "--current-unit us" as 1e-6 A and "--time-unit A" as seconds, exit 0.
-    host::ColumnMapping& m = reader.columns;
-    try {
-        if (!a.time_unit.empty()) m.time_scale_to_s = host::time_unit_scale(a.time_unit);
+        settings = host::settings_from_strings(setting_strings(a));
     } catch (const std::invalid_argument& e) {
-        std::cerr << "battsim: --time-unit: " << e.what() << "\n";
+        std::cerr << command << ": " << e.what() << "\n";
         return kExitUsage;
     }
-    try {
-        if (!a.current_unit.empty()) m.current_scale_to_a = host::current_unit_scale(a.current_unit);
-    } catch (const std::invalid_argument& e) {
-        std::cerr << "battsim: --current-unit: " << e.what() << "\n";
-        return kExitUsage;
-    }
-    m.time = a.time_col;
-    m.voltage = a.voltage_col;
-    m.current = a.current_col;
-    m.temperature = a.temperature_col;
-    m.cells = a.cell_cols;
-    m.current_negative_is_discharge = a.negative_discharge;
-    if (a.average_ms != 0.0) {
-        try {
-            reader.average_us = static_cast<std::uint64_t>(std::llround(host::average_window_ms(a.average_ms) * 1000.0));
-        } catch (const std::invalid_argument& e) {
-            std::cerr << "battsim: --average-ms: " << e.what() << "\n";
-            return kExitUsage;
-        }
-    }
+    reader = settings.reader_options(reader);
     try {
         config = a.config.empty() ? host::builtin_config() : host::load_config_file(a.config);
     } catch (const host::ConfigError& e) {
         std::cerr << command << ": config: " << e.what() << "\n";
         return kExitConfigError;
     }
-    if (a.estimator == "reference") {
-        config.monitor.estimator = core::EstimatorKind::Reference;
-    } else if (a.estimator == "joint") {
-        config.monitor.estimator = core::EstimatorKind::Joint;
-    } else if (!a.estimator.empty()) {
-        std::cerr << "battsim: --estimator: expected reference or joint, found \"" << a.estimator << "\"\n";
-        return kExitUsage;
-    }
+    if (settings.estimator) config.monitor.estimator = *settings.estimator;
     return kExitOk;
 }
 

@@ -45,10 +45,11 @@ struct ModelJobArgs {
 // Adds those options after the command's own; `report` names the report in the help
 // ("fit report"), `plot_help` says what the plot shows.
 void add_model_job_options(CLI::App& sub, ModelJobArgs& a, const std::string& report, const std::string& plot_help);
-// Fills reader options and loads the config (with its model extensions); prints the error,
-// prefixed with `command`, and returns an exit code other than kExitOk on failure.
+// Fills reader options (through host::settings_from_strings, as batch and manifests) and
+// loads the config (with its model extensions); prints the error, prefixed with `command`
+// ("battsim replay"), and returns an exit code other than kExitOk on failure.
 int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedConfig& config,
-                  const std::string& command = "battsim");
+                  const std::string& command);
 // The options as typed, for the batch planner, which validates them like a manifest's
 // fields (batch, bench).
 host::LogSettingStrings setting_strings(const InputArgs& a);
