@@ -288,3 +288,19 @@ TEST_CASE("Diagnostic column: the flight-time solve fed the true pack, with and 
     REQUIRE(diagnostic_columns().size() == 1);
     CHECK(diagnostic_columns()[0].name == "solve-truth");
 }
+
+TEST_CASE("score --columns: the columns named, in order, diagnostics included; a wrong name refused", "[score]") {
+    const auto names = [](const std::vector<EstimatorColumn>& cols) {
+        std::vector<std::string> n;
+        for (const EstimatorColumn& c : cols) n.push_back(c.name);
+        return n;
+    };
+    const std::vector<std::string> standard = {"reference", "baseline", "oracle", "joint"};
+    CHECK(names(standard_columns()) == standard);
+    CHECK(names(select_columns("")) == standard);
+    CHECK(names(select_columns(",")) == standard);  // no name at all
+    CHECK(names(select_columns("joint,solve-truth,reference")) == std::vector<std::string>{"joint", "solve-truth", "reference"});
+    CHECK(names(select_columns(",oracle,")) == std::vector<std::string>{"oracle"});
+    CHECK_THROWS_WITH(select_columns("joint,nonesuch"),
+                      "unknown estimator \"nonesuch\"; expected reference, baseline, oracle, joint, solve-truth");
+}
