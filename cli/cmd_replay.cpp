@@ -12,6 +12,7 @@
 #include "host/config_json.h"
 #include "host/plot/plot.h"
 #include "host/replay.h"
+#include "host/report/brief.h"
 #include "host/report/charger_check.h"
 #include "host/report/current_offset_fix.h"
 #include "host/report/telemetry_writer.h"
@@ -177,9 +178,9 @@ std::function<int()> setup(CLI::App& sub) {
         }
         if (a->json) std::cout << text;
         if (!a->json && a->summary.empty() && a->series.empty() && a->plot.empty() && a->mavlink.empty() && a->tlog.empty())
-            print_brief(summary, people);
-        if (!a->json && a->said) print_said(summary["said"], summary["flight"], people);
-        if (!a->json && summary.contains("charger_check")) print_charger_check(summary["charger_check"], people);
+            host::print_brief(summary, people);
+        if (!a->json && a->said) host::print_said(summary["said"], summary["flight"], people);
+        if (!a->json && summary.contains("charger_check")) host::print_charger_check(summary["charger_check"], people);
         if (!no_valid.empty())
             std::cerr << "battsim replay: no valid samples: " << no_valid
                       << (a->plot.empty() ? "" : "; --plot not drawn")

@@ -1,5 +1,6 @@
 // What the subcommands share: the input options (config, format, column mapping), the
 // options and the error-to-exit-code plumbing of the model jobs, the --plot name check.
+// (What replay prints for people is host/report/brief.h.)
 #pragma once
 #include <functional>
 #include <ostream>
@@ -82,12 +83,6 @@ host::NamedPath printed_output(const std::string& flag, bool given);
 std::ostream& people_out(const std::vector<host::NamedPath>& outputs);
 // Appends `paths` to `to`, each named `what` in check_outputs' messages ("a log").
 void add_named(std::vector<host::NamedPath>& to, const std::string& what, const std::vector<std::string>& paths);
-// Human-readable few lines about a summary.
-void print_brief(const nlohmann::json& summary, std::ostream& out);
-// The summary's `said` (replay --said): each text with its time.
-void print_said(const nlohmann::json& said, const nlohmann::json& flight, std::ostream& out);
-// The summary's `charger_check` as one line for people.
-void print_charger_check(const nlohmann::json& check, std::ostream& out);
 // A config written by a command that tunes the joint estimator (calibrate, fit-ocv) selects
 // it: one left on the reference estimator changed nothing a replay or the firmware ran. Says so.
 void select_joint_estimator(host::LoadedConfig& config, const char* command);
