@@ -54,10 +54,10 @@ std::function<int()> setup(CLI::App& sub) {
             std::cerr << "battsim calibrate: --estimator: the calibration is of the joint estimator's health filter\n";
             return kExitUsage;
         }
-        host::ReplayOptions opt;
-        if (int rc = resolve_input(a->input, opt.reader, opt.config)) return rc;
-        host::ShapeCalibration c;
         const char* const command = "battsim calibrate";
+        host::ReplayOptions opt;
+        if (int rc = resolve_input(a->input, opt.reader, opt.config, command)) return rc;
+        host::ShapeCalibration c;
         std::vector<host::NamedPath> inputs{{"-c/--config", a->input.config, true}};
         add_named(inputs, "a log", a->logs);
         const std::vector<host::NamedPath> outputs{printed_output("--json", a->json), text_output("-o/--output", a->output, true)};

@@ -53,8 +53,6 @@ int run(const MakeConfigArgs& a) {
         std::cerr << me << ": --json goes with --list-keys (a config is JSON already)\n";
         return kExitUsage;
     }
-    host::PackRating r;
-    r.name = a.name;
     host::LogPack log;
     if (!a.from_log.empty()) {
         host::ReaderOptions options;
@@ -65,29 +63,14 @@ int run(const MakeConfigArgs& a) {
         if (!std::isfinite(a.cutoff_v))
             for (const std::string& note : log.cutoff_notes) std::cerr << me << ": note: " << note << "\n";
     }
-    // The command line first, then the log; each value says where it came from.
-    auto pick = [&r](double given, const char* given_text, double logged, const std::string& logged_from, double* out) {
-        if (std::isfinite(given)) {
-            *out = given;
-            r.sources.push_back(given_text);
-        } else if (std::isfinite(logged)) {
-            *out = logged;
-            r.sources.push_back(logged_from);
-        }
-    };
-    if (a.cells > 0) {
-        r.cells = a.cells;
-        r.sources.push_back("cells given");
-    } else if (log.cells > 0) {
-        r.cells = log.cells;
-        r.sources.push_back(std::to_string(log.cells) + " cells from " + log.cells_from);
-    }
-    pick(a.capacity_mah / 1000.0, "capacity given", log.capacity_ah, "capacity from " + log.capacity_from, &r.capacity_ah);
-    pick(a.resistance_mohm / 1000.0, "resistance given", log.resistance_ohm, "resistance from " + log.resistance_from,
-         &r.resistance_ohm);
-    pick(a.cutoff_v, "cutoff given", log.cutoff_voltage_v, "cutoff from " + log.cutoff_from, &r.cutoff_voltage_v);
-    pick(a.cutoff_delay_s, "cutoff delay given", log.cutoff_delay_s, "cutoff delay from " + log.cutoff_delay_from,
-         &r.cutoff_delay_s);
+    host::PackRating given;
+    given.name = a.name;
+    given.cells = a.cells;
+    given.capacity_ah = a.capacity_mah / 1000.0;
+    given.resistance_ohm = a.resistance_mohm / 1000.0;
+    given.cutoff_voltage_v = a.cutoff_v;
+    given.cutoff_delay_s = a.cutoff_delay_s;
+    const host::PackRating r = host::merge_rating(given, log);
     // Where each value came from, when a log gave some (from the command line alone it only
     // repeated what was typed); before a refusal too, which had not said what the log did give.
     for (const std::string& s : r.sources)

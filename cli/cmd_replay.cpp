@@ -12,6 +12,7 @@
 #include "host/config_json.h"
 #include "host/plot/plot.h"
 #include "host/replay.h"
+#include "host/report/brief.h"
 #include "host/report/charger_check.h"
 #include "host/report/current_offset_fix.h"
 #include "host/report/telemetry_writer.h"
@@ -70,7 +71,7 @@ std::function<int()> setup(CLI::App& sub) {
     add_input_options(sub, a->input);
     return [a, charged]() -> int {
         host::ReplayOptions opt;
-        if (int rc = resolve_input(a->input, opt.reader, opt.config)) return rc;
+        if (int rc = resolve_input(a->input, opt.reader, opt.config, "battsim replay")) return rc;
         if (int rc = check_plot_option("battsim replay", a->plot)) return rc;
         // The texts may go to standard output ("-"), one of them; the MAVLink stream, the
         // tlog and the plot are binary (or drawn by gnuplot) and need a file.
@@ -177,9 +178,9 @@ std::function<int()> setup(CLI::App& sub) {
         }
         if (a->json) std::cout << text;
         if (!a->json && a->summary.empty() && a->series.empty() && a->plot.empty() && a->mavlink.empty() && a->tlog.empty())
-            print_brief(summary, people);
-        if (!a->json && a->said) print_said(summary["said"], summary["flight"], people);
-        if (!a->json && summary.contains("charger_check")) print_charger_check(summary["charger_check"], people);
+            host::print_brief(summary, people);
+        if (!a->json && a->said) host::print_said(summary["said"], summary["flight"], people);
+        if (!a->json && summary.contains("charger_check")) host::print_charger_check(summary["charger_check"], people);
         if (!no_valid.empty())
             std::cerr << "battsim replay: no valid samples: " << no_valid
                       << (a->plot.empty() ? "" : "; --plot not drawn")

@@ -76,33 +76,11 @@ std::function<int()> setup(CLI::App& sub) {
             if (int rc = check_logs_once("battsim score", files)) return rc;
         }
         std::vector<host::score::EstimatorColumn> columns;
-        auto all = host::score::standard_columns();
-        const size_t standard_count = all.size();
-        for (auto& d : host::score::diagnostic_columns()) all.push_back(std::move(d));
-        std::vector<std::string> wanted;
-        for (size_t b = 0; b <= a->columns.size() && !a->columns.empty();) {
-            const size_t e = std::min(a->columns.find(',', b), a->columns.size());
-            if (e > b) wanted.push_back(a->columns.substr(b, e - b));
-            b = e + 1;
-        }
-        if (wanted.empty()) {
-            columns.assign(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(standard_count));
-        } else {
-            for (const std::string& name : wanted) {
-                bool found = false;
-                for (const auto& c : all) {
-                    if (c.name == name) {
-                        columns.push_back(c);
-                        found = true;
-                    }
-                }
-                if (!found) {
-                    std::string names;
-                    for (const auto& c : all) names += (names.empty() ? "" : ", ") + c.name;
-                    std::cerr << "battsim score: --columns: unknown estimator \"" << name << "\"; expected " << names << "\n";
-                    return kExitUsage;
-                }
-            }
+        try {
+            columns = host::score::select_columns(a->columns);
+        } catch (const std::invalid_argument& e) {
+            std::cerr << "battsim score: --columns: " << e.what() << "\n";
+            return kExitUsage;
         }
         host::score::ScoreOptions opt;
         opt.jobs = a->jobs > 0 ? a->jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));

@@ -1,5 +1,6 @@
 // What the subcommands share: the input options (config, format, column mapping), the
 // options and the error-to-exit-code plumbing of the model jobs, the --plot name check.
+// (What replay prints for people is host/report/brief.h.)
 #pragma once
 #include <functional>
 #include <ostream>
@@ -45,10 +46,11 @@ struct ModelJobArgs {
 // Adds those options after the command's own; `report` names the report in the help
 // ("fit report"), `plot_help` says what the plot shows.
 void add_model_job_options(CLI::App& sub, ModelJobArgs& a, const std::string& report, const std::string& plot_help);
-// Fills reader options and loads the config (with its model extensions); prints the error,
-// prefixed with `command`, and returns an exit code other than kExitOk on failure.
+// Fills reader options (through host::settings_from_strings, as batch and manifests) and
+// loads the config (with its model extensions); prints the error, prefixed with `command`
+// ("battsim replay"), and returns an exit code other than kExitOk on failure.
 int resolve_input(const InputArgs& a, host::ReaderOptions& reader, host::LoadedConfig& config,
-                  const std::string& command = "battsim");
+                  const std::string& command);
 // The options as typed, for the batch planner, which validates them like a manifest's
 // fields (batch, bench).
 host::LogSettingStrings setting_strings(const InputArgs& a);
@@ -81,12 +83,6 @@ host::NamedPath printed_output(const std::string& flag, bool given);
 std::ostream& people_out(const std::vector<host::NamedPath>& outputs);
 // Appends `paths` to `to`, each named `what` in check_outputs' messages ("a log").
 void add_named(std::vector<host::NamedPath>& to, const std::string& what, const std::vector<std::string>& paths);
-// Human-readable few lines about a summary.
-void print_brief(const nlohmann::json& summary, std::ostream& out);
-// The summary's `said` (replay --said): each text with its time.
-void print_said(const nlohmann::json& said, const nlohmann::json& flight, std::ostream& out);
-// The summary's `charger_check` as one line for people.
-void print_charger_check(const nlohmann::json& check, std::ostream& out);
 // A config written by a command that tunes the joint estimator (calibrate, fit-ocv) selects
 // it: one left on the reference estimator changed nothing a replay or the firmware ran. Says so.
 void select_joint_estimator(host::LoadedConfig& config, const char* command);

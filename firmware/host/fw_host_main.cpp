@@ -19,7 +19,7 @@
 
 namespace {
 
-// The CLI's exit codes (cli/command.h), so scripts treat both tools alike.
+// The CLI's exit codes (cli/exit_codes.h), so scripts treat both tools alike.
 constexpr int kExitOk = 0;
 constexpr int kExitUsage = 2;
 constexpr int kExitInputError = 3;

@@ -250,6 +250,36 @@ std::string per_cell_resistance_note(const PackRating& r) {
            number_text(r.resistance_ohm * 1e3 * r.cells, "%.3g") + ")";
 }
 
+PackRating merge_rating(const PackRating& given, const LogPack& log) {
+    PackRating r;
+    r.name = given.name;
+    if (given.cells > 0) {
+        r.cells = given.cells;
+        r.sources.push_back("cells given");
+    } else if (log.cells > 0) {
+        r.cells = log.cells;
+        r.sources.push_back(std::to_string(log.cells) + " cells from " + log.cells_from);
+    }
+    const auto pick = [&r](double given_value, const char* given_text, double logged, const std::string& logged_from,
+                           double* out) {
+        if (std::isfinite(given_value)) {
+            *out = given_value;
+            r.sources.push_back(given_text);
+        } else if (std::isfinite(logged)) {
+            *out = logged;
+            r.sources.push_back(logged_from);
+        }
+    };
+    pick(given.capacity_ah, "capacity given", log.capacity_ah, "capacity from " + log.capacity_from, &r.capacity_ah);
+    pick(given.resistance_ohm, "resistance given", log.resistance_ohm, "resistance from " + log.resistance_from,
+         &r.resistance_ohm);
+    pick(given.cutoff_voltage_v, "cutoff given", log.cutoff_voltage_v, "cutoff from " + log.cutoff_from,
+         &r.cutoff_voltage_v);
+    pick(given.cutoff_delay_s, "cutoff delay given", log.cutoff_delay_s, "cutoff delay from " + log.cutoff_delay_from,
+         &r.cutoff_delay_s);
+    return r;
+}
+
 LogPack log_pack(const SourceInfo& info, double resting_voltage_v, int cells_given) {
     LogPack p;
     double v = NAN;

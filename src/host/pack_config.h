@@ -56,6 +56,10 @@ struct LogPack {
     std::vector<std::string> cutoff_notes;
     int declared_cells_beyond = 0;     // a declared count above core::kMaxCells (then cells = 0)
 };
+// The rating make-config writes: each value given (`given`: cells 0 and NaN = not given)
+// over the log's, and `sources` saying where each came from ("capacity given", "capacity
+// from BATT_CAPACITY"), in the order cells, capacity, resistance, cutoff, cutoff delay.
+PackRating merge_rating(const PackRating& given, const LogPack& log);
 // `resting_voltage_v`: the log's first pack voltage while at rest (NaN = not at rest).
 // `cells_given` > 0: the count the values per cell (cutoff, PX4's resistance) are judged and
 // converted with, when the user says the log's is wrong.

@@ -489,3 +489,36 @@ TEST_CASE("a time or current unit of the other quantity is refused, as a manifes
     const auto ok = clitest::run_json("replay " + q(log) + cols + " --time-unit ms --current-unit mA --json");
     CHECK(ok["duration_s"] == 39.9);
 }
+
+TEST_CASE("the one-log commands refuse a bad reading option as batch does, named by the command", "[cli]") {
+    // replay, fit and the others had read these options with their own copy of batch's
+    // parsing, its messages prefixed "battsim: " and untested.
+    struct Case {
+        std::string option, says;
+    };
+    const Case cases[] = {
+        {"--estimator nonesuch", "--estimator: unknown estimator \"nonesuch\"; expected reference or joint"},
+        {"--current-source amps", "--current-source: unknown current source \"amps\"; expected auto, current or shunt"},
+        {"--format nonesuch", "unknown log format \"nonesuch\"; expected one of auto, raw, csv, dataflash-text, dataflash-bin, ulog"},
+    };
+    for (const Case& c : cases) {
+        for (const char* command : {"replay", "fit", "discharge"}) {
+            INFO(command << " " << c.option);
+            const auto r = run(std::string(command) + " " + q(kExample) + " " + c.option);
+            CHECK(r.exit_code == 2);
+            CHECK_THAT(r.err, Catch::StartsWith(std::string("battsim ") + command + ": " + c.says));
+            CHECK(r.out.empty());
+        }
+        // batch spells the log's format --log-format; its message is the same.
+        const std::string option = c.option.rfind("--format", 0) == 0 ? "--log-format nonesuch" : c.option;
+        const auto b = run("batch " + q(kExample) + " " + option);
+        INFO("batch " << option);
+        CHECK(b.exit_code == 2);
+        CHECK_THAT(b.err, Catch::StartsWith("battsim batch: " + c.says));
+    }
+    // Given well, they still choose what they did.
+    const auto joint = clitest::run_json("replay " + q(kExample) + " -c " + q(kConfig) + " --estimator joint --json");
+    CHECK(joint["estimator"] == "joint");
+    const auto reference = clitest::run_json("replay " + q(kExample) + " -c " + q(kConfig) + " --estimator reference --json");
+    CHECK(reference["estimator"] == "reference");
+}

@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -759,6 +760,69 @@ TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes
     CHECK_THAT(partial.out, Catch::Contains("no verdict"));
     CHECK_THAT(partial.err, Catch::Contains("not charged full") && Catch::Contains("not written"));
     CHECK_FALSE(std::filesystem::exists(dir + "/p-fixed.json"));
+}
+
+TEST_CASE("replay's reading options reach the reader: renamed columns read as battsim's own", "[cli]") {
+    // The column options go through host::settings_from_strings, as batch's and a manifest's:
+    // a log under other names, with them, must give the very series of the one under battsim's.
+    const std::string dir = clitest::temp_dir();
+    std::string own = "time_ms,voltage_v,current_a,cell1_v,cell2_v,cell3_v,cell4_v\n";
+    std::string renamed = "t,pack,load,c1,c2,c3,c4,temp\n";
+    long t = 630;
+    for (int k = 0; k < 300; ++k, t += 67) {
+        const bool load = k >= 150;
+        const std::string cells = load ? "3.97,3.98,3.97,3.98" : "4.12,4.13,4.12,4.13";
+        own += std::to_string(t) + (load ? ",15.90,20," : ",16.50,0.25,") + cells + "\n";
+        // The current in mA and negative while discharging.
+        renamed += std::to_string(t) + (load ? ",15.90,-20000," : ",16.50,-250,") + cells + ",25\n";
+    }
+    clitest::write_file(dir + "/own.csv", own);
+    clitest::write_file(dir + "/renamed.csv", renamed);
+    const std::string columns =
+        " --time-col t --time-unit ms --voltage-col pack --current-col load --current-unit mA --negative-discharge"
+        " --cell-cols c1,c2,c3,c4";
+    const auto a = run("replay " + q(dir + "/own.csv") + " -c " + q(kConfig) + " --series -");
+    const auto b = run("replay " + q(dir + "/renamed.csv") + " -c " + q(kConfig) + columns + " --series -");
+    INFO(a.err << b.err);
+    REQUIRE(a.exit_code == 0);
+    REQUIRE(b.exit_code == 0);
+    CHECK(std::count(a.out.begin(), a.out.end(), '\n') == 301);  // a header and a row per sample
+    CHECK(a.out == b.out);
+    // The temperature column is looked for where it is named.
+    const auto temp = run("replay " + q(dir + "/renamed.csv") + " -c " + q(kConfig) + columns + " --temperature-col temp --json");
+    INFO(temp.err);
+    CHECK(temp.exit_code == 0);
+    const auto wrong = run("replay " + q(dir + "/renamed.csv") + " -c " + q(kConfig) + columns + " --temperature-col nonesuch --json");
+    CHECK(wrong.exit_code == 3);
+    CHECK_THAT(wrong.err, Catch::Contains("\"nonesuch\""));
+}
+
+TEST_CASE("replay --current-source shunt reads a raw log's shunt column through the config's calibration", "[cli]") {
+    // The load's shunt reads twice the logged 20 A (15.88 mV: 41 A by the reference
+    // calibration); the logged current_ma column says 20 A.
+    std::string log;
+    long t = 630;
+    for (int k = 0; k < 150; ++k, t += 67) log += std::to_string(t) + ",16.50,4.12,4.13,4.12,4.13,250.00,1.32,\n";
+    for (int k = 0; k < 150; ++k, t += 67) log += std::to_string(t) + ",15.90,3.97,3.98,3.97,3.98,20000.00,15.88,\n";
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/shunt.csv", log);
+    // The current of the last row of the series (its third column).
+    const auto last_current_a = [&](const std::string& source) {
+        const auto r = run("replay " + q(dir + "/shunt.csv") + " -c " + q(kConfig) + source + " --series -");
+        INFO(r.err);
+        REQUIRE(r.exit_code == 0);
+        const size_t row = r.out.rfind('\n', r.out.size() - 2) + 1;
+        std::stringstream fields(r.out.substr(row));
+        std::string time_s, voltage_v, current_a;
+        std::getline(fields, time_s, ',');
+        std::getline(fields, voltage_v, ',');
+        std::getline(fields, current_a, ',');
+        return std::stod(current_a);
+    };
+    CHECK(last_current_a("") == Approx(20.0));
+    CHECK(last_current_a(" --current-source current") == Approx(20.0));
+    // 15.88 mV / 3.7834625 mV per 10 A × 10000 − 982.8 mA (configs/reference-modified.json).
+    CHECK(last_current_a(" --current-source shunt") == Approx(15.88 / 3.7834625 * 10.0 - 0.9828158579).epsilon(1e-4));
 }
 
 TEST_CASE("replay reports bad input with file, line and a non-zero exit", "[cli]") {

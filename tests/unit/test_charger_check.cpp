@@ -2,6 +2,9 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <sstream>
+
+#include "host/report/brief.h"
 #include "host/report/charger_check.h"
 
 using battsim::host::charger_check;
@@ -90,4 +93,23 @@ TEST_CASE("Charger check: a gap between samples on the ground holds no gain back
     c = charger_check(summary(1.2, 100.0), o);
     CHECK(c["notes"][0].get<std::string>().find("100 mAh missing at the start, over 5 % of the charger's 1000 mAh") !=
           std::string::npos);
+}
+
+TEST_CASE("The charger check's line for people says the verdict and the gain", "[charger]") {
+    nlohmann::json c = {{"counted_ah", 1.4}, {"charged_ah", 1.5}, {"ratio", 0.9333333}, {"fault", true},
+                        {"suggested_current_gain", 1.0714286}};
+    std::ostringstream fault;
+    battsim::host::print_charger_check(c, fault);
+    CHECK(fault.str() == "  charger check: counted 1.400 Ah against 1.500 Ah charged (x0.9333): current sensor fault; "
+                         "suggested extensions.current_sensor.gain 1.0714\n");
+    c["fault"] = false;
+    std::ostringstream fine;
+    battsim::host::print_charger_check(c, fine);
+    CHECK(fine.str() == "  charger check: counted 1.400 Ah against 1.500 Ah charged (x0.9333): within tolerance; "
+                        "no change needed (the gain it implies: 1.0714)\n");
+    c["fault"] = nullptr;
+    c["suggested_current_gain"] = nullptr;
+    std::ostringstream none;
+    battsim::host::print_charger_check(c, none);
+    CHECK(none.str() == "  charger check: counted 1.400 Ah against 1.500 Ah charged (x0.9333): no verdict\n");
 }

@@ -331,3 +331,42 @@ TEST_CASE("make-config: a given pack resistance that looks like one cell's is no
     r.resistance_ohm = 0.004;
     CHECK(per_cell_resistance_note(r).empty());
 }
+
+TEST_CASE("make-config: a value given wins over the log's, and each says where it came from", "[pack_config]") {
+    LogPack log;
+    log.cells = 3;
+    log.cells_from = "how high it rests";
+    log.capacity_ah = 4.0;
+    log.capacity_from = "BATT_CAPACITY";
+    log.cutoff_voltage_v = 10.5;
+    log.cutoff_from = "BATT_LOW_VOLT";
+    log.cutoff_delay_s = 10.0;
+    log.cutoff_delay_from = "BATT_LOW_TIMER";
+    PackRating given;  // nothing given: the log's values
+    given.name = "mine";
+    PackRating r = merge_rating(given, log);
+    CHECK(r.name == "mine");
+    CHECK(r.cells == 3);
+    CHECK(r.capacity_ah == 4.0);
+    CHECK(std::isnan(r.resistance_ohm));  // neither says: left to the reference pack's
+    CHECK(r.cutoff_voltage_v == 10.5);
+    CHECK(r.cutoff_delay_s == 10.0);
+    CHECK(r.sources == std::vector<std::string>{"3 cells from how high it rests", "capacity from BATT_CAPACITY",
+                                                "cutoff from BATT_LOW_VOLT", "cutoff delay from BATT_LOW_TIMER"});
+    given.cells = 4;
+    given.capacity_ah = 1.76;
+    given.resistance_ohm = 0.012;
+    given.cutoff_voltage_v = 13.3;
+    r = merge_rating(given, log);
+    CHECK(r.cells == 4);
+    CHECK(r.capacity_ah == 1.76);
+    CHECK(r.resistance_ohm == 0.012);
+    CHECK(r.cutoff_voltage_v == 13.3);
+    CHECK(r.cutoff_delay_s == 10.0);
+    CHECK(r.sources == std::vector<std::string>{"cells given", "capacity given", "resistance given", "cutoff given",
+                                                "cutoff delay from BATT_LOW_TIMER"});
+    // Without a log, what was given alone.
+    r = merge_rating(given, LogPack());
+    CHECK(r.sources.size() == 4);
+    CHECK(std::isnan(r.cutoff_delay_s));
+}

@@ -106,17 +106,17 @@ TEST_CASE("Judging: known answers give known errors, hits and false warnings", "
     const ColumnFlight& exact = f.columns[0];
     for (int p = 0; p < 3; ++p) {
         if (!exact.has_rt[p]) continue;  // past the landing
-        CHECK(exact.rt_err[p] == Approx(0.0).margin(1e-9));
+        CHECK(exact.rt_err_pct[p] == Approx(0.0).margin(1e-9));
     }
     CHECK(exact.has_rt[0]);
     CHECK(exact.has_rt[1]);
-    CHECK(exact.cap_err20 == Approx(0.0).margin(1e-9));
+    CHECK(exact.cap_err20_pct == Approx(0.0).margin(1e-9));
     CHECK_FALSE(exact.has_res20);
     CHECK(exact.warned_in_time);
     CHECK(exact.false_warnings.empty());
     const ColumnFlight& biased = f.columns[1];
-    CHECK(biased.rt_err[1] == Approx(5.0).epsilon(1e-9));
-    CHECK(biased.cap_err20 == Approx(10.0).epsilon(1e-9));
+    CHECK(biased.rt_err_pct[1] == Approx(5.0).epsilon(1e-9));
+    CHECK(biased.cap_err20_pct == Approx(10.0).epsilon(1e-9));
     CHECK_FALSE(biased.warned_in_time);  // the wrong cause
     CHECK(biased.false_warnings == std::vector<std::string>{"high_resistance"});
     CHECK_FALSE(f.columns[2].warned_in_time);  // the right cause, too late
@@ -274,7 +274,7 @@ TEST_CASE("Diagnostic column: the flight-time solve fed the true pack, with and 
     REQUIRE(with.flights.size() == 1);
     const ColumnFlight& w = with.flights[0].columns[0];
     REQUIRE(w.has_energy20);
-    CHECK(std::fabs(w.energy_err20) < 2.0);
+    CHECK(std::fabs(w.energy_err20_pct) < 2.0);
     CHECK(w.has_rt[1]);
 
     sim::Scenario s0 = s;
@@ -282,9 +282,25 @@ TEST_CASE("Diagnostic column: the flight-time solve fed the true pack, with and 
     const ScoreResult without = score_scenarios({s0}, cols, ScoreOptions{});
     const ColumnFlight& n = without.flights[0].columns[0];
     REQUIRE(n.has_energy20);
-    CHECK(n.energy_err20 < w.energy_err20 - 2.0);
+    CHECK(n.energy_err20_pct < w.energy_err20_pct - 2.0);
     // It is a diagnostic: not among the standard columns.
     for (const EstimatorColumn& c : standard_columns()) CHECK(c.name != "solve-truth");
     REQUIRE(diagnostic_columns().size() == 1);
     CHECK(diagnostic_columns()[0].name == "solve-truth");
+}
+
+TEST_CASE("score --columns: the columns named, in order, diagnostics included; a wrong name refused", "[score]") {
+    const auto names = [](const std::vector<EstimatorColumn>& cols) {
+        std::vector<std::string> n;
+        for (const EstimatorColumn& c : cols) n.push_back(c.name);
+        return n;
+    };
+    const std::vector<std::string> standard = {"reference", "baseline", "oracle", "joint"};
+    CHECK(names(standard_columns()) == standard);
+    CHECK(names(select_columns("")) == standard);
+    CHECK(names(select_columns(",")) == standard);  // no name at all
+    CHECK(names(select_columns("joint,solve-truth,reference")) == std::vector<std::string>{"joint", "solve-truth", "reference"});
+    CHECK(names(select_columns(",oracle,")) == std::vector<std::string>{"oracle"});
+    CHECK_THROWS_WITH(select_columns("joint,nonesuch"),
+                      "unknown estimator \"nonesuch\"; expected reference, baseline, oracle, joint, solve-truth");
 }

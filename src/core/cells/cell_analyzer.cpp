@@ -85,20 +85,20 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     const uint64_t lag_us = static_cast<uint64_t>(config_.lag_s * 1.0e6f);
     const int pick = pick_lagged(t_us_, head_, count_, kHistory, time_us, lag_us);
     if (pick >= 0) {
-        const float di = current_a - i_[pick];
+        const float di = current_a - current_a_[pick];
         if (fabsf(di) >= config_.min_step_a) {
             sxx_ += di * di;
             n_r_ += 1.0f;
             for (int c = 0; c < cells; ++c) {
-                const float dv = cell_v[c] - v_[pick][c];
+                const float dv = cell_v[c] - cell_v_[pick][c];
                 sxy_[c] += di * dv;
                 syy_[c] += dv * dv;
             }
         }
     }
     t_us_[head_] = time_us;
-    i_[head_] = current_a;
-    for (int c = 0; c < cells; ++c) v_[head_][c] = cell_v[c];
+    current_a_[head_] = current_a;
+    for (int c = 0; c < cells; ++c) cell_v_[head_][c] = cell_v[c];
     head_ = (head_ + 1) % kHistory;
     if (count_ < kHistory) ++count_;
 

@@ -140,8 +140,8 @@ private:
     Config config_;
     Status status_;
     uint64_t t_us_[kHistory] = {};
-    float i_[kHistory] = {};
-    float v_[kHistory][kMaxCells] = {};
+    float current_a_[kHistory] = {};
+    float cell_v_[kHistory][kMaxCells] = {};
     int head_ = 0, count_ = 0;
     // Resistance sums (shared ΔI²) and per-cell drift regression sums against charge.
     float sxx_ = 0.0f, n_r_ = 0.0f;

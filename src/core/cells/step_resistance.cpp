@@ -26,22 +26,22 @@ bool CellStepResistance::ring_steady() const {
     const float mean = sum_a_ / static_cast<float>(kWindow);
     const float band = band_a(mean);
     for (int k = 0; k < kWindow; ++k)
-        if (fabsf(i_[k] - mean) > band) return false;
+        if (fabsf(current_a_[k] - mean) > band) return false;
     return true;
 }
 
 void CellStepResistance::summarise(Window* w) const {
     const float n = static_cast<float>(kWindow);
     float sum_a = 0.0f;
-    for (int k = 0; k < kWindow; ++k) sum_a += i_[k];
+    for (int k = 0; k < kWindow; ++k) sum_a += current_a_[k];
     w->current_a = sum_a / n;
     const float floor_v2 = config_.noise_floor_v * config_.noise_floor_v;
     for (int c = 0; c < cells_; ++c) {
         float sum_v = 0.0f;
-        for (int k = 0; k < kWindow; ++k) sum_v += v_[k][c];
+        for (int k = 0; k < kWindow; ++k) sum_v += cell_v_[k][c];
         const float mean = sum_v / n;
         float ss = 0.0f;
-        for (int k = 0; k < kWindow; ++k) ss += (v_[k][c] - mean) * (v_[k][c] - mean);
+        for (int k = 0; k < kWindow; ++k) ss += (cell_v_[k][c] - mean) * (cell_v_[k][c] - mean);
         w->voltage_v[c] = mean;
         w->variance_v2[c] = maxf(floor_v2, ss / (n - 1.0f)) / n;
     }
@@ -66,11 +66,11 @@ void CellStepResistance::update(const float* cell_v, int cells, float current_a)
         ++count_;
         if (count_ == 1) sum_a_ = 0.0f;
     } else {
-        sum_a_ -= i_[head_];
+        sum_a_ -= current_a_[head_];
     }
     sum_a_ += current_a;
-    i_[head_] = current_a;
-    for (int c = 0; c < cells; ++c) v_[head_][c] = cell_v[c];
+    current_a_[head_] = current_a;
+    for (int c = 0; c < cells; ++c) cell_v_[head_][c] = cell_v[c];
     head_ = head_ + 1 < kWindow ? head_ + 1 : 0;
     if (!moving_) return;
     ++waited_;

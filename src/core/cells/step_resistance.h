@@ -59,10 +59,10 @@ private:
     Config config_;
     Status status_;
     int cells_ = 0;
-    float i_[kWindow] = {};
-    float v_[kWindow][kMaxCells] = {};
+    float current_a_[kWindow] = {};
+    float cell_v_[kWindow][kMaxCells] = {};
     int head_ = 0, count_ = 0;
-    float sum_a_ = 0.0f;  // of i_ while the ring is full: the departure test is O(1)
+    float sum_a_ = 0.0f;  // of current_a_ while the ring is full: the departure test is O(1)
     bool moving_ = false;  // between a step's start and its settled window
     uint16_t waited_ = 0;
     Window before_;

@@ -23,8 +23,8 @@ void DifferenceResistanceEstimator::update(uint64_t time_us, float voltage_v, fl
     // Newest sample at least `lag` old; a gap much longer than the lag breaks the pair.
     const int pick = pick_lagged(t_us_, head_, count_, kHistory, time_us, lag_us);
     t_us_[head_] = time_us;
-    v_[head_] = voltage_v;
-    i_[head_] = current_a;
+    voltage_v_[head_] = voltage_v;
+    current_a_[head_] = current_a;
     head_ = (head_ + 1) % kHistory;
     if (count_ < kHistory) ++count_;
 
@@ -41,8 +41,8 @@ void DifferenceResistanceEstimator::update(uint64_t time_us, float voltage_v, fl
         sxyt_ = keep * sxyt_ - dt_s * sxy_;
     }
     if (pick < 0) return;
-    const float di = current_a - i_[pick];
-    const float dv = voltage_v - v_[pick];
+    const float di = current_a - current_a_[pick];
+    const float dv = voltage_v - voltage_v_[pick];
     if (fabsf(di) < config_.min_step_a) return;
     // A garbled reading, not the pack: a heavy pair that shows far less sag than the pack's
     // resistance (one 100 A read with no sag, weighted by ΔI², had pulled R0 to a sixth; one

@@ -46,8 +46,8 @@ private:
     Config config_;
     Status status_;
     uint64_t t_us_[kHistory] = {};
-    float v_[kHistory] = {};
-    float i_[kHistory] = {};
+    float voltage_v_[kHistory] = {};
+    float current_a_[kHistory] = {};
     int head_ = 0;
     int count_ = 0;
     float sxx_ = 0.0f, sxy_ = 0.0f, syy_ = 0.0f, n_ = 0.0f;

@@ -260,15 +260,25 @@ std::string progress_line(size_t done, size_t total, size_t failed, int width) {
     return bar;
 }
 
-json make_row(const BatchItem& item, const json& summary) {
+// What a row says of its log whether it replayed or not: which log, pack, monitor, config
+// and estimator.
+static json row_of(const BatchItem& item) {
     json row;
     row["index"] = item.index;
     row["test"] = item.test;
     row["log"] = item.path;
     row["pack"] = item.pack.empty() ? json(nullptr) : json(item.pack);
     row["monitor"] = item.monitor.empty() ? json(nullptr) : json(item.monitor);
-    row["config"] = summary.value("config", item.replay.config.name);
-    row["estimator"] = summary.value("estimator", std::string(to_string(item.replay.config.monitor.estimator)));
+    row["config"] = item.replay.config.name;
+    row["estimator"] = to_string(item.replay.config.monitor.estimator);
+    return row;
+}
+
+json make_row(const BatchItem& item, const json& summary) {
+    json row = row_of(item);
+    // The summary's own say, where it has one.
+    row["config"] = summary.value("config", row["config"].get<std::string>());
+    row["estimator"] = summary.value("estimator", row["estimator"].get<std::string>());
     // A log the config kept wholly out replays without an error and reads null everywhere: its
     // row fails (with the reason) and keeps what the summary says, so a pipeline need not
     // compare sensor_fault_samples with samples itself.
@@ -333,14 +343,7 @@ json make_row(const BatchItem& item, const json& summary) {
 }
 
 json make_error_row(const BatchItem& item, const std::string& reason) {
-    json row;
-    row["index"] = item.index;
-    row["test"] = item.test;
-    row["log"] = item.path;
-    row["pack"] = item.pack.empty() ? json(nullptr) : json(item.pack);
-    row["monitor"] = item.monitor.empty() ? json(nullptr) : json(item.monitor);
-    row["config"] = item.replay.config.name;
-    row["estimator"] = to_string(item.replay.config.monitor.estimator);
+    json row = row_of(item);
     row["status"] = kRowError;
     row["error"] = reason;
     row["flight"] = false;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "host/score/coulomb_baseline.h"
@@ -63,6 +65,29 @@ std::vector<EstimatorColumn> standard_columns() {
 }
 
 std::vector<EstimatorColumn> diagnostic_columns() { return {solve_truth_column()}; }
+
+std::vector<EstimatorColumn> select_columns(const std::string& names) {
+    std::vector<std::string> wanted;
+    for (size_t b = 0; b <= names.size() && !names.empty();) {
+        const size_t e = std::min(names.find(',', b), names.size());
+        if (e > b) wanted.push_back(names.substr(b, e - b));
+        b = e + 1;
+    }
+    std::vector<EstimatorColumn> all = standard_columns();
+    if (wanted.empty()) return all;
+    for (EstimatorColumn& d : diagnostic_columns()) all.push_back(std::move(d));
+    std::vector<EstimatorColumn> columns;
+    for (const std::string& name : wanted) {
+        const auto it = std::find_if(all.begin(), all.end(), [&](const EstimatorColumn& c) { return c.name == name; });
+        if (it == all.end()) {
+            std::string known;
+            for (const EstimatorColumn& c : all) known += (known.empty() ? "" : ", ") + c.name;
+            throw std::invalid_argument("unknown estimator \"" + name + "\"; expected " + known);
+        }
+        columns.push_back(*it);
+    }
+    return columns;
+}
 
 EstimatorColumn monitor_column(std::string name, std::string description,
                                std::function<void(core::MonitorConfig&)> tweak) {

@@ -68,6 +68,10 @@ EstimatorColumn solve_truth_column();
 std::vector<EstimatorColumn> standard_columns();
 // Columns run only when named (`battsim score --columns`): diagnostics, not estimators.
 std::vector<EstimatorColumn> diagnostic_columns();
+// `battsim score --columns`: the columns named, comma-separated, in that order, from the
+// standard and the diagnostic ones; no name at all: the standard columns. Throws
+// std::invalid_argument for a name of none, listing the names there are.
+std::vector<EstimatorColumn> select_columns(const std::string& names);
 
 }  // namespace score
 }  // namespace host

@@ -75,40 +75,40 @@ ColumnFlight judge(const std::vector<Estimate>& est, const sim::SimulationResult
         const Estimate& e = est[static_cast<size_t>(i)];
         if (e.has_remaining_time) {
             cf.has_rt[p] = true;
-            cf.rt_err[p] = (e.remaining_time_s - (t.cutoff_s - e.time_s)) / total * 100.0;
+            cf.rt_err_pct[p] = (e.remaining_time_s - (t.cutoff_s - e.time_s)) / total * 100.0;
         }
         if (p == 1) {
             const double truth_e = true_energy(i);
             if (e.has_remaining_energy && std::isfinite(truth_e) && truth_e > 0.0) {
                 cf.has_energy20 = true;
-                cf.energy_err20 = (e.remaining_energy_wh - truth_e) / truth_e * 100.0;
+                cf.energy_err20_pct = (e.remaining_energy_wh - truth_e) / truth_e * 100.0;
             }
             if (e.has_capacity) {
                 cf.has_cap20 = true;
-                cf.cap_err20 = (e.capacity_ah - t.pack_capacity_ah) / t.pack_capacity_ah * 100.0;
+                cf.cap_err20_pct = (e.capacity_ah - t.pack_capacity_ah) / t.pack_capacity_ah * 100.0;
             }
             const double r = true_resistance(i);
             if (e.has_resistance && std::isfinite(r)) {
                 cf.has_res20 = true;
-                cf.res_err20 = (e.resistance_ohm - r) / r * 100.0;
+                cf.res_err20_pct = (e.resistance_ohm - r) / r * 100.0;
             }
         }
     }
     if (!est.empty() && est.back().has_rest_capacity) {
         cf.has_cap_rest = true;
-        cf.cap_err_rest = (est.back().rest_capacity_ah - t.pack_capacity_ah) / t.pack_capacity_ah * 100.0;
+        cf.cap_err_rest_pct = (est.back().rest_capacity_ah - t.pack_capacity_ah) / t.pack_capacity_ah * 100.0;
     }
     const long iend = index_at(est, t.landing_s);
     if (iend >= 0 && est[static_cast<size_t>(iend)].time_s >= t.takeoff_s) {
         const Estimate& e = est[static_cast<size_t>(iend)];
         if (e.has_capacity) {
             cf.has_cap_end = true;
-            cf.cap_err_end = (e.capacity_ah - t.pack_capacity_ah) / t.pack_capacity_ah * 100.0;
+            cf.cap_err_end_pct = (e.capacity_ah - t.pack_capacity_ah) / t.pack_capacity_ah * 100.0;
         }
         const double r = true_resistance(iend);
         if (e.has_resistance && std::isfinite(r)) {
             cf.has_res_end = true;
-            cf.res_err_end = (e.resistance_ohm - r) / r * 100.0;
+            cf.res_err_end_pct = (e.resistance_ohm - r) / r * 100.0;
         }
     }
 
@@ -221,7 +221,7 @@ std::vector<Row> build_rows(const ScoreResult& r) {
     const char* pct[3] = {"10", "20", "50"};
     for (int p = 0; p < 3; ++p) {
         add_pair(std::string("remaining_time_") + pct[p], std::string("remaining time at ") + pct[p] + " %",
-                 [p](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_rt[p], c.rt_err[p]); });
+                 [p](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_rt[p], c.rt_err_pct[p]); });
     }
     // Against the floor: per flight, this column's |error| minus the oracle's, in points.
     const auto oracle = std::find(r.columns.begin(), r.columns.end(), "oracle");
@@ -233,7 +233,7 @@ std::vector<Row> build_rows(const ScoreResult& r) {
             const ColumnFlight& oc = fl.columns[o];
             for (size_t c = 0; c < nc; ++c) {
                 const ColumnFlight& cc = fl.columns[c];
-                med.stats[c].add(cc.has_rt[1] && oc.has_rt[1], std::fabs(cc.rt_err[1]) - std::fabs(oc.rt_err[1]));
+                med.stats[c].add(cc.has_rt[1] && oc.has_rt[1], std::fabs(cc.rt_err_pct[1]) - std::fabs(oc.rt_err_pct[1]));
             }
         }
         Row most{"remaining_time_20_above_oracle", std::string(24, ' ') + "largest, points", Row::Max, med.stats, {}};
@@ -245,21 +245,21 @@ std::vector<Row> build_rows(const ScoreResult& r) {
                 Row::Median, std::vector<Stat>(nc), {}};
         for (const FlightScore& fl : r.flights)
             for (size_t c = 0; c < nc; ++c)
-                if (fl.sensor_faulty) med.stats[c].add(fl.columns[c].has_rt[1], fl.columns[c].rt_err[1]);
+                if (fl.sensor_faulty) med.stats[c].add(fl.columns[c].has_rt[1], fl.columns[c].rt_err_pct[1]);
         rows.push_back(med);
     }
     add_pair("remaining_energy_20", "remaining energy at 20 %",
-             [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_energy20, c.energy_err20); });
+             [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_energy20, c.energy_err20_pct); });
     add_pair("capacity_20", "capacity at 20 %",
-             [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_cap20, c.cap_err20); });
+             [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_cap20, c.cap_err20_pct); });
     add_pair("capacity_end", "capacity at the end",
-             [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_cap_end, c.cap_err_end); });
+             [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_cap_end, c.cap_err_end_pct); });
     add_pair("capacity_after_rest", "capacity after the landing rest",
-             [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_cap_rest, c.cap_err_rest); });
+             [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_cap_rest, c.cap_err_rest_pct); });
     add_pair("resistance_20", "resistance at 20 %",
-             [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_res20, c.res_err20); });
+             [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_res20, c.res_err20_pct); });
     add_pair("resistance_end", "resistance at the end",
-             [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_res_end, c.res_err_end); });
+             [](const FlightScore&, const ColumnFlight& c, Stat& s) { s.add(c.has_res_end, c.res_err_end_pct); });
 
     const auto add_count = [&](const std::string& key, const std::string& label,
                                const std::function<void(const FlightScore&, const ColumnFlight&, Count&)>& f) {
@@ -671,13 +671,13 @@ json to_json(const ScoreResult& r) {
                 warn[warning_name(static_cast<core::Warning>(w))] =
                     cf.first_warning_s[w] >= 0.0 ? json(sim::round_fixed(cf.first_warning_s[w], 3)) : json(nullptr);
             }
-            per[r.columns[c]] = {{"remaining_time_error_pct", {opt(cf.has_rt[0], cf.rt_err[0]), opt(cf.has_rt[1], cf.rt_err[1]), opt(cf.has_rt[2], cf.rt_err[2])}},
-                                 {"remaining_energy_error_20_pct", opt(cf.has_energy20, cf.energy_err20)},
-                                 {"capacity_error_20_pct", opt(cf.has_cap20, cf.cap_err20)},
-                                 {"capacity_error_end_pct", opt(cf.has_cap_end, cf.cap_err_end)},
-                                 {"capacity_error_after_rest_pct", opt(cf.has_cap_rest, cf.cap_err_rest)},
-                                 {"resistance_error_20_pct", opt(cf.has_res20, cf.res_err20)},
-                                 {"resistance_error_end_pct", opt(cf.has_res_end, cf.res_err_end)},
+            per[r.columns[c]] = {{"remaining_time_error_pct", {opt(cf.has_rt[0], cf.rt_err_pct[0]), opt(cf.has_rt[1], cf.rt_err_pct[1]), opt(cf.has_rt[2], cf.rt_err_pct[2])}},
+                                 {"remaining_energy_error_20_pct", opt(cf.has_energy20, cf.energy_err20_pct)},
+                                 {"capacity_error_20_pct", opt(cf.has_cap20, cf.cap_err20_pct)},
+                                 {"capacity_error_end_pct", opt(cf.has_cap_end, cf.cap_err_end_pct)},
+                                 {"capacity_error_after_rest_pct", opt(cf.has_cap_rest, cf.cap_err_rest_pct)},
+                                 {"resistance_error_20_pct", opt(cf.has_res20, cf.res_err20_pct)},
+                                 {"resistance_error_end_pct", opt(cf.has_res_end, cf.res_err_end_pct)},
                                  {"first_warning_after_takeoff_s", warn},
                                  {"warned_in_time", cf.warned_in_time},
                                  {"false_warnings", cf.false_warnings},

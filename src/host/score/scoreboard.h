@@ -48,13 +48,13 @@ struct ScoreOptions {
 // Per flight and column.
 struct ColumnFlight {
     bool has_rt[3] = {false, false, false};  // 10, 20, 50 %
-    double rt_err[3] = {0, 0, 0};
+    double rt_err_pct[3] = {0, 0, 0};
     bool has_energy20 = false;
-    double energy_err20 = 0;
+    double energy_err20_pct = 0;
     bool has_cap20 = false, has_cap_end = false, has_res20 = false, has_res_end = false;
-    double cap_err20 = 0, cap_err_end = 0, res_err20 = 0, res_err_end = 0;
+    double cap_err20_pct = 0, cap_err_end_pct = 0, res_err20_pct = 0, res_err_end_pct = 0;
     bool has_cap_rest = false;  // capacity read at the rest after landing (end of the log)
-    double cap_err_rest = 0;
+    double cap_err_rest_pct = 0;
     bool warned_in_time = false;
     std::vector<std::string> false_warnings;
     bool cell_warning = false;

@@ -69,7 +69,7 @@ PlantOutput Plant::evaluate_current(double current_a) const {
     const double f = temperature_factor();
     out.current_a = current_a;
     for (int c = 0; c < params_.cells; ++c) {
-        const double v = params_.ocv->voltage_v(state_.soc[c]) - state_.v1[c] - state_.v2[c] - current_a * cell_r0(c, f);
+        const double v = params_.ocv->voltage_v(state_.soc[c]) - state_.v1_v[c] - state_.v2_v[c] - current_a * cell_r0(c, f);
         out.cell_v[c] = v;
         out.voltage_v += v;
     }
@@ -84,7 +84,7 @@ PlantOutput Plant::step_power(double power_w, double dt_s, bool airborne) {
     for (int c = 0; c < params_.cells; ++c) {
         ocv[c] = params_.ocv->voltage_v(state_.soc[c]);
         r0[c] = cell_r0(c, f);
-        e += ocv[c] - state_.v1[c] - state_.v2[c];
+        e += ocv[c] - state_.v1_v[c] - state_.v2_v[c];
         r += r0[c];
     }
     PlantOutput out;
@@ -102,7 +102,7 @@ PlantOutput Plant::step_power(double power_w, double dt_s, bool airborne) {
     }
     out.current_a = current;
     for (int c = 0; c < params_.cells; ++c) {
-        out.cell_v[c] = ocv[c] - state_.v1[c] - state_.v2[c] - current * r0[c];
+        out.cell_v[c] = ocv[c] - state_.v1_v[c] - state_.v2_v[c] - current * r0[c];
         out.voltage_v += out.cell_v[c];
     }
     out.power_w = out.voltage_v * current;
@@ -115,11 +115,11 @@ PlantOutput Plant::step_power(double power_w, double dt_s, bool airborne) {
         const CellParams& p = params_.cell[c];
         const double r1 = p.r1_ohm * f, r2 = p.r2_ohm * f;
         heat_w += current * current * r0[c];
-        if (r1 > 0.0) heat_w += state_.v1[c] * state_.v1[c] / r1;
-        if (r2 > 0.0) heat_w += state_.v2[c] * state_.v2[c] / r2;
+        if (r1 > 0.0) heat_w += state_.v1_v[c] * state_.v1_v[c] / r1;
+        if (r2 > 0.0) heat_w += state_.v2_v[c] * state_.v2_v[c] / r2;
         state_.soc[c] -= current * dt_s / (3600.0 * p.capacity_ah);
-        state_.v1[c] = state_.v1[c] * decay1_[c] + current * r1 * (1.0 - decay1_[c]);
-        state_.v2[c] = state_.v2[c] * decay2_[c] + current * r2 * (1.0 - decay2_[c]);
+        state_.v1_v[c] = state_.v1_v[c] * decay1_[c] + current * r1 * (1.0 - decay1_[c]);
+        state_.v2_v[c] = state_.v2_v[c] * decay2_[c] + current * r2 * (1.0 - decay2_[c]);
     }
     const double g = airborne ? params_.conductance_flight_w_per_k : params_.conductance_ground_w_per_k;
     state_.temperature_c += dt_s * (heat_w - g * (state_.temperature_c - params_.ambient_c)) / params_.heat_capacity_j_per_k;

@@ -44,8 +44,8 @@ struct PlantParams {
 
 struct PlantState {
     double soc[kMaxCells] = {};
-    double v1[kMaxCells] = {};   // RC branch voltages
-    double v2[kMaxCells] = {};
+    double v1_v[kMaxCells] = {};  // RC branch voltages
+    double v2_v[kMaxCells] = {};
     double temperature_c = 20.0;
     double charge_ah = 0.0;      // drawn from the pack since the start
     double energy_wh = 0.0;      // delivered at the terminals since the start

@@ -106,9 +106,9 @@ void SensorChain::configure(const SensorParams& params, int cells, uint64_t seed
 }
 
 void SensorChain::finish_ina226() {
-    if (acc226_.weight <= 0.0) return;
-    const double bus = acc226_.bus / acc226_.weight * (1.0 + unit_.bus_gain_error) + noise_rng_.normal(0.0, p_.bus_noise_v);
-    const double shunt = acc226_.shunt / acc226_.weight + noise_rng_.normal(0.0, p_.shunt_noise_mv);
+    if (acc226_.span_s <= 0.0) return;
+    const double bus = acc226_.bus_v_s / acc226_.span_s * (1.0 + unit_.bus_gain_error) + noise_rng_.normal(0.0, p_.bus_noise_v);
+    const double shunt = acc226_.shunt_mv_s / acc226_.span_s + noise_rng_.normal(0.0, p_.shunt_noise_mv);
     bus_count_ = quantise(bus, kBusLsbV, 0, 32767);            // bus register: 0..40.96 V
     shunt_count_ = quantise(shunt, kShuntLsbMv, -32768, 32767);  // ±81.92 mV
     if (shunt_count_ <= -32768 || shunt_count_ >= 32767) ++stats_.current_clipped;
@@ -117,9 +117,9 @@ void SensorChain::finish_ina226() {
 }
 
 void SensorChain::finish_ina3221() {
-    if (acc3221_.weight <= 0.0) return;
+    if (acc3221_.span_s <= 0.0) return;
     for (int k = 0; k + 1 < cells_; ++k) {
-        const double v = acc3221_.taps[k] / acc3221_.weight * (1.0 + unit_.tap_gain_error[k]) + unit_.tap_offset_v[k] +
+        const double v = acc3221_.taps_v_s[k] / acc3221_.span_s * (1.0 + unit_.tap_gain_error[k]) + unit_.tap_offset_v[k] +
                          noise_rng_.normal(0.0, p_.tap_noise_v);
         tap_count_[k] = quantise(v, kTapLsbV, -4096, 4095);  // 13-bit signed register
     }
@@ -206,18 +206,18 @@ void SensorChain::feed(double t_s, double dt_s, const TrueValues& v, bool airbor
                             static_cast<double>(p_.shunt.scale_mv_per_10a) / 10000.0;
 
     const double ground_v = v.current_a * p_.ground_lead_ohm;  // the monitor's ground above the pack's negative
-    acc226_.bus += (v.voltage_v - ground_v - v.current_a * p_.bus_lead_ohm) * dt_s;
-    acc226_.shunt += shunt_mv * dt_s;
-    acc226_.weight += dt_s;
+    acc226_.bus_v_s += (v.voltage_v - ground_v - v.current_a * p_.bus_lead_ohm) * dt_s;
+    acc226_.shunt_mv_s += shunt_mv * dt_s;
+    acc226_.span_s += dt_s;
     double tap = 0.0;
     for (int k = 0; k + 1 < cells_; ++k) {
         tap += v.cell_v[k];
         double tv = tap - ground_v;
         // An open input floats to a few tens of millivolts.
         if (k + 1 == f.loose_tap) tv = tv * (1.0 - open_weight) + 0.02 * open_weight;
-        acc3221_.taps[k] += tv * dt_s;
+        acc3221_.taps_v_s[k] += tv * dt_s;
     }
-    acc3221_.weight += dt_s;
+    acc3221_.span_s += dt_s;
     temperature_c_ = v.temperature_c;
 
     while (t_end >= next_ready226_s_) {

@@ -130,8 +130,10 @@ public:
     int cells() const { return cells_; }
 
 private:
+    // Readings integrated over a conversion (V·s, mV·s) and the time they cover, so a
+    // conversion reads the mean of what it saw.
     struct Accumulator {
-        double bus = 0, shunt = 0, taps[kMaxCells] = {}, weight = 0;
+        double bus_v_s = 0, shunt_mv_s = 0, taps_v_s[kMaxCells] = {}, span_s = 0;
     };
     void finish_ina226();
     void finish_ina3221();
