@@ -113,6 +113,9 @@ void draw_logger_page(Display& d, const LoggerPage& page) {
     }
     d.text(0, 4, r.c_str());
     r.clear();
+    // Why lines are missing from the record: readings without cells are not sent.
+    if (page.taps_missing) r.append("no taps");
+    if (page.counters.tap_errors > 0) r.appendf("tap%u", static_cast<unsigned>(page.counters.tap_errors));
     append_counters_row(r, page.counters);
     d.text(0, 5, r.c_str());
     d.show();
