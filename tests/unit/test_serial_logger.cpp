@@ -357,6 +357,9 @@ TEST_CASE("battsim log records a device end to end and stops after --max-wait", 
     r = fwtest::run(BATTSIM_BINARY, "log --port " + fwtest::q(dir + "/none") + " --out " + fwtest::q(dir + "/b.csv") +
                                         " --max-wait 0.2 -q");
     CHECK(r.exit_code == 3);
+    r = fwtest::run(BATTSIM_BINARY, "log --port " + fwtest::q(dir + "/none") + " --out " + fwtest::q(dir + "/c.csv") +
+                                        " --max-wait 0.2");
+    CHECK(r.err.find("none has been gone for 0.2 s; stopping") != std::string::npos);  // not "0.200000 s"
     r = fwtest::run(BATTSIM_BINARY, "log --port " + fwtest::q(link) + " --out " + fwtest::q(out) + " --max-wait 0.2");
     CHECK(r.exit_code == 5);  // exists, no --append
     CHECK(r.err.find("already exists") != std::string::npos);

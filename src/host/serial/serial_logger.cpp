@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <deque>
 #include <thread>
@@ -151,7 +152,9 @@ public:
                     }
                     if (o_.max_wait_s > 0 && seconds_since(absent_since) >= o_.max_wait_s) {
                         stats_.device_gone = true;
-                        say(o_.port + " has been gone for " + std::to_string(o_.max_wait_s) + " s; stopping");
+                        char waited[32];  // as given: "0.5 s", not std::to_string's "0.500000 s"
+                        std::snprintf(waited, sizeof waited, "%g", o_.max_wait_s);
+                        say(o_.port + " has been gone for " + waited + " s; stopping");
                         break;
                     }
                     sleep_while_running(stop, o_.reopen_interval_s);
