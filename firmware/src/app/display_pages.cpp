@@ -44,8 +44,13 @@ void draw_monitor_page(Display& d, const MonitorPage& page) {
     d.text(0, 1, r.c_str());
 
     r.clear();
-    r.appendf("Cap %4.2fAh R%3.0fmOhm", static_cast<double>(s.capacity_ah),
-              static_cast<double>(s.resistance_ohm * 1000.0f));
+    r.appendf("Cap %4.2fAh ", static_cast<double>(s.capacity_ah));
+    // No estimate yet reads "--", as the series leaves it empty: "R  0mOhm" looked measured.
+    if (s.resistance_ohm > 0.0f) {
+        r.appendf("R%3.0fmOhm", static_cast<double>(s.resistance_ohm * 1000.0f));
+    } else {
+        r.append("R --mOhm");
+    }
     d.text(0, 2, r.c_str());
 
     r.clear();
