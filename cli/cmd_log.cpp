@@ -58,6 +58,9 @@ std::function<int()> setup(CLI::App& sub) {
         } catch (const host::serial::HeaderMismatch& e) {
             std::cerr << "battsim log: " << e.what() << "\n";
             return kExitInputError;
+        } catch (const host::serial::DeviceRestarted& e) {
+            std::cerr << "battsim log: " << e.what() << "\n";
+            return kExitInputError;
         } catch (const std::runtime_error& e) {
             std::cerr << "battsim log: " << e.what() << "\n";
             return kExitOutputError;

@@ -35,6 +35,7 @@ const char* kUsage =
     "  --mavlink FILE            write the telemetry UART's MAVLink bytes here (monitor)\n"
     "  --buzzer FILE             write the buzzer's switchings here as time_s,on (monitor)\n"
     "  --no-hello                do not greet the device: it then only prompts \"BMS\"\n"
+    "  --no-taps                 the INA3221 does not answer: readings without cell taps\n"
     "  --no-sd-output, --no-uart-output, --no-oled-output   switch an output off\n"
     "  --forget-averages         neither read nor write the averages file on the card\n";
 
@@ -47,6 +48,7 @@ struct Args {
     std::string mavlink;
     std::string buzzer;
     bool hello = true;
+    bool taps = true;
     bool sd_out = true;
     bool uart_out = true;
     bool oled_out = true;
@@ -78,6 +80,8 @@ bool parse_args(int argc, char** argv, Args& a) {
             if (!value(a.buzzer)) return false;
         } else if (s == "--no-hello") {
             a.hello = false;
+        } else if (s == "--no-taps") {
+            a.taps = false;
         } else if (s == "--no-sd-output") {
             a.sd_out = false;
         } else if (s == "--no-uart-output") {
@@ -130,7 +134,7 @@ int main(int argc, char** argv) {
         return kExitInputError;
     }
     host::MockClock clock;
-    host::LogSensors sensors(source, clock);
+    host::LogSensors sensors(source, clock, a.taps);
     host::DirectoryStorage storage(a.sd.empty() ? std::string(".") : a.sd, !a.sd.empty());
     host::TextDisplay display(clock, a.oled);
     host::ScriptedSerial serial;

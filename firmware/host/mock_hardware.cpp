@@ -154,6 +154,7 @@ bool LogSensors::read_pack(PackReading& out) {
 }
 
 bool LogSensors::read_taps(TapReading& out) {
+    if (!taps_present_) return false;
     out = row_.taps;
     return true;
 }

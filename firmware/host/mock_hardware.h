@@ -65,12 +65,15 @@ private:
 // so the firmware sees the log's own timing (gaps become missed readings).
 class LogSensors : public Sensors {
 public:
-    LogSensors(RawLogSource& source, MockClock& clock) : source_(source), clock_(clock) {}
+    // `taps_present` false: a board whose INA3221 does not answer (none fitted, a loose
+    // module, a wrong address), as the real driver reports it.
+    LogSensors(RawLogSource& source, MockClock& clock, bool taps_present = true)
+        : source_(source), clock_(clock), taps_present_(taps_present) {}
     bool begin() override { return true; }
     bool conversion_ready() override;
     bool read_pack(PackReading& out) override;
     bool read_taps(TapReading& out) override;
-    bool has_taps() const override { return true; }
+    bool has_taps() const override { return taps_present_; }
     // True once every row has been read. Looks one row ahead, so the app is not left
     // waiting out a conversion timeout after the last row.
     bool finished() {
@@ -81,6 +84,7 @@ public:
 private:
     RawLogSource& source_;
     MockClock& clock_;
+    bool taps_present_;
     LogRow row_;
     bool pending_ = false;
     bool ended_ = false;

@@ -1,5 +1,6 @@
 #include "host/export_header.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -154,6 +155,17 @@ std::vector<std::string> export_firmware_config(const std::string& json_path, co
         notes.push_back("cells_in_series " + std::to_string(n) +
                         ": the reference hardware's three cell taps read 2 to 4 cells, so the firmware measures no cell "
                         "with this config (no weak-cell check; the pack's estimates are unaffected)");
+    // The INA226 reads the pack on its bus input, specified for 0 to 36 V (TI SBOS547; 40 V
+    // absolute maximum): a pack above that is out of the reference hardware's reach.
+    constexpr float kIna226BusMaxV = 36.0f;
+    const float top_v = std::max(config.monitor.max_voltage_v, config.monitor.battery.full_voltage_v);
+    if (top_v > kIna226BusMaxV) {
+        char v[32];
+        std::snprintf(v, sizeof v, "%.2f", static_cast<double>(top_v));
+        notes.push_back(std::string("the pack reaches ") + v +
+                        " V (max_voltage_v, full_voltage_v): above the INA226's 36 V bus input range, so the reference "
+                        "hardware cannot measure this pack (and above 40 V, the chip's absolute maximum, it is damaged)");
+    }
     return notes;
 }
 

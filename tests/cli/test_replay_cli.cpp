@@ -259,6 +259,14 @@ TEST_CASE("replay notes what the config makes unreliable: no OCV table for the j
     CHECK(e6.exit_code == 0);
     CHECK_THAT(e6.err, Catch::Contains("battsim export-config: note: cells_in_series 6: the reference hardware's three "
                                        "cell taps read 2 to 4 cells, so the firmware measures no cell with this config"));
+    CHECK(e6.err.find("36 V") == std::string::npos);  // 25.2 V: within the INA226's bus range
+    // A 10S pack (42 V full) is beyond the INA226's 36 V bus input: said, the header still written.
+    REQUIRE(run("make-config --cells 10 --capacity-mah 5000 -o " + q(dir + "/10s.json")).exit_code == 0);
+    auto e10 = run("export-config --firmware " + q(dir + "/10s.json") + " -o " + q(dir + "/h10.h"));
+    CHECK(e10.exit_code == 0);
+    CHECK_THAT(e10.err, Catch::Contains("battsim export-config: note: the pack reaches 42.00 V (max_voltage_v, "
+                                        "full_voltage_v): above the INA226's 36 V bus input range"));
+    CHECK(std::filesystem::exists(dir + "/h10.h"));
 }
 
 TEST_CASE("replay notes a current of the other sign and a time column in milliseconds", "[cli]") {

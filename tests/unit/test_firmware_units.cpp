@@ -312,3 +312,23 @@ TEST_CASE("The OLED's cell row keeps all four cells when a tap reads nonsense", 
     for (int row = 0; row < 4; ++row) start = f.find('\n', start) + 1;
     CHECK(f.substr(start, f.find('\n', start) - start) == "4.20 ---- ---- 4.19  ");  // padded to 21
 }
+
+TEST_CASE("The OLED shows no resistance until there is an estimate, as the series does", "[firmware]") {
+    fw::host::MockClock clock;
+    fw::host::TextDisplay display(clock);
+    core::Sample sample;
+    core::MonitorStatus status;
+    status.capacity_ah = 1.55f;
+    fw::MonitorPage page;
+    page.sample = &sample;
+    page.status = &status;
+    const auto row3 = [&]() {
+        fw::draw_monitor_page(display, page);
+        const std::string f = display.frame();
+        const size_t start = f.find('\n', f.find('\n') + 1) + 1;
+        return f.substr(start, f.find('\n', start) - start);
+    };
+    CHECK(row3() == "Cap 1.55Ah R --mOhm  ");  // had read "R  0mOhm", like a measurement
+    status.resistance_ohm = 0.0214f;
+    CHECK(row3() == "Cap 1.55Ah R 21mOhm  ");
+}

@@ -256,6 +256,46 @@ TEST_CASE("serial logger: a damaged header is asked for again, never taken from 
     CHECK(stats.corrupt_lines == 1);
 }
 
+TEST_CASE("serial logger: a device whose time restarts stops the run, keeping a file battsim reads", "[serial]") {
+    // A NodeMCU powered by the USB link resets when the link drops: it comes back with its
+    // clock and mAh count from zero. Written on, the file had a time that goes back there,
+    // which every battsim command refuses ("time goes backwards").
+    const std::string dir = fwtest::temp_dir("serial-restart");
+    const std::string link = dir + "/ttyBMS";
+    const std::string out = dir + "/log.csv";
+    FakeDevice dev(link);
+    dev.plug();
+    std::atomic<bool> stop{false};
+    std::string error;
+    SerialLogStats stats;
+    std::thread logger([&] {
+        try {
+            stats = run_serial_logger(options(link, out), stop);
+        } catch (const DeviceRestarted& e) {
+            error = e.what();
+        }
+    });
+    Joiner joiner{stop, logger};
+    dev.handshake(kHeader);
+    std::string expected = kHeader + "\n";
+    for (int n = 0; n < 10; ++n) {
+        dev.line(data_line(n));
+        expected += data_line(n) + "\n";
+    }
+    REQUIRE(wait_for_lines(out, 11));
+    dev.unplug();
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    dev.plug();
+    dev.handshake(kHeader);
+    dev.line(data_line(0));  // its clock from zero again
+    dev.line(data_line(1));
+    logger.join();
+    CHECK(error == out + ": the device restarted (its time_us went back from 1232000 to 629000 after 10 lines "
+                         "written): its clock and counts start again from zero; the file holds what came before, "
+                         "record the rest to a new file");
+    CHECK(fwtest::read_file(out) == expected);
+}
+
 TEST_CASE("serial logger: --append repairs a cut last line, refuses another device's header", "[serial]") {
     const std::string dir = fwtest::temp_dir("serial-append");
     const std::string link = dir + "/ttyBMS";
@@ -357,6 +397,9 @@ TEST_CASE("battsim log records a device end to end and stops after --max-wait", 
     r = fwtest::run(BATTSIM_BINARY, "log --port " + fwtest::q(dir + "/none") + " --out " + fwtest::q(dir + "/b.csv") +
                                         " --max-wait 0.2 -q");
     CHECK(r.exit_code == 3);
+    r = fwtest::run(BATTSIM_BINARY, "log --port " + fwtest::q(dir + "/none") + " --out " + fwtest::q(dir + "/c.csv") +
+                                        " --max-wait 0.2");
+    CHECK(r.err.find("none has been gone for 0.2 s; stopping") != std::string::npos);  // not "0.200000 s"
     r = fwtest::run(BATTSIM_BINARY, "log --port " + fwtest::q(link) + " --out " + fwtest::q(out) + " --max-wait 0.2");
     CHECK(r.exit_code == 5);  // exists, no --append
     CHECK(r.err.find("already exists") != std::string::npos);

@@ -44,8 +44,13 @@ void draw_monitor_page(Display& d, const MonitorPage& page) {
     d.text(0, 1, r.c_str());
 
     r.clear();
-    r.appendf("Cap %4.2fAh R%3.0fmOhm", static_cast<double>(s.capacity_ah),
-              static_cast<double>(s.resistance_ohm * 1000.0f));
+    r.appendf("Cap %4.2fAh ", static_cast<double>(s.capacity_ah));
+    // No estimate yet reads "--", as the series leaves it empty: "R  0mOhm" looked measured.
+    if (s.resistance_ohm > 0.0f) {
+        r.appendf("R%3.0fmOhm", static_cast<double>(s.resistance_ohm * 1000.0f));
+    } else {
+        r.append("R --mOhm");
+    }
     d.text(0, 2, r.c_str());
 
     r.clear();
@@ -113,6 +118,9 @@ void draw_logger_page(Display& d, const LoggerPage& page) {
     }
     d.text(0, 4, r.c_str());
     r.clear();
+    // Why lines are missing from the record: readings without cells are not sent.
+    if (page.taps_missing) r.append("no taps");
+    if (page.counters.tap_errors > 0) r.appendf("tap%u", static_cast<unsigned>(page.counters.tap_errors));
     append_counters_row(r, page.counters);
     d.text(0, 5, r.c_str());
     d.show();

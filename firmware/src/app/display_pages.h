@@ -23,7 +23,7 @@ struct MonitorPage {
 // Cap 1.48Ah R 21mOhm
 // Left  3:12 of  5:40
 // 4.11 4.10 4.12 4.09
-// ok  miss 3
+// ok miss3
 void draw_monitor_page(Display& d, const MonitorPage& page);
 
 struct LoggerPage {
@@ -33,6 +33,7 @@ struct LoggerPage {
     uint32_t lines_sent = 0;
     bool connected = false;
     ReadingCounters counters;
+    bool taps_missing = false;  // the config wants cells but no INA3221 answers
 };
 void draw_logger_page(Display& d, const LoggerPage& page);
 

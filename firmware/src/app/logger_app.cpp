@@ -13,16 +13,23 @@ void LoggerApp::begin(const LoggerAppConfig& config) {
     counter_.reset(0.0f, 0.0f);
     counting_ = false;
     lines_sent_ = 0;
+    header_cells_ = 0;
     displayed_ = false;
     cells_ = config.cells_in_series >= 2 && config.cells_in_series <= kTapChannels + 1 ? config.cells_in_series : 0;
 }
 
 void LoggerApp::send_header() {
     line_.clear();
+    // No tap chip: every reading would lack its cells and none would be sent, so the pack
+    // is recorded alone rather than not at all, until the next hello.
+    header_cells_ = sensors_.has_taps() ? cells_ : 0;
     line_.append("time_us,voltage_v,current_a,shunt_mv");
-    for (int c = 1; c <= cells_; ++c) line_.appendf(",cell%d_v", c);
+    for (int c = 1; c <= header_cells_; ++c) line_.appendf(",cell%d_v", c);
     line_.append(",consumed_mah,missed_readings");
     link_.send_data(line_.c_str(), line_.size());
+    if (header_cells_ != cells_) {
+        link_.send_note("no INA3221: no cell columns until the next hello");
+    }
 }
 
 void LoggerApp::handle_serial() {
@@ -44,7 +51,7 @@ void LoggerApp::send_line(float current_a, const int32_t* cells_10uv) {
     line_.append_fixed(reading_.pack.bus_10uv, kBusDecimals);
     line_.appendf(",%.9g,", static_cast<double>(current_a));
     line_.append_fixed(reading_.pack.shunt_100nv, kShuntDecimals);
-    for (int c = 0; c < cells_; ++c) {
+    for (int c = 0; c < header_cells_; ++c) {
         line_.append_char(',');
         line_.append_fixed(cells_10uv[c], kBusDecimals);
     }
@@ -83,10 +90,12 @@ LoggerApp::Step LoggerApp::step() {
         last_time_us_ = reading_.time_us;
 
         int32_t cells_10uv[kTapChannels + 1] = {};
-        const int n = reading_.taps_ok ? cell_voltages_10uv(reading_.pack, reading_.taps, cells_, cells_10uv) : 0;
+        const int n = header_cells_ > 0 && reading_.taps_ok
+                          ? cell_voltages_10uv(reading_.pack, reading_.taps, header_cells_, cells_10uv)
+                          : 0;
         // A reading whose taps failed is not sent (the host's CSV readers take no empty
         // fields); it still counts charge, and the display shows the tap errors.
-        if (n == cells_) send_line(current_a, cells_10uv);
+        if (n == header_cells_) send_line(current_a, cells_10uv);
     }
 
     const uint32_t now_ms = clock_.millis();
@@ -100,6 +109,7 @@ LoggerApp::Step LoggerApp::step() {
         page.lines_sent = lines_sent_;
         page.connected = link_.connected();
         page.counters = readings_.counters();
+        page.taps_missing = cells_ > 0 && !sensors_.has_taps();
         draw_logger_page(display_, page);
     }
     return Step::Reading;

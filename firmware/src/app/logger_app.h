@@ -5,6 +5,8 @@
 //   time_us,voltage_v,current_a,shunt_mv,cell1_v..cellN_v,consumed_mah,missed_readings
 // voltage, shunt and cells are exact decimals of the integer readings; current_a has 9
 // significant digits (a float read back exactly). The mAh count starts at the handshake.
+// Without a tap chip at the hello the header and lines carry no cell columns (and a note says
+// so): the pack's curve is what a discharge test needs first.
 #pragma once
 #include <stdint.h>
 
@@ -61,7 +63,8 @@ private:
     uint32_t last_display_ms_ = 0;
     bool displayed_ = false;
     uint32_t last_sensor_retry_ms_ = 0;
-    int cells_ = 0;
+    int cells_ = 0;         // cells the config asks for (0: none measurable)
+    int header_cells_ = 0;  // cells in the header last sent: none when no tap chip answered
     Reading reading_;
     telemetry::FixedText<256> line_;
 };

@@ -288,11 +288,20 @@ void MonitorApp::send_status_note() {
     t.append(" flights=");
     t.append_uint(state_.flights);
     t.append(" out=");
-    t.append(state_.outputs.uart ? "uart," : "");
-    t.append(state_.outputs.sd ? "sd," : "");
-    t.append(state_.outputs.display ? "oled" : "");
-    if (state_.outputs.mavlink && telemetry_port_ != nullptr) t.append(state_.outputs.display ? ",mavlink" : "mavlink");
-    if (state_.outputs.buzzer && buzzer_ != nullptr) t.append(",buzzer");
+    // The outputs that are on, comma-separated with no empty items ("none" for none), so a
+    // host can split the list.
+    const char* on[5] = {};
+    size_t n = 0;
+    if (state_.outputs.uart) on[n++] = "uart";
+    if (state_.outputs.sd) on[n++] = "sd";
+    if (state_.outputs.display) on[n++] = "oled";
+    if (state_.outputs.mavlink && telemetry_port_ != nullptr) on[n++] = "mavlink";
+    if (state_.outputs.buzzer && buzzer_ != nullptr) on[n++] = "buzzer";
+    for (size_t i = 0; i < n; ++i) {
+        if (i > 0) t.append_char(',');
+        t.append(on[i]);
+    }
+    if (n == 0) t.append("none");
     link_.send_note(t.c_str());
 }
 

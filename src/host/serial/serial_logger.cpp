@@ -7,6 +7,8 @@
 #include <cctype>
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <deque>
 #include <thread>
@@ -151,7 +153,9 @@ public:
                     }
                     if (o_.max_wait_s > 0 && seconds_since(absent_since) >= o_.max_wait_s) {
                         stats_.device_gone = true;
-                        say(o_.port + " has been gone for " + std::to_string(o_.max_wait_s) + " s; stopping");
+                        char waited[32];  // as given: "0.5 s", not std::to_string's "0.500000 s"
+                        std::snprintf(waited, sizeof waited, "%g", o_.max_wait_s);
+                        say(o_.port + " has been gone for " + waited + " s; stopping");
                         break;
                     }
                     sleep_while_running(stop, o_.reopen_interval_s);
@@ -289,8 +293,44 @@ private:
             ++stats_.repeated_headers;
             return;
         }
-        file_.append_line(d.text);
+        append_data(d.text);
+    }
+
+    // The first field as a number, if it is one (the time: time_us, time_s).
+    static bool leading_number(const std::string& line, double& out) {
+        const size_t comma = line.find(',');
+        const std::string field = line.substr(0, comma);
+        if (field.empty()) return false;
+        char* end = nullptr;
+        out = std::strtod(field.c_str(), &end);
+        return end == field.c_str() + field.size();
+    }
+
+    void append_data(const std::string& line) {
+        double t = 0.0;
+        if (leading_number(line, t)) {
+            // A reset restarts the device's clock and counts: the file would hold a time that
+            // goes back there, which every battsim command refuses. Everything before is kept.
+            if (have_time_ && t < last_time_) {
+                file_.sync();
+                const std::string col = file_.header().substr(0, file_.header().find(','));
+                throw DeviceRestarted(o_.out_path + ": the device restarted (its " + col + " went back from " +
+                                      line_time(last_time_) + " to " + line_time(t) + " after " +
+                                      std::to_string(stats_.lines_written) + " lines written" +
+                                      "): its clock and counts start again from zero; the file holds what came "
+                                      "before, record the rest to a new file");
+            }
+            have_time_ = true;
+            last_time_ = t;
+        }
+        file_.append_line(line);
         ++stats_.lines_written;
+    }
+
+    static std::string line_time(double t) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%.17g", t);
+        return b;
     }
 
     void confirm_header(const std::string& h) {
@@ -306,8 +346,7 @@ private:
         confirmed_ = true;
         for (const std::string& l : held_) {
             if (l == file_.header()) continue;
-            file_.append_line(l);
-            ++stats_.lines_written;
+            append_data(l);
         }
         held_.clear();
     }
@@ -326,6 +365,8 @@ private:
     std::string open_error_;  // why the port did not open last time
     std::deque<std::string> held_;
     bool confirmed_ = false;
+    bool have_time_ = false;  // a data line with a numeric first field was written this run
+    double last_time_ = 0.0;
     bool expect_header_ = false;
     Clock::time_point last_hello_ = Clock::now() - std::chrono::hours(1);
     Clock::time_point connected_at_ = Clock::now();

@@ -27,6 +27,13 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+// The device's first column (its time) went back within one recording: it restarted, its
+// clock and its counts from zero, and no battsim command reads a file whose time goes back.
+class DeviceRestarted : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
 struct SerialLogOptions {
     std::string port;
     std::string out_path;
@@ -57,7 +64,7 @@ using MessageSink = std::function<void(const std::string&)>;
 
 // Runs until `stop` becomes true or the device has been gone for max_wait_s. Throws
 // std::runtime_error for output problems (file exists without append, write or fsync
-// failure), HeaderMismatch, std::invalid_argument for a bad baud rate, NotASerialDevice for a
+// failure), HeaderMismatch, DeviceRestarted (with every line before it written), std::invalid_argument for a bad baud rate, NotASerialDevice for a
 // port that is there but no terminal (before the output is made, unless it is a character
 // device: that shows only on opening it).
 SerialLogStats run_serial_logger(const SerialLogOptions& options, const std::atomic<bool>& stop,
