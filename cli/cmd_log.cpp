@@ -2,6 +2,7 @@
 // serial port, surviving disconnects (the library does the work: host/serial/).
 #include <csignal>
 #include <iostream>
+#include <string>
 
 #include "command.h"
 #include "common_options.h"
@@ -58,18 +59,21 @@ std::function<int()> setup(CLI::App& sub) {
         } catch (const host::serial::HeaderMismatch& e) {
             std::cerr << "battsim log: " << e.what() << "\n";
             return kExitInputError;
-        } catch (const host::serial::DeviceRestarted& e) {
-            std::cerr << "battsim log: " << e.what() << "\n";
-            return kExitInputError;
         } catch (const std::runtime_error& e) {
             std::cerr << "battsim log: " << e.what() << "\n";
             return kExitOutputError;
         }
-        std::cerr << "battsim log: " << stats.lines_written << " lines written to " << a->options.out_path << " ("
+        std::string to = a->options.out_path;
+        // After a device restart the lines are in parts, each a log of its own.
+        for (size_t k = 1; k < stats.files.size(); ++k)
+            to += (k + 1 == stats.files.size() ? " and " : ", ") + stats.files[k];
+        std::cerr << "battsim log: " << stats.lines_written << " lines written to " << to << " ("
                   << stats.connections << " connections, " << stats.cut_lines << " cut lines dropped, "
                   << stats.corrupt_lines << " corrupt lines dropped";
         if (stats.overlong_lines > 0) std::cerr << ", " << stats.overlong_lines << " over-long lines dropped";
         if (stats.held_dropped > 0) std::cerr << ", " << stats.held_dropped << " lines lost waiting for a header";
+        if (stats.restarts > 0)
+            std::cerr << ", " << stats.restarts << (stats.restarts == 1 ? " device restart" : " device restarts");
         std::cerr << ")\n";
         if (stats.device_gone && stats.connections == 0) {
             std::cerr << "battsim log: " << a->options.port << " never appeared (expected a serial device, tty)\n";

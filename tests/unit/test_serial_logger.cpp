@@ -256,31 +256,29 @@ TEST_CASE("serial logger: a damaged header is asked for again, never taken from 
     CHECK(stats.corrupt_lines == 1);
 }
 
-TEST_CASE("serial logger: a device whose time restarts stops the run, keeping a file battsim reads", "[serial]") {
+TEST_CASE("serial logger: a device whose time restarts continues in the next part, each a file battsim reads",
+          "[serial]") {
     // A NodeMCU powered by the USB link resets when the link drops: it comes back with its
     // clock and mAh count from zero. Written on, the file had a time that goes back there,
     // which every battsim command refuses ("time goes backwards").
     const std::string dir = fwtest::temp_dir("serial-restart");
     const std::string link = dir + "/ttyBMS";
     const std::string out = dir + "/log.csv";
+    fwtest::write_file(dir + "/log-2.csv", "an earlier run's part\n");  // never written over
     FakeDevice dev(link);
     dev.plug();
     std::atomic<bool> stop{false};
-    std::string error;
+    std::vector<std::string> messages;
     SerialLogStats stats;
     std::thread logger([&] {
-        try {
-            stats = run_serial_logger(options(link, out), stop);
-        } catch (const DeviceRestarted& e) {
-            error = e.what();
-        }
+        stats = run_serial_logger(options(link, out), stop, [&](const std::string& m) { messages.push_back(m); });
     });
     Joiner joiner{stop, logger};
     dev.handshake(kHeader);
-    std::string expected = kHeader + "\n";
+    std::string first = kHeader + "\n";
     for (int n = 0; n < 10; ++n) {
         dev.line(data_line(n));
-        expected += data_line(n) + "\n";
+        first += data_line(n) + "\n";
     }
     REQUIRE(wait_for_lines(out, 11));
     dev.unplug();
@@ -289,11 +287,39 @@ TEST_CASE("serial logger: a device whose time restarts stops the run, keeping a 
     dev.handshake(kHeader);
     dev.line(data_line(0));  // its clock from zero again
     dev.line(data_line(1));
+    REQUIRE(wait_for_lines(dir + "/log-3.csv", 3));
+    stop = true;
     logger.join();
-    CHECK(error == out + ": the device restarted (its time_us went back from 1232000 to 629000 after 10 lines "
-                         "written): its clock and counts start again from zero; the file holds what came before, "
-                         "record the rest to a new file");
-    CHECK(fwtest::read_file(out) == expected);
+    CHECK(fwtest::read_file(out) == first);
+    CHECK(fwtest::read_file(dir + "/log-2.csv") == "an earlier run's part\n");
+    CHECK(fwtest::read_file(dir + "/log-3.csv") == kHeader + "\n" + data_line(0) + "\n" + data_line(1) + "\n");
+    CHECK(stats.lines_written == 12);
+    CHECK(stats.restarts == 1);
+    CHECK(stats.files == std::vector<std::string>{out, dir + "/log-3.csv"});
+    CHECK(std::find(messages.begin(), messages.end(),
+                    "the device restarted (its time_us went back from 1232000 to 629000): its clock and counts start "
+                    "again from zero, so the rest goes to " + dir + "/log-3.csv (" + out + " holds what came before)") !=
+          messages.end());
+
+    // --append to a file whose last time is later than the device's: the device restarted
+    // between the runs, and its lines go to the next free part too.
+    stop = false;
+    std::thread again([&] {
+        SerialLogOptions o = options(link, out);
+        o.append = true;
+        stats = run_serial_logger(o, stop);
+    });
+    Joiner joiner2{stop, again};
+    dev.unplug();
+    dev.plug();
+    dev.handshake(kHeader);
+    dev.line(data_line(2));
+    REQUIRE(wait_for_lines(dir + "/log-4.csv", 2));
+    stop = true;
+    again.join();
+    CHECK(fwtest::read_file(out) == first);
+    CHECK(fwtest::read_file(dir + "/log-4.csv") == kHeader + "\n" + data_line(2) + "\n");
+    CHECK(stats.files == std::vector<std::string>{out, dir + "/log-4.csv"});
 }
 
 TEST_CASE("serial logger: --append repairs a cut last line, refuses another device's header", "[serial]") {
@@ -384,6 +410,12 @@ TEST_CASE("battsim log records a device end to end and stops after --max-wait", 
         expected += data_line(i) + "\n";
     }
     REQUIRE(wait_for_lines(out, 26));
+    // Reset: back within --max-wait, its clock from zero; the rest goes to the next part.
+    dev.unplug();
+    dev.plug();
+    dev.handshake(kHeader);
+    dev.line(data_line(0));
+    REQUIRE(wait_for_lines(dir + "/log-2.csv", 2));
     dev.send("$half,a,li");
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     dev.unplug();
@@ -391,7 +423,9 @@ TEST_CASE("battsim log records a device end to end and stops after --max-wait", 
     INFO(r.err);
     CHECK(r.exit_code == 0);
     CHECK(fwtest::read_file(out) == expected);
-    CHECK(r.err.find("25 lines written") != std::string::npos);
+    CHECK(fwtest::read_file(dir + "/log-2.csv") == kHeader + "\n" + data_line(0) + "\n");
+    CHECK(r.err.find("26 lines written to " + out + " and " + dir + "/log-2.csv (") != std::string::npos);
+    CHECK(r.err.find(", 1 device restart)") != std::string::npos);
 
     // A port that never appears is an input error.
     r = fwtest::run(BATTSIM_BINARY, "log --port " + fwtest::q(dir + "/none") + " --out " + fwtest::q(dir + "/b.csv") +

@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <deque>
+#include <memory>
 #include <thread>
 #include <vector>
 
@@ -28,6 +29,16 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 std::string errno_text() { return std::strerror(errno); }
+
+// The n-th part of a recording: "flight.csv" -> "flight-2.csv" (the extension of the file
+// name kept; none: "-2" appended).
+std::string part_path(const std::string& path, int n) {
+    const std::string::size_type slash = path.rfind('/');
+    const std::string::size_type dot = path.rfind('.');
+    const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash + 1);
+    const std::string stem = has_ext ? path.substr(0, dot) : path;
+    return stem + "-" + std::to_string(n) + (has_ext ? path.substr(dot) : "");
+}
 
 // The output: grows only by whole lines, one write() each, on an O_APPEND descriptor.
 class LineFile {
@@ -56,6 +67,9 @@ public:
     LineFile& operator=(const LineFile&) = delete;
 
     const std::string& header() const { return header_; }
+    const std::string& path() const { return path_; }
+    // The last line's text as found by --append ("" when the file had no data line).
+    const std::string& last_existing_line() const { return last_line_; }
 
     void write_header(const std::string& h) {
         append_line(h);
@@ -104,6 +118,16 @@ private:
         if (!content.empty() && content.back() != '\n') {
             truncate_to_last_newline();
             repaired = true;
+            content.erase(content.rfind('\n') == std::string::npos ? 0 : content.rfind('\n') + 1);
+        }
+        // The last whole line after the header: a device that restarted since must not
+        // continue this file with a time that goes back.
+        if (first_nl != std::string::npos && content.size() > first_nl + 1) {
+            const std::string::size_type end = content.size() - 1;  // its newline
+            const std::string::size_type begin = content.rfind('\n', end - 1);
+            if (begin != std::string::npos && begin >= first_nl && end > begin + 1)
+                last_line_ = content.substr(begin + 1, end - begin - 1);
+            if (!last_line_.empty() && last_line_.back() == '\r') last_line_.pop_back();
         }
     }
     void truncate_to_last_newline() {
@@ -124,6 +148,7 @@ private:
     int fd_ = -1;
     bool created_ = false;
     std::string header_;
+    std::string last_line_;
     bool dirty_ = false;
     Clock::time_point last_sync_ = Clock::now();
 };
@@ -131,8 +156,14 @@ private:
 class Session {
 public:
     Session(const SerialLogOptions& o, const MessageSink& message, SerialLogStats& stats)
-        : o_(o), message_(message), stats_(stats), file_(o.out_path, o.append, stats.repaired_tail) {
+        : o_(o), message_(message), stats_(stats), file_(new LineFile(o.out_path, o.append, stats.repaired_tail)) {
         if (stats_.repaired_tail) say(o_.out_path + ": removed an unfinished last line left by an earlier run");
+        stats_.files.push_back(o_.out_path);
+        double t = 0.0;
+        if (leading_number(file_->last_existing_line(), t)) {
+            have_time_ = true;
+            last_time_ = t;
+        }
     }
 
     void run(const std::atomic<bool>& stop) {
@@ -186,13 +217,13 @@ public:
                 }
                 greet();
             }
-            file_.sync_if_due(o_.fsync_interval_s);
+            file_->sync_if_due(o_.fsync_interval_s);
         }
         // A clean stop: whatever is held without a confirmed header cannot be written, nor a
         // line still arriving.
         stats_.held_dropped += held_.size();
         if (splitter_.discard_partial() > 0) ++stats_.cut_lines;
-        file_.sync();
+        file_->sync();
     }
 
 private:
@@ -235,7 +266,7 @@ private:
         held_.clear();
         confirmed_ = false;
         expect_header_ = false;
-        file_.sync();
+        file_->sync();
         say(o_.port + " disconnected" + (cut > 0 ? " mid-line (" + std::to_string(cut) + " bytes dropped)" : "") +
             "; waiting for it to come back");
     }
@@ -289,7 +320,7 @@ private:
             held_.push_back(d.text);
             return;
         }
-        if (d.text == file_.header()) {
+        if (d.text == file_->header()) {
             ++stats_.repeated_headers;
             return;
         }
@@ -309,22 +340,39 @@ private:
     void append_data(const std::string& line) {
         double t = 0.0;
         if (leading_number(line, t)) {
-            // A reset restarts the device's clock and counts: the file would hold a time that
-            // goes back there, which every battsim command refuses. Everything before is kept.
-            if (have_time_ && t < last_time_) {
-                file_.sync();
-                const std::string col = file_.header().substr(0, file_.header().find(','));
-                throw DeviceRestarted(o_.out_path + ": the device restarted (its " + col + " went back from " +
-                                      line_time(last_time_) + " to " + line_time(t) + " after " +
-                                      std::to_string(stats_.lines_written) + " lines written" +
-                                      "): its clock and counts start again from zero; the file holds what came "
-                                      "before, record the rest to a new file");
-            }
+            // A reset restarts the device's clock and counts: written on, the file would hold a
+            // time that goes back, which every battsim command refuses; so the rest goes to
+            // the next part (log-2.csv), each part a log battsim reads.
+            if (have_time_ && t < last_time_) next_part(t);
             have_time_ = true;
             last_time_ = t;
         }
-        file_.append_line(line);
+        file_->append_line(line);
         ++stats_.lines_written;
+    }
+
+    // Closes the current file and continues in the first free "<stem>-N<ext>", N from 2,
+    // with the same header.
+    void next_part(double t) {
+        file_->sync();
+        const std::string header = file_->header();
+        const std::string col = header.substr(0, header.find(','));
+        const std::string from = file_->path();
+        std::string path;
+        for (int n = 2;; ++n) {
+            path = part_path(o_.out_path, n);
+            struct stat st;
+            if (::stat(path.c_str(), &st) != 0 || st.st_size == 0) break;
+        }
+        bool repaired = false;
+        file_.reset();
+        file_.reset(new LineFile(path, false, repaired));
+        file_->write_header(header);
+        stats_.files.push_back(path);
+        ++stats_.restarts;
+        say("the device restarted (its " + col + " went back from " + line_time(last_time_) + " to " + line_time(t) +
+            "): its clock and counts start again from zero, so the rest goes to " + path + " (" + from +
+            " holds what came before)");
     }
 
     static std::string line_time(double t) {
@@ -334,18 +382,18 @@ private:
     }
 
     void confirm_header(const std::string& h) {
-        if (file_.header().empty()) {
-            file_.write_header(h);
+        if (file_->header().empty()) {
+            file_->write_header(h);
             stats_.header_written = 1;
-        } else if (h == file_.header()) {
+        } else if (h == file_->header()) {
             ++stats_.repeated_headers;
         } else {
             throw HeaderMismatch(o_.out_path + ": the device's header \"" + h + "\" differs from the file's \"" +
-                                 file_.header() + "\"; record to a new file");
+                                 file_->header() + "\"; record to a new file");
         }
         confirmed_ = true;
         for (const std::string& l : held_) {
-            if (l == file_.header()) continue;
+            if (l == file_->header()) continue;
             append_data(l);
         }
         held_.clear();
@@ -359,7 +407,7 @@ private:
     const SerialLogOptions& o_;
     const MessageSink& message_;
     SerialLogStats& stats_;
-    LineFile file_;
+    std::unique_ptr<LineFile> file_;  // the file being written: the next part after a device restart
     SerialPort port_;
     LineSplitter splitter_;
     std::string open_error_;  // why the port did not open last time

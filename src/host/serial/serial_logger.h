@@ -7,13 +7,16 @@
 // in part; after the device disappears the port is reopened by path until it comes back
 // (a USB re-plug, a udev symlink), the device is greeted again and its header, sent
 // again, must match the file's. Lines that arrive before the device has confirmed its
-// header on a connection are held and written once it has.
+// header on a connection are held and written once it has. A device that restarted (its
+// time went back) continues in the next part, "FILE-2.csv", with the same header: every
+// file written is a log battsim reads.
 #pragma once
 #include <atomic>
 #include <cstddef>
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "host/serial/serial_port.h"
 
@@ -23,13 +26,6 @@ namespace serial {
 
 // The device's header differs from the file's: a different program or cell count.
 class HeaderMismatch : public std::runtime_error {
-public:
-    using std::runtime_error::runtime_error;
-};
-
-// The device's first column (its time) went back within one recording: it restarted, its
-// clock and its counts from zero, and no battsim command reads a file whose time goes back.
-class DeviceRestarted : public std::runtime_error {
 public:
     using std::runtime_error::runtime_error;
 };
@@ -58,13 +54,17 @@ struct SerialLogStats {
     size_t held_dropped = 0;       // held lines lost because no header came before the link dropped
     bool repaired_tail = false;    // --append found and removed a cut last line
     bool device_gone = false;      // stopped because of max_wait_s
+    // The files written, in order: --out, then a part for each time the device restarted
+    // (its first column, the time, went back: "flight-2.csv", "flight-3.csv", ...).
+    std::vector<std::string> files;
+    size_t restarts = 0;
 };
 
 using MessageSink = std::function<void(const std::string&)>;
 
 // Runs until `stop` becomes true or the device has been gone for max_wait_s. Throws
 // std::runtime_error for output problems (file exists without append, write or fsync
-// failure), HeaderMismatch, DeviceRestarted (with every line before it written), std::invalid_argument for a bad baud rate, NotASerialDevice for a
+// failure), HeaderMismatch, std::invalid_argument for a bad baud rate, NotASerialDevice for a
 // port that is there but no terminal (before the output is made, unless it is a character
 // device: that shows only on opening it).
 SerialLogStats run_serial_logger(const SerialLogOptions& options, const std::atomic<bool>& stop,
