@@ -15,6 +15,9 @@ enum ExitCode : int {
     // An error no command expected: a bug in battsim, not in the run's inputs. Its own code
     // (sysexits' EX_SOFTWARE) so a pipeline never takes it for "some logs failed" (1).
     kExitInternal = 70,
+    // Memory ran out (std::bad_alloc): the machine's limit, not a bug nor a bad input; a
+    // pipeline may retry with fewer --jobs or on a bigger machine (sysexits' EX_OSERR).
+    kExitOutOfMemory = 71,
 };
 
 }  // namespace cli

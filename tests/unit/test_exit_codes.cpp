@@ -35,6 +35,14 @@ TEST_CASE("an unexpected error exits 70, not batch's 'some logs failed' (1)", "[
     CHECK_THAT(odd.err, Catch::Contains("an exception of unknown type"));
 }
 
+TEST_CASE("running out of memory exits 71 and says so, not 'a bug in battsim'", "[exit]") {
+    const Ran oom = guarded([]() -> int { throw std::bad_alloc(); });
+    CHECK(oom.code == 71);
+    CHECK(oom.code == cli::kExitOutOfMemory);
+    CHECK(oom.err == "battsim batch: out of memory (exit 71; try fewer --jobs, a shorter log or a machine with more "
+                     "memory)\n");
+}
+
 TEST_CASE("an input or config error that gets out of a command keeps its documented code", "[exit]") {
     const Ran input = guarded([]() -> int { throw host::InputError("log.csv", 3, 2, "expected a number"); });
     CHECK(input.code == 3);
@@ -51,7 +59,7 @@ TEST_CASE("the README's exit-code table lists every exit code", "[exit]") {
     const std::string readme = text.str();
     const std::string section = readme.substr(readme.find("### Exit codes"));
     for (int code : {cli::kExitOk, cli::kExitFailure, cli::kExitUsage, cli::kExitInputError, cli::kExitConfigError,
-                     cli::kExitOutputError, cli::kExitInternal}) {
+                     cli::kExitOutputError, cli::kExitInternal, cli::kExitOutOfMemory}) {
         INFO(code);
         CHECK(section.find("\n| " + std::to_string(code) + " | ") != std::string::npos);
     }

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <new>
 #include <optional>
 #include <thread>
 
@@ -420,6 +421,10 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
                     for (const json& note : summary.value("config_notes", json::array()))
                         if (std::find(config_wide.begin(), config_wide.end(), note.get<std::string>()) == config_wide.end())
                             log_notes[k].push_back(item.path + ": " + note.get<std::string>());
+                } catch (const std::bad_alloc&) {
+                    // This log alone; the others may still fit (its what() says only "std::bad_alloc").
+                    row = make_error_row(item, "out of memory replaying this log");
+                    summary = json();
                 } catch (const std::exception& e) {
                     // InputError carries file:line:column; anything else is reported as is.
                     row = make_error_row(item, e.what());
