@@ -18,6 +18,7 @@ namespace {
 
 struct MakeConfigArgs {
     std::string from_log;
+    std::string board;
     std::string format = "auto";
     int cells = 0;
     double capacity_mah = NAN;
@@ -40,9 +41,9 @@ int list_keys(const MakeConfigArgs& a) {
 
 int run(const MakeConfigArgs& a) {
     const char* me = "battsim make-config";
-    if (int rc = check_outputs(me, {{"--from-log", a.from_log}}, {text_output("-o/--output", a.output)})) return rc;
+    if (int rc = check_outputs(me, {{"--from-log", a.from_log}, {"--board", a.board}}, {text_output("-o/--output", a.output)})) return rc;
     if (a.list_keys) {
-        if (!a.from_log.empty() || a.cells > 0 || std::isfinite(a.capacity_mah) || std::isfinite(a.resistance_mohm) ||
+        if (!a.from_log.empty() || !a.board.empty() || a.cells > 0 || std::isfinite(a.capacity_mah) || std::isfinite(a.resistance_mohm) ||
             std::isfinite(a.cutoff_v) || std::isfinite(a.cutoff_delay_s) || !a.name.empty()) {
             std::cerr << me << ": --list-keys lists the keys of any config; it takes no pack options\n";
             return kExitUsage;
@@ -100,6 +101,19 @@ int run(const MakeConfigArgs& a) {
         std::cerr << me << ": " << e.what() << "\n";
         return kExitUsage;
     }
+    if (!a.board.empty()) {
+        // Read before anything is written: a bad board config exits 4 with its position.
+        const host::LoadedConfig board = host::load_config_file(a.board);
+        const std::vector<std::string> changed = host::apply_board(j, board);
+        if (changed.empty()) {
+            std::cerr << me << ": note: " << a.board << " has the reference logger's board settings; nothing to take\n";
+        } else {
+            std::string list;
+            for (const std::string& key : changed) list += (list.empty() ? "" : ", ") + key;
+            std::cerr << me << ": from the board's config " << a.board << ": " << list << "\n";
+            j["description"] = j["description"].get<std::string>() + " Board settings (" + list + ") from " + a.board + ".";
+        }
+    }
     host::write_file_atomic(a.output, host::json_text(j, 2) + "\n");
     return kExitOk;
 }
@@ -110,6 +124,10 @@ std::function<int()> setup(CLI::App& sub) {
                    "Take what an autopilot log says about its pack: PX4 BAT1_N_CELLS, BAT1_CAPACITY, BAT1_R_INTERNAL; "
                    "ArduPilot BATT_CAPACITY, BATT_LOW_VOLT (or LOW_VOLT, FS_BATT_VOLTAGE), BATT_LOW_TIMER; the cell "
                    "count from its cell columns or how high it rests");
+    sub.add_option("--board", a->board,
+                   "A config written for this monitor board (e.g. by replay --config-out after a charger check): take "
+                   "its board settings, not the reference logger's: the shunt calibration, the current sensor's range and "
+                   "correction (battery.extensions.current_sensor), which cells' readings carry a lead, the telemetry");
     sub.add_option("--format", a->format, "Log format of --from-log (as replay)")->capture_default_str();
     sub.add_option("--cells", a->cells, "Cells in series")->check(CLI::Range(1, 12));
     sub.add_option("--capacity-mah", a->capacity_mah, "Rated capacity (mAh)")->check(number_in(0.0, 1.0e6, true));

@@ -236,6 +236,37 @@ json pack_config_json(const PackRating& r) {
     return j;
 }
 
+const char* const kBoardKeys[8] = {"/sensor/shunt_offset_ma",
+                                   "/sensor/shunt_scale_mv_per_10a",
+                                   "/sensor/max_current_a",
+                                   "/sensor/min_current_a",
+                                   "/battery/extensions/current_sensor",
+                                   "/joint/first_cell_includes_lead",
+                                   "/joint/last_cell_includes_lead",
+                                   "/telemetry"};
+
+std::vector<std::string> apply_board(json& config, const LoadedConfig& board) {
+    // Effective values on both sides: a config that leaves a key out means its default.
+    const json from = config_to_json(board);
+    const json was = config_to_json(config_from_json(config, "make-config"));
+    std::vector<std::string> changed;
+    for (const char* key : kBoardKeys) {
+        const json::json_pointer at(key);
+        const bool has = from.contains(at);
+        if (has == was.contains(at) && (!has || from.at(at) == was.at(at))) continue;
+        if (has) {
+            config[at] = from.at(at);
+        } else if (config.contains(at)) {  // an optional section the board's config goes without
+            config[at.parent_pointer()].erase(at.back());
+        }
+        std::string dotted = std::string(key).substr(1);
+        std::replace(dotted.begin(), dotted.end(), '/', '.');
+        changed.push_back(dotted);
+    }
+    config_from_json(config, "make-config");  // still a valid config; throws ConfigError
+    return changed;
+}
+
 std::string per_cell_resistance_note(const PackRating& r) {
     if (r.cells < 2 || !std::isfinite(r.resistance_ohm) || !(r.capacity_ah > 0.0)) return "";
     // The reference LiPo scaled to this rating, per cell; a pack figure under 1.5 of those is

@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "host/config_json.h"
 #include "host/io/sample_reader.h"
 
 namespace battsim {
@@ -32,6 +33,18 @@ struct PackRating {
 // configs/generic-3s.json and sim-4s-1800.json were by hand. Checked by config_from_json.
 // Throws std::invalid_argument naming the value out of range.
 nlohmann::json pack_config_json(const PackRating& rating);
+// The settings that belong to the monitor board and its wiring rather than to the pack
+// (JSON pointers): the shunt calibration, the current sensor's range and correction, which
+// cells' readings carry a lead, and the MAVLink output. A fleet flies one board with many
+// packs; a config made for a new pack had carried the dissertation board's calibration.
+extern const char* const kBoardKeys[8];
+// Sets `config`'s board settings to `board`'s (a config written for the same monitor, e.g.
+// by `replay --config-out` after a charger check), as their effective values: a key `board`
+// leaves at its default is set to the default. Returns the keys that changed, dotted
+// ("sensor.shunt_offset_ma"), in kBoardKeys' order. Throws ConfigError if the result is no
+// valid config.
+std::vector<std::string> apply_board(nlohmann::json& config, const LoadedConfig& board);
+
 // A note when a given pack resistance looks like one cell's (a charger shows each cell's
 // internal resistance, and --resistance-mohm is the whole pack's); empty otherwise.
 std::string per_cell_resistance_note(const PackRating& rating);

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <fstream>
 #include <string>
 
 #include "cli_util.h"
@@ -156,3 +157,37 @@ TEST_CASE("battsim make-config counts a Matrice 100's cells from where it takes 
     CHECK(glitch["flight"]["resistance_ohm"]["final"].get<double>() ==
           Approx(clean["flight"]["resistance_ohm"]["final"].get<double>()).epsilon(0.01));
 }
+
+TEST_CASE("battsim make-config --board: a calibrated monitor's settings carried to a new pack's config", "[cli][make_config]") {
+    const std::string dir = clitest::temp_dir();
+    json board = json::parse(clitest::read_file(kSource + "/configs/sim-4s.json"));
+    board["sensor"]["shunt_offset_ma"] = -20.0;
+    board["battery"]["extensions"]["current_sensor"] = {{"gain", 1.02}};
+    clitest::write_file(dir + "/board.json", board.dump());
+    const std::string out = dir + "/pack.json";
+    const clitest::Result r =
+        clitest::run("make-config --cells 6 --capacity-mah 5000 --board " + q(dir + "/board.json") + " -o " + q(out));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.err.find("from the board's config " + dir + "/board.json: sensor.shunt_offset_ma, "
+                     "battery.extensions.current_sensor\n") != std::string::npos);
+    const json made = json::parse(clitest::read_file(out));
+    CHECK(made["sensor"]["shunt_offset_ma"] == -20.0);
+    CHECK(made["battery"]["extensions"]["current_sensor"]["gain"] == 1.02);
+    CHECK(made["battery"]["cells_in_series"] == 6);
+    CHECK(made["description"].get<std::string>().find("from " + dir + "/board.json.") != std::string::npos);
+
+    const clitest::Result same = clitest::run("make-config --cells 6 --capacity-mah 5000 --board " +
+                                              q(kSource + "/configs/reference-modified.json"));
+    CHECK(same.exit_code == 0);
+    CHECK(same.err.find("has the reference logger's board settings; nothing to take") != std::string::npos);
+    // A board config that is no config: exit 4 with its position, nothing written.
+    clitest::write_file(dir + "/bad.json", "{\"schema\": \"battsim.config\", \"sensor\": {\"shunt_ofset_ma\": 1}}");
+    const clitest::Result bad = clitest::run("make-config --cells 6 --capacity-mah 5000 --board " + q(dir + "/bad.json") +
+                                             " -o " + q(dir + "/never.json"));
+    CHECK(bad.exit_code == 4);
+    CHECK(bad.err.find("bad.json:1:") != std::string::npos);
+    CHECK(bad.err.find("$.sensor.shunt_ofset_ma: unknown key") != std::string::npos);
+    CHECK_FALSE(std::ifstream(dir + "/never.json").good());
+}
+

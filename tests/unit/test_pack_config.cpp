@@ -370,3 +370,44 @@ TEST_CASE("make-config: a value given wins over the log's, and each says where i
     CHECK(r.sources.size() == 4);
     CHECK(std::isnan(r.cutoff_delay_s));
 }
+
+TEST_CASE("make-config --board: the board's settings, not the reference logger's, as effective values", "[pack_config]") {
+    PackRating r;
+    r.cells = 6;
+    r.capacity_ah = 5.0;
+    json made = pack_config_json(r);
+    // The reference logger's own config changes nothing: its board settings are make-config's.
+    json same = made;
+    CHECK(apply_board(same, builtin_config()).empty());
+    CHECK(same == made);
+
+    LoadedConfig board = builtin_config();
+    board.monitor.shunt.offset_ma = 12.5f;
+    board.monitor.shunt.scale_mv_per_10a = 3.75f;
+    board.monitor.extensions.current_sensor.gain = 1.03f;
+    board.monitor.cell_analysis.first_cell_includes_lead = false;  // a monitor with its own supply
+    board.telemetry.system_id = 3;
+    board.monitor.sensor.max_pack_voltage_v = 99.0f;  // the pack's, not the board's: not taken
+    const std::vector<std::string> changed = apply_board(made, board);
+    CHECK(changed == std::vector<std::string>{"sensor.shunt_offset_ma", "sensor.shunt_scale_mv_per_10a",
+                                              "battery.extensions.current_sensor", "joint.first_cell_includes_lead",
+                                              "telemetry"});
+    CHECK(made["sensor"]["shunt_offset_ma"] == 12.5);
+    CHECK(made["sensor"]["shunt_scale_mv_per_10a"] == 3.75);
+    CHECK(made["sensor"]["max_pack_voltage_v"] == 31.5);  // 5.25 V per cell on 6S, as made
+    CHECK(made["battery"]["extensions"]["current_sensor"]["gain"] == 1.03);
+    CHECK(made["joint"]["first_cell_includes_lead"] == false);
+    CHECK(made["telemetry"]["system_id"] == 3);
+    CHECK(made["battery"]["capacity_ah"] == 5.0);
+    const LoadedConfig read = config_from_json(made, "test");
+    CHECK(read.monitor.shunt.offset_ma == 12.5f);
+    CHECK(read.monitor.extensions.current_sensor.gain == 1.03f);
+
+    // A board config at the defaults takes a correction back out (an effective value, not a
+    // missing key), and says so.
+    const std::vector<std::string> back = apply_board(made, builtin_config());
+    CHECK(back == changed);
+    CHECK_FALSE(made["battery"]["extensions"].contains("current_sensor"));
+    CHECK_FALSE(made.contains("telemetry"));
+    CHECK(made["joint"]["first_cell_includes_lead"] == true);
+}
