@@ -33,7 +33,10 @@ if [ "${BATTSIM_QUICK:-0}" = 1 ]; then exit 0; fi
 # alone 630 s at -O0, 152 s at -O2).
 san="$root/build-san"
 echo "== ASan+UBSan build (clang) of the test suite and the fuzz harnesses"
-CC=clang CXX=clang++ cmake -S "$root" -B "$san" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBATTSIM_SANITIZE=ON -DBATTSIM_FUZZ=ON "$@" >/dev/null
+# Line tables only (clang's -gline-tables-only) instead of full debug info: a sanitizer's
+# report still names file and line; the heaviest file compiled in 43 s instead of 60.
+CC=clang CXX=clang++ cmake -S "$root" -B "$san" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG" -DBATTSIM_SANITIZE=ON -DBATTSIM_FUZZ=ON "$@" >/dev/null
 cmake --build "$san" -j"$jobs"
 (cd "$san" && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --output-on-failure -j"$jobs")
 
