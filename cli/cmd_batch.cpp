@@ -14,6 +14,7 @@
 #include "host/batch/table.h"
 #include "host/config_json.h"
 #include "host/io/atomic_file.h"
+#include "host/io/sample_reader.h"
 
 namespace battsim {
 namespace cli {
@@ -226,7 +227,7 @@ std::function<int()> setup(CLI::App& sub) {
     // Here --format is the table's format (as for merge); the logs' format moves to
     // --log-format, usually set per log in the manifest anyway.
     sub.remove_option(sub.get_option("--format"));
-    sub.add_option("--log-format", a->input.format, "Log format: auto, raw, csv, dataflash-text, dataflash-bin, ulog")
+    sub.add_option("--log-format", a->input.format, host::log_format_help())
         ->capture_default_str();
     sub.add_option("--format", a->format, "Table format: md, csv or json (json is what merge reads)")->capture_default_str();
     return [a, output]() {
