@@ -4,7 +4,6 @@
 
 #include <filesystem>
 #include <iostream>
-#include <map>
 #include <mutex>
 #include <thread>
 
@@ -131,16 +130,8 @@ int run(const BatchArgs& a) {
             outputs.push_back({"--out's " + it.summary_stem() + ".json", (fs::path(a.out_dir) / (it.summary_stem() + ".json")).string()});
     }
     if (int rc = check_outputs("battsim batch", inputs, outputs)) return rc;
-    // What each config makes unreliable, once per config (every row's notes repeat it): a
-    // fleet replayed with the joint estimator and no OCV table reads plausible nonsense.
-    std::map<std::string, size_t> noted;
-    for (const host::BatchItem& it : items) {
-        if (!it.error.empty()) continue;
-        for (const std::string& note : host::config_notes(it.replay.config.monitor))
-            ++noted["config " + it.replay.config.name + ": " + note];
-    }
-    for (const auto& [note, logs] : noted)
-        std::cerr << me << "note (" << logs << (logs == 1 ? " log" : " logs") << "), " << note << "\n";
+    // What each config makes unreliable, once per config.
+    for (const host::CountedNote& n : host::count_config_notes(items)) std::cerr << me << host::counted_note_text(n) << "\n";
 
     host::BatchRunOptions opt;
     opt.jobs = a.jobs > 0 ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
