@@ -4,7 +4,6 @@
 
 #include <filesystem>
 #include <iostream>
-#include <map>
 #include <mutex>
 #include <thread>
 
@@ -14,6 +13,7 @@
 #include "host/batch/table.h"
 #include "host/config_json.h"
 #include "host/io/atomic_file.h"
+#include "host/io/sample_reader.h"
 
 namespace battsim {
 namespace cli {
@@ -130,16 +130,8 @@ int run(const BatchArgs& a) {
             outputs.push_back({"--out's " + it.summary_stem() + ".json", (fs::path(a.out_dir) / (it.summary_stem() + ".json")).string()});
     }
     if (int rc = check_outputs("battsim batch", inputs, outputs)) return rc;
-    // What each config makes unreliable, once per config (every row's notes repeat it): a
-    // fleet replayed with the joint estimator and no OCV table reads plausible nonsense.
-    std::map<std::string, size_t> noted;
-    for (const host::BatchItem& it : items) {
-        if (!it.error.empty()) continue;
-        for (const std::string& note : host::config_notes(it.replay.config.monitor))
-            ++noted["config " + it.replay.config.name + ": " + note];
-    }
-    for (const auto& [note, logs] : noted)
-        std::cerr << me << "note (" << logs << (logs == 1 ? " log" : " logs") << "), " << note << "\n";
+    // What each config makes unreliable, once per config.
+    for (const host::CountedNote& n : host::count_config_notes(items)) std::cerr << me << host::counted_note_text(n) << "\n";
 
     host::BatchRunOptions opt;
     opt.jobs = a.jobs > 0 ? a.jobs : std::max(1u, std::thread::hardware_concurrency());
@@ -226,7 +218,7 @@ std::function<int()> setup(CLI::App& sub) {
     // Here --format is the table's format (as for merge); the logs' format moves to
     // --log-format, usually set per log in the manifest anyway.
     sub.remove_option(sub.get_option("--format"));
-    sub.add_option("--log-format", a->input.format, "Log format: auto, raw, csv, dataflash-text, dataflash-bin, ulog")
+    sub.add_option("--log-format", a->input.format, host::log_format_help())
         ->capture_default_str();
     sub.add_option("--format", a->format, "Table format: md, csv or json (json is what merge reads)")->capture_default_str();
     return [a, output]() {

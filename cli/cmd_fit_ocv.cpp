@@ -151,8 +151,7 @@ std::function<int()> setup(CLI::App& sub) {
             add_named(all_logs, "a --test log", a->test_logs);
             if (int rc = check_logs_once(command, all_logs)) return rc;
         }
-        if (a->test_every > 0)
-            for (size_t k = 0; k < logs.size(); ++k) logs[k].test = k % a->test_every == 1 % a->test_every;
+        host::fit::hold_out_every(logs, a->test_every);
         for (const std::string& p : a->test_logs) logs.push_back({p, reader, true});
         host::fit::OcvStitch s;
         if (int rc = run_job(command, [&] { s = host::fit::stitch_ocv(logs, config, a->options, &std::cerr); })) return rc;

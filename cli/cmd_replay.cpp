@@ -14,7 +14,7 @@
 #include "host/replay.h"
 #include "host/report/brief.h"
 #include "host/report/charger_check.h"
-#include "host/report/current_offset_fix.h"
+#include "host/report/config_out.h"
 #include "host/report/telemetry_writer.h"
 
 namespace battsim {
@@ -122,17 +122,13 @@ std::function<int()> setup(CLI::App& sub) {
         for (const auto& note : summary["input"]["notes"]) std::cerr << "battsim replay: note: " << note.get<std::string>() << "\n";
         for (const auto& note : summary.value("config_notes", nlohmann::json::array()))
             std::cerr << "battsim replay: note: " << note.get<std::string>() << "\n";
-        host::LoadedConfig corrected = opt.config;
-        // The config written is the file's with the corrections: --estimator chose this run's
-        // estimator, not the file's (written, it had switched every later replay of the file).
-        if (!a->input.estimator.empty()) {
-            try {
-                corrected.monitor.estimator =
-                    (a->input.config.empty() ? host::builtin_config() : host::load_config_file(a->input.config)).monitor.estimator;
-            } catch (const host::ConfigError& e) {  // changed since it was read at the start
-                std::cerr << "battsim replay: config: " << e.what() << "\n";
-                return kExitConfigError;
-            }
+        // The config --config-out writes is the file's, not this run's --estimator.
+        host::LoadedConfig filed;
+        try {
+            filed = host::filed_config(opt.config, a->input.config, !a->input.estimator.empty());
+        } catch (const host::ConfigError& e) {  // changed since it was read at the start
+            std::cerr << "battsim replay: config: " << e.what() << "\n";
+            return kExitConfigError;
         }
         // Nothing valid to report (a config for another pack kept every sample out): the outputs
         // are written all the same, to show it, but the run fails (exit 1), as batch's row does.
@@ -149,21 +145,15 @@ std::function<int()> setup(CLI::App& sub) {
             }
             for (const auto& note : summary["charger_check"]["notes"])
                 std::cerr << "battsim replay: charger check: " << note.get<std::string>() << "\n";
-            const auto& gain = summary["charger_check"]["suggested_current_gain"];
-            if (gain.is_number()) corrected.monitor.extensions.current_sensor.gain = static_cast<float>(gain.get<double>());
         }
-        // The offset the joint estimator learnt on the ground, when it called it a fault.
-        const double offset_taken_a = host::correct_current_offset(summary, corrected.monitor);
-        // Written only with a correction: a config carrying a gain fitted to an offset, or
-        // to a pack that was not full, would be wrong on every later flight.
-        const bool gain_found = check && summary["charger_check"]["suggested_current_gain"].is_number();
-        const bool refuse_config = !a->config_out.empty() && !gain_found && offset_taken_a == 0.0;
+        const host::ConfigCorrections corrected = host::with_corrections(filed, summary);
+        const bool refuse_config = !a->config_out.empty() && !corrected.found();
         const std::string text = host::json_text(summary, 2) + "\n";
         try {
             if (!a->summary.empty()) host::write_file_atomic(a->summary, text);
             if (stream) stream->commit();
             if (!a->config_out.empty() && !refuse_config)
-                host::write_file_atomic(a->config_out, host::json_text(host::config_to_json(corrected), 2) + "\n");
+                host::write_file_atomic(a->config_out, host::json_text(host::config_to_json(corrected.config), 2) + "\n");
             if (!a->plot.empty() && no_valid.empty()) {  // no sample to draw
                 const std::string title = "battsim replay: " + a->log + " (config " + summary["config"].get<std::string>() +
                                           ", " + summary["estimator"].get<std::string>() + " estimator)";
@@ -193,9 +183,9 @@ std::function<int()> setup(CLI::App& sub) {
                       << "no current-sensor offset learnt as a sensor fault); " << a->config_out << " not written\n";
             return kExitFailure;
         }
-        if (!a->config_out.empty() && offset_taken_a != 0.0)
+        if (!a->config_out.empty() && corrected.offset_taken_a != 0.0)
             std::cerr << "battsim replay: --config-out: extensions.current_sensor.offset_a "
-                      << corrected.monitor.extensions.current_sensor.offset_a << " A (the " << offset_taken_a
+                      << corrected.config.monitor.extensions.current_sensor.offset_a << " A (the " << corrected.offset_taken_a
                       << " A offset learnt on the ground taken out) in " << a->config_out << "\n";
         return no_valid.empty() ? kExitOk : kExitFailure;
     };

@@ -24,13 +24,6 @@ struct SimulateArgs {
     double cutoff = NAN;  // NaN = not given (0 had passed as "not given" unseen)
 };
 
-std::string default_truth_path(const std::string& log) {
-    const size_t slash = log.find_last_of('/');
-    const size_t dot = log.find_last_of('.');
-    const std::string stem = (dot != std::string::npos && (slash == std::string::npos || dot > slash)) ? log.substr(0, dot) : log;
-    return stem + ".truth.json";
-}
-
 std::function<int()> setup(CLI::App& sub) {
     auto a = std::make_shared<SimulateArgs>();
     sub.add_option("SCENARIO", a->scenarios, "Scenario JSON files, or directories of them")->required();
@@ -99,7 +92,7 @@ std::function<int()> setup(CLI::App& sub) {
                 outputs.push_back({"the log of " + s.name, targets.back().first});
                 outputs.push_back({"the truth of " + s.name, targets.back().second});
             } else {
-                targets.emplace_back(a->output, a->truth.empty() ? default_truth_path(a->output) : a->truth);
+                targets.emplace_back(a->output, a->truth.empty() ? host::sim::default_truth_path(a->output) : a->truth);
                 outputs.push_back({"-o/--output", targets.back().first});
                 outputs.push_back({a->truth.empty() ? "the truth (-o's name with .truth.json)" : "--truth", targets.back().second});
             }

@@ -11,6 +11,7 @@
 #include "host/batch/manifest.h"
 #include "host/config_reader.h"
 #include "host/io/atomic_file.h"
+#include "host/io/sample_reader.h"
 #include "host/io/number_text.h"
 #include "host/plot/plot.h"
 #include "host/replay.h"
@@ -37,7 +38,7 @@ CLI::Validator number_in(double lo, double hi, bool above_lo) {
 
 void add_input_options(CLI::App& sub, InputArgs& a) {
     sub.add_option("-c,--config", a.config, "Battery and monitor config JSON (default: built in, the same as configs/reference-modified.json: the dissertation's 1.55 Ah 4S pack and logger)");
-    sub.add_option("--format", a.format, "Log format: auto, raw, csv, dataflash-text, dataflash-bin, ulog")
+    sub.add_option("--format", a.format, host::log_format_help())
         ->capture_default_str();
     sub.add_option("--current-source", a.current_source, "Raw logs: current from 'current' (logged mA) or 'shunt' (shunt mV through the config's calibration)")
         ->capture_default_str();

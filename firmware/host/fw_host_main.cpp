@@ -19,7 +19,9 @@
 
 namespace {
 
-// The CLI's exit codes (cli/exit_codes.h), so scripts treat both tools alike.
+// The CLI's exit codes (cli/exit_codes.h), so scripts treat both tools alike. A copy: the
+// firmware includes nothing from cli/; the unit test "battsim_fw_host exits with battsim's exit
+// codes" (tests/unit/test_firmware_replay.cpp) fails when the two differ.
 constexpr int kExitOk = 0;
 constexpr int kExitUsage = 2;
 constexpr int kExitInputError = 3;

@@ -16,11 +16,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (size) std::fwrite(data, 1, size, f);
     std::fclose(f);
     // The first byte picks the forced format too, so every reader sees every input.
-    using battsim::host::LogFormat;
-    const LogFormat formats[] = {LogFormat::Auto, LogFormat::RawPbms, LogFormat::Csv, LogFormat::DataflashText,
-                                 LogFormat::DataflashBinary, LogFormat::Ulog};
+    const auto& formats = battsim::host::log_formats();  // Auto first: the empty input detects
     battsim::host::ReaderOptions opt;
-    opt.format = formats[size ? data[0] % 6 : 0];
+    opt.format = formats[size ? data[0] % formats.size() : 0].format;
     // The second byte switches the averaging reader on for one input in four.
     if (size > 1 && data[1] % 4 == 0) opt.average_us = 1000u * (1u + data[1] % 64u);
     try {

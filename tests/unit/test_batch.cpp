@@ -875,3 +875,38 @@ TEST_CASE("summaries of logs of one stem are named by their paths, whatever the 
     assign_summary_names(twice);
     CHECK(duplicate_summary_names(twice) == std::vector<std::string>{"*.csv: /p/*.csv, /p/*.csv"});
 }
+
+TEST_CASE("batch counts each config's notes once, by the logs replayed with it", "[batch]") {
+    LoadedConfig reference = builtin_config();
+    REQUIRE(config_notes(reference.monitor).empty());
+    LoadedConfig joint = reference;
+    joint.monitor.estimator = battsim::core::EstimatorKind::Joint;  // no OCV table: one note
+    REQUIRE(config_notes(joint.monitor).size() == 1);
+    const std::string joint_note = config_notes(joint.monitor).front();
+
+    std::vector<BatchItem> items(6);
+    const auto use = [&](size_t k, LoadedConfig config, const std::string& name) {
+        config.name = name;
+        items[k].replay.config = config;
+    };
+    use(0, joint, "zeta");
+    use(1, joint, "alpha");
+    use(2, reference, "ref");
+    use(3, joint, "alpha");
+    use(4, joint, "alpha");
+    items[4].error = "no file matches";  // never replayed: not counted
+    use(5, joint, "zeta");
+
+    const std::vector<CountedNote> counted = count_config_notes(items);
+    REQUIRE(counted.size() == 2);
+    CHECK(counted[0].note == "config alpha: " + joint_note);  // in the order of the text
+    CHECK(counted[0].logs == 2);
+    CHECK(counted[1].note == "config zeta: " + joint_note);
+    CHECK(counted[1].logs == 2);
+    CHECK(counted_note_text(counted[0]) == "note (2 logs), config alpha: " + joint_note);
+    CHECK(counted_note_text({"config b: x", 1}) == "note (1 log), config b: x");
+
+    items[5].replay.config = reference;
+    CHECK(count_config_notes(items).back().logs == 1);
+    CHECK(count_config_notes({}).empty());
+}

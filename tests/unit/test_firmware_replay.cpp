@@ -23,6 +23,7 @@
 #include "app/averages_file.h"
 #include "app/monitor_app.h"
 #include "battsim_config.h"
+#include "exit_codes.h"
 #include "host/config_json.h"
 #include "host/replay.h"
 #include "host/serial/line_protocol.h"
@@ -475,6 +476,27 @@ TEST_CASE("firmware sends no data before a host says hello", "[firmware][data]")
     CHECK(fw.uart.size() == prompts * 4);
     CHECK(static_cast<double>(prompts) >= duration_s - 1.0);
     CHECK(static_cast<double>(prompts) <= duration_s + 2.0);
+}
+
+// battsim_fw_host keeps its own copy of the CLI's exit codes (the firmware includes nothing
+// from cli/): run into each of its exits, it must give cli/exit_codes.h's code for it.
+TEST_CASE("battsim_fw_host exits with battsim's exit codes", "[firmware][exit]") {
+    const std::string dir = fwtest::temp_dir("fwexit");
+    const std::string good = dir + "/good.csv";
+    fwtest::write_file(good, "629,16.66,4.14,4.16,4.17,4.18,781.44,0.67,\n696,16.67,4.14,4.17,4.18,4.18,457.66,0.55,\n");
+    const auto exits = [](const std::string& args, int code) {
+        const fwtest::Run r = fwtest::run(BATTSIM_FW_HOST_BINARY, args);
+        INFO(args << ": " << r.err);
+        CHECK(r.exit_code == code);
+    };
+    exits(fwtest::q(good), cli::kExitOk);
+    exits("--help", cli::kExitOk);
+    exits("--program nope " + fwtest::q(good), cli::kExitUsage);
+    exits("--no-such-option " + fwtest::q(good), cli::kExitUsage);
+    exits(fwtest::q(dir + "/missing.csv"), cli::kExitInputError);
+    exits("--sd " + fwtest::q(dir + "/no-card") + " " + fwtest::q(good), cli::kExitOutputError);
+    // A port's file that cannot be written: the run's other exit with kExitOutputError.
+    exits("--uart " + fwtest::q(dir) + " " + fwtest::q(good), cli::kExitOutputError);
 }
 
 TEST_CASE("battsim_fw_host reports a bad log with file, line and column", "[firmware]") {

@@ -129,3 +129,31 @@ TEST_CASE("OCV stitch: options and logs it cannot use", "[fit]") {
     // Too little data is the log's fault (an InputError: exit 3), not the options'.
     CHECK_THROWS_AS(fit::stitch_ocv({tiny}, {}, ReaderOptions{}, config, o), fit::TooLittleData);
 }
+
+TEST_CASE("fit-ocv --test-every K holds out the 2nd log and every Kth after it", "[fit]") {
+    const auto marks = [](size_t count, unsigned every) {
+        std::vector<fit::OcvStitchLog> logs(count);
+        fit::hold_out_every(logs, every);
+        std::string m;
+        for (const fit::OcvStitchLog& l : logs) m += l.test ? 'T' : 'f';
+        return m;
+    };
+    CHECK(marks(7, 2) == "fTfTfTf");
+    CHECK(marks(7, 3) == "fTffTff");  // indices 1, 4
+    CHECK(marks(9, 4) == "fTfffTfff");  // indices 1, 5
+    CHECK(marks(1, 2) == "f");
+    CHECK(marks(2, 1000000) == "fT");
+    CHECK(marks(3, 1) == "TTT");  // K = 1 (the CLI refuses it): every log
+    CHECK(marks(0, 3).empty());
+
+    // K = 0 (not given) keeps the marks; K > 0 sets every log's.
+    std::vector<fit::OcvStitchLog> logs(3);
+    logs[0].test = true;
+    fit::hold_out_every(logs, 0);
+    CHECK(logs[0].test);
+    CHECK_FALSE(logs[1].test);
+    fit::hold_out_every(logs, 2);
+    CHECK_FALSE(logs[0].test);
+    CHECK(logs[1].test);
+    CHECK_FALSE(logs[2].test);
+}

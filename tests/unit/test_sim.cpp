@@ -551,3 +551,14 @@ TEST_CASE("The sensor-fault causes a monitor should name for each injected fault
     f.missed_burst_rate_per_min = 2.0;
     CHECK(host::sim::nameable_fault_causes(f) == (core::kFaultCurrentOffset | core::kFaultCells | core::kFaultSampleGap));
 }
+
+TEST_CASE("simulate -o LOG's default truth file: the extension of the file name replaced", "[sim]") {
+    CHECK(default_truth_path("flight.csv") == "flight.truth.json");
+    CHECK(default_truth_path("logs/flight.bin") == "logs/flight.truth.json");
+    CHECK(default_truth_path("a.b.ulg") == "a.b.truth.json");  // the last dot only
+    CHECK(default_truth_path("flight") == "flight.truth.json");
+    // A dot in a directory's name is not the file's extension.
+    CHECK(default_truth_path("run.2/flight") == "run.2/flight.truth.json");
+    CHECK(default_truth_path("./flight") == "./flight.truth.json");
+    CHECK(default_truth_path("../out/f.csv") == "../out/f.truth.json");
+}

@@ -246,6 +246,22 @@ std::vector<std::string> duplicate_summary_names(const std::vector<BatchItem>& i
     return out;
 }
 
+std::vector<CountedNote> count_config_notes(const std::vector<BatchItem>& items) {
+    std::map<std::string, std::size_t> noted;
+    for (const BatchItem& it : items) {
+        if (!it.error.empty()) continue;
+        for (const std::string& note : config_notes(it.replay.config.monitor))
+            ++noted["config " + it.replay.config.name + ": " + note];
+    }
+    std::vector<CountedNote> counted;
+    for (const auto& [note, logs] : noted) counted.push_back({note, logs});
+    return counted;
+}
+
+std::string counted_note_text(const CountedNote& n) {
+    return "note (" + std::to_string(n.logs) + (n.logs == 1 ? " log" : " logs") + "), " + n.note;
+}
+
 std::vector<std::string> renamed_summaries(const std::vector<BatchItem>& items) {
     std::vector<std::string> out;
     for (const BatchItem& it : items)

@@ -71,6 +71,19 @@ std::vector<std::string> duplicate_summary_names(const std::vector<BatchItem>& i
 // in item order: said on stderr, so the operator knows where to look.
 std::vector<std::string> renamed_summaries(const std::vector<BatchItem>& items);
 
+// A note config_notes makes of a config alone (what it makes unreliable), "config NAME: note",
+// and how many of the run's logs are replayed with that config.
+struct CountedNote {
+    std::string note;
+    std::size_t logs = 0;
+};
+// Said once per config, not per row (every row's notes repeat it): a fleet replayed with the
+// joint estimator and no OCV table reads plausible nonsense. Items that failed before replay
+// (error) are left out; in the order of the note's text.
+std::vector<CountedNote> count_config_notes(const std::vector<BatchItem>& items);
+// "note (3 logs), config NAME: note" ("1 log").
+std::string counted_note_text(const CountedNote& n);
+
 struct BatchRunOptions {
     unsigned jobs = 1;
     std::string out_dir;          // non-empty: write <summary_stem()>.json there as each log completes

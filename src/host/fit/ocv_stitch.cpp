@@ -714,6 +714,11 @@ OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& 
     return s;
 }
 
+void hold_out_every(std::vector<OcvStitchLog>& logs, unsigned every) {
+    if (every == 0) return;
+    for (std::size_t k = 0; k < logs.size(); ++k) logs[k].test = k % every == 1 % every;
+}
+
 LoadedConfig with_stitched_table(const LoadedConfig& config, const OcvStitch& s) {
     LoadedConfig out = config;
     core::OcvTable& t = out.monitor.joint.ocv;

@@ -93,6 +93,11 @@ struct OcvStitchLog {
     bool test = false;  // evaluated with the fitted table, not fitted
 };
 
+// fit-ocv --test-every K: marks every Kth log from the 2nd on (indices 1, K+1, 2K+1, ...) as a
+// test log and the others as fitted (for K > 1 the first log is always fitted; K = 1 holds
+// out all). K = 0 (not given) leaves the marks as they are.
+void hold_out_every(std::vector<OcvStitchLog>& logs, unsigned every);
+
 // Reads every log (throws InputError like replay_log) and fits. Throws std::invalid_argument
 // for bad options, TooLittleData (an InputError) for no fitted log of 10 valid samples. With `notes_out`, each of the notes
 // is also written there as it is found ("battsim fit-ocv: note: ..."), a log's as it is read.

@@ -20,25 +20,41 @@
 namespace battsim {
 namespace host {
 
+const std::vector<LogFormatEntry>& log_formats() {
+    static const std::vector<LogFormatEntry> formats{
+        {LogFormat::Auto, "auto", "detected from the content"},
+        {LogFormat::RawPbms, "raw", "the dissertation logger's 8 fields, no header"},
+        {LogFormat::Csv, "csv", "CSV with a header row"},
+        {LogFormat::DataflashText, "dataflash-text", "ArduPilot text log"},
+        {LogFormat::DataflashBinary, "dataflash-bin", "ArduPilot .bin log"},
+        {LogFormat::Ulog, "ulog", "PX4 .ulg log"},
+    };
+    return formats;
+}
+
 const char* to_string(LogFormat f) {
-    switch (f) {
-        case LogFormat::Auto: return "auto";
-        case LogFormat::RawPbms: return "raw";
-        case LogFormat::Csv: return "csv";
-        case LogFormat::DataflashText: return "dataflash-text";
-        case LogFormat::DataflashBinary: return "dataflash-bin";
-        case LogFormat::Ulog: return "ulog";
-    }
+    for (const LogFormatEntry& e : log_formats())
+        if (e.format == f) return e.name;
     return "unknown";
 }
 
 LogFormat parse_log_format(const std::string& name) {
-    for (LogFormat f : {LogFormat::Auto, LogFormat::RawPbms, LogFormat::Csv, LogFormat::DataflashText,
-                        LogFormat::DataflashBinary, LogFormat::Ulog}) {
-        if (name == to_string(f)) return f;
+    std::string names;
+    for (const LogFormatEntry& e : log_formats()) {
+        if (name == e.name) return e.format;
+        names += (names.empty() ? "" : ", ") + std::string(e.name);
     }
-    throw std::invalid_argument("unknown log format \"" + name +
-                                "\"; expected one of auto, raw, csv, dataflash-text, dataflash-bin, ulog");
+    throw std::invalid_argument("unknown log format \"" + name + "\"; expected one of " + names);
+}
+
+std::string log_format_help() {
+    std::string help = "Log format:";
+    const char* separator = " ";
+    for (const LogFormatEntry& e : log_formats()) {
+        help += separator + std::string(e.name) + " (" + e.description + ")";
+        separator = ", ";
+    }
+    return help;
 }
 
 namespace {

@@ -42,9 +42,24 @@ private:
 
 enum class LogFormat { Auto, RawPbms, Csv, DataflashText, DataflashBinary, Ulog };
 
+// A format's name (on the command line, in manifests and summaries) and a few words for help
+// texts.
+struct LogFormatEntry {
+    LogFormat format;
+    const char* name;
+    const char* description;
+};
+// Every LogFormat, Auto first, in the order help texts and messages list them: the one list a
+// new format is added to. to_string, parse_log_format, the --format and --log-format help and
+// the reader fuzz harness all read it.
+const std::vector<LogFormatEntry>& log_formats();
+
+// The entry's name; "unknown" for a value not in log_formats().
 const char* to_string(LogFormat f);
-// Accepts "auto", "raw", "csv", "dataflash-text", "dataflash-bin", "ulog"; throws std::invalid_argument.
+// Accepts a name from log_formats(); throws std::invalid_argument naming them all.
 LogFormat parse_log_format(const std::string& name);
+// The help text of an option taking a log format: every name, each with its description.
+std::string log_format_help();
 
 enum class CurrentSource { Auto, Current, Shunt };
 

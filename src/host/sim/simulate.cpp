@@ -469,6 +469,13 @@ json truth_to_json(const SimulationResult& r) {
     return j;
 }
 
+std::string default_truth_path(const std::string& log_path) {
+    const size_t slash = log_path.find_last_of('/');
+    const size_t dot = log_path.find_last_of('.');
+    const bool extension = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+    return (extension ? log_path.substr(0, dot) : log_path) + ".truth.json";
+}
+
 void write_simulation(const SimulationResult& r, const std::string& log_path, const std::string& truth_path) {
     // Both are committed only when both could be written.
     AtomicFile log(log_path);

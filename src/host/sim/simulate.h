@@ -113,6 +113,10 @@ nlohmann::json truth_to_json(const SimulationResult& r);
 // says what to change; empty when the ground reads as ground.
 std::string ground_draw_note(const SimulationResult& r);
 
+// simulate -o LOG's truth file without --truth: LOG with its extension (after the last dot of
+// its file name, not of a directory's) replaced by ".truth.json".
+std::string default_truth_path(const std::string& log_path);
+
 // Writes the log and the truth JSON atomically.
 void write_simulation(const SimulationResult& r, const std::string& log_path, const std::string& truth_path);
 
