@@ -1,6 +1,8 @@
 // The monitor: composes the model, the estimators and the cell scorer per sample behind
 // one status struct. The same object runs on the ESP8266 and in `battsim replay`; it
-// sees only samples and their time stamps.
+// sees only samples and their time stamps. To embed it in other firmware (the sources to
+// compile, the config, the costs, the assumptions): docs/embedding.md and its compiled
+// example, examples/embed/embed_example.cpp.
 #pragma once
 #include <stdint.h>
 
@@ -12,6 +14,9 @@
 namespace battsim {
 namespace core {
 
+// Bits of MonitorStatus::warnings. With the joint estimator, low capacity and high resistance
+// are the short flight's causes and are raised only with it; with the reference estimator
+// they compare the estimates with the config's rating (WarningConfig).
 enum Warning : uint8_t {
     kWarnLowCapacity = 0,
     kWarnHighResistance = 1,
@@ -44,6 +49,11 @@ enum SensorFaultCause : uint8_t {
     kFaultSampleGap = 8,      // joint: this sample ends a gap longer than max_sample_gap_s (dt_s is its length)
 };
 
+// What update() returns. Units are in the names; "joint" marks what only the joint estimator
+// fills. Before `initialised` (the first rest settles the state of charge: a few seconds at
+// rest after power-up, or forced at a take-off) soc, consumed_* and the models read 0; the
+// remaining and total times mean something only while `time_valid` (from the first take-off
+// on); a resistance of 0 is none yet.
 struct MonitorStatus {
     uint64_t time_us = 0;
     float dt_s = 0.0f;
@@ -61,13 +71,13 @@ struct MonitorStatus {
     float consumed_mwh = 0.0f;
     float model_voltage_v = 0.0f;          // fixed (configured) model
     float adapted_model_voltage_v = 0.0f;  // adapted model: the reference's; the joint estimator's tracking filter one step ahead
-    float soc = 0.0f;                      // 1 − consumed / estimated capacity
+    float soc = 0.0f;                      // 0…1; reference: 1 − consumed / estimated capacity; joint: its tracking filter's
     float capacity_ah = 0.0f;              // estimated pack capacity
     float capacity_sigma_ah = 0.0f;        // joint estimator: its standard error (0 = none)
     float resistance_ohm = 0.0f;           // online resistance estimate
     float usable_capacity_ah = 0.0f;
-    float remaining_time_s = 0.0f;
-    float total_time_s = 0.0f;
+    float remaining_time_s = 0.0f;  // flight left at the flight's mean power to the loaded cutoff (min_flight_voltage_v)
+    float total_time_s = 0.0f;      // the whole flight's, from the take-off
     bool time_valid = false;
     float avg_current_a = 0.0f;
     float avg_power_w = 0.0f;
@@ -77,9 +87,9 @@ struct MonitorStatus {
     float rest_capacity_ah = 0.0f;     // joint estimator: from the rests before and after a flight (0 = none)
     uint8_t short_flight_cause = 0;    // JointEstimator::Cause bits
 
-    uint8_t cell_count = 0;
+    uint8_t cell_count = 0;  // the reference's Piao scores' cells (cell_score); 0 with the joint estimator
     float cell_score[kMaxCells] = {};
-    int8_t outlier_cell = -1;
+    int8_t outlier_cell = -1;  // the cell named by kWarnCellOutlier: 0-based (cell 1 = 0), −1 = none
     uint8_t cell_finding = 0;  // joint estimator: CellAnalyzer::Finding of outlier_cell
     float cell_resistance_ohm[kMaxCells] = {};
     float cell_capacity_deficit[kMaxCells] = {};
@@ -94,9 +104,14 @@ struct MonitorStatus {
     float current_offset_a = 0.0f;   // joint: the current-sensor offset learnt on the ground
 };
 
+// No heap, no global state (two packs: two monitors), about 6.5 KB (sizeof on the ESP8266:
+// 6,496 B, the config's copy included), so usually a static object rather than a local.
 class Monitor {
 public:
+    // Before the first update, and again to start afresh (a new pack, or a clock that went
+    // back): every estimate and state is reset. The config is copied.
     void configure(const MonitorConfig& config);
+    // One call per reading; the status it returns stays valid until the next call.
     const MonitorStatus& update(const Sample& sample);
     const MonitorStatus& status() const { return status_; }
     const MonitorConfig& config() const { return config_; }

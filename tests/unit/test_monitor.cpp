@@ -2,9 +2,14 @@
 // becomes NaN, warnings carry their first times.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <memory>
+#include <vector>
 
 #include "core/monitor.h"
+#include "host/config_json.h"
+#include "host/io/sample_reader.h"
 
 using namespace battsim::core;
 
@@ -250,4 +255,48 @@ TEST_CASE("Joint mode's adapted model is its own filter's prediction, which foll
     CHECK(own_v < 0.04f);
     CHECK(std::fabs(s.model_voltage_v - 15.0005f) > 4.0f * own_v);
     CHECK(s.adapted_model_voltage_v != s.model_voltage_v);
+}
+
+TEST_CASE("A monitor configured again runs as a new one (a pack swapped without a restart)", "[monitor][embed]") {
+    // docs/embedding.md tells an embedder to call configure() again for a new pack. The joint
+    // estimator had kept the flight-time solve under way and its results: the remaining time
+    // of the next flight read up to 107 s off after the take-off and 7.6 s a minute later.
+    MonitorConfig cfg = battsim::host::load_config_file(BATTSIM_SOURCE_DIR "/configs/sim-4s.json").monitor;
+    cfg.estimator = EstimatorKind::Joint;  // as replay --estimator joint
+    std::vector<Sample> samples;
+    {
+        const std::unique_ptr<battsim::host::SampleReader> reader =
+            battsim::host::open_reader(BATTSIM_SOURCE_DIR "/logs/example-4s.csv", battsim::host::ReaderOptions{});
+        Sample s;
+        while (reader->next(s)) samples.push_back(s);
+    }
+    REQUIRE(samples.size() > 3000);
+    std::unique_ptr<Monitor> fresh(new Monitor), used(new Monitor);
+    used->configure(cfg);
+    for (const Sample& s : samples) used->update(s);
+    REQUIRE(used->status().warnings_raised == 0);
+    used->configure(cfg);
+    fresh->configure(cfg);
+    size_t timed = 0;
+    for (size_t k = 0; k < samples.size(); ++k) {
+        const MonitorStatus& a = fresh->update(samples[k]);
+        const MonitorStatus& b = used->update(samples[k]);
+        INFO("sample " << k);
+        REQUIRE(a.time_valid == b.time_valid);
+        REQUIRE(a.remaining_time_s == b.remaining_time_s);
+        REQUIRE(a.total_time_s == b.total_time_s);
+        REQUIRE(a.expected_time_s == b.expected_time_s);
+        REQUIRE(a.remaining_energy_wh == b.remaining_energy_wh);
+        REQUIRE(a.soc == b.soc);
+        REQUIRE(a.capacity_ah == b.capacity_ah);
+        REQUIRE(a.capacity_sigma_ah == b.capacity_sigma_ah);
+        REQUIRE(a.resistance_ohm == b.resistance_ohm);
+        REQUIRE(a.consumed_mah == b.consumed_mah);
+        REQUIRE(a.warnings == b.warnings);
+        REQUIRE(a.flying == b.flying);
+        REQUIRE(std::memcmp(a.cell_resistance_ohm, b.cell_resistance_ohm, sizeof a.cell_resistance_ohm) == 0);
+        REQUIRE(std::memcmp(a.cell_capacity_deficit, b.cell_capacity_deficit, sizeof a.cell_capacity_deficit) == 0);
+        if (a.time_valid) ++timed;
+    }
+    CHECK(timed > 2000);
 }

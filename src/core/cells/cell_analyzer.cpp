@@ -82,7 +82,7 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
         status_.cell_count = static_cast<uint8_t>(cells);
     }
     // Resistance: pair with the newest sample at least `lag` old.
-    const uint64_t lag_us = static_cast<uint64_t>(config_.lag_s * 1.0e6f);
+    const uint64_t lag_us = static_cast<uint32_t>(config_.lag_s * 1.0e6f);  // 32 bits, as in DifferenceResistanceEstimator
     const int pick = pick_lagged(t_us_, head_, count_, kHistory, time_us, lag_us);
     if (pick >= 0) {
         const float di = current_a - current_a_[pick];

@@ -19,7 +19,9 @@ void DifferenceResistanceEstimator::configure(const Config& config) {
 void DifferenceResistanceEstimator::update(uint64_t time_us, float voltage_v, float current_a) {
     const float dt_s = count_ > 0 && time_us > last_us_ ? static_cast<float>(time_us - last_us_) * 1.0e-6f : 0.0f;
     last_us_ = time_us;
-    const uint64_t lag_us = static_cast<uint64_t>(config_.lag_s * 1.0e6f);
+    // Through 32 bits (lags are at most 60 s): a float to 64-bit conversion is a library call
+    // that works in double on some targets (libgcc's on ARM), per update.
+    const uint64_t lag_us = static_cast<uint32_t>(config_.lag_s * 1.0e6f);
     // Newest sample at least `lag` old; a gap much longer than the lag breaks the pair.
     const int pick = pick_lagged(t_us_, head_, count_, kHistory, time_us, lag_us);
     t_us_[head_] = time_us;

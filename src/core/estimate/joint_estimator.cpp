@@ -24,6 +24,11 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     cells_ = cells_in_series > 0 ? cells_in_series : 1;
     ocv_.configure(config.ocv, cells_in_series, rated);
     solver_.set_cutoff_delay_s(config.cutoff_delay_s);
+    // A monitor configured again (a new pack without a restart) starts as a new one: a solve
+    // left under way and finished on the new pack had its remaining time off by up to 107 s
+    // after the take-off and by 7.6 s a minute later (logs/example-4s.csv twice; test_monitor.cpp).
+    solver_.stop();
+    for (float& r : results_) r = 0.0f;
     DifferenceResistanceEstimator::Config rc = config.resistance;
     rc.initial_resistance_ohm = rated.internal_resistance_ohm;
     resistance_.configure(rc);
@@ -53,7 +58,7 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     polarisation_ref_ohm_ = 0.0f;
     start_soc_ = 1.0f;
     takeoff_soc_valid_ = false;
-    charge_total_ah_ = rest_s_ = ground_s_ = 0.0f;
+    charge_total_ah_ = rest_s_ = ground_s_ = gap_hold_s_ = 0.0f;
     has_flown_ = false;
     taken_off_ = false;
     rest_reads_ = 0;

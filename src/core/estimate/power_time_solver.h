@@ -28,6 +28,8 @@ public:
     // Time the flight goes on at the power after the loaded voltage reaches the minimum
     // (a failsafe's filter or hold time; 0 = the crossing ends it). Kept across starts.
     void set_cutoff_delay_s(float delay_s) { cutoff_delay_s_ = delay_s > 0.0f ? delay_s : 0.0f; }
+    // Drops a solve under way: the next advance() returns at once and a new start() is due.
+    void stop() { done_ = true; }
     // Runs up to `max_steps` steps; returns true when the result is complete.
     bool advance(const OcvCurve& ocv, int max_steps);
     bool done() const { return done_; }
