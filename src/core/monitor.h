@@ -2,7 +2,7 @@
 // one status struct. The same object runs on the ESP8266 and in `battsim replay`; it
 // sees only samples and their time stamps. To embed it in other firmware (the sources to
 // compile, the config, the costs, the assumptions): docs/embedding.md and its compiled
-// example, examples/embed/embed_example.cpp.
+// example, tests/embed/embed_example.cpp.
 #pragma once
 #include <stdint.h>
 

@@ -1,4 +1,4 @@
-// docs/embedding.md's example (examples/embed/embed_example.cpp: the core alone, fed one
+// docs/embedding.md's example (tests/embed/embed_example.cpp: the core alone, fed one
 // Sample per reading by its own reader, configured by an exported header) against `battsim
 // replay` of the same log and config: the same numbers in every row, the same warnings at
 // the same times. Keeps the page's example and its claims from going stale.

@@ -8,11 +8,11 @@
 // (tests/cli/test_embed_example_cli.cpp). The C library alone (stdio for the stand-in and
 // the printout); no battsim host code.
 //
-// Built by CMake (examples/embed/CMakeLists.txt) against the core sources with the core's
+// Built by CMake (tests/embed/CMakeLists.txt) against the core sources with the core's
 // rules (-fno-exceptions -fno-rtti) and -Wconversion -Wdouble-promotion -Werror; by hand:
 //   build/battsim export-config --firmware configs/sim-4s.json --estimator joint -o battsim_config.h
 //   g++ -std=c++17 -O2 -ffp-contract=off -fno-exceptions -fno-rtti -Isrc -I.
-//       examples/embed/embed_example.cpp $(find src/core -name '*.cpp') -o embed_example
+//       tests/embed/embed_example.cpp $(find src/core -name '*.cpp') -o embed_example
 //   ./embed_example logs/example-4s.csv
 #include <math.h>
 #include <stdint.h>
