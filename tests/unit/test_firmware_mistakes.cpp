@@ -25,6 +25,40 @@ std::string small_raw_log() {
     return log;
 }
 
+// The same rest and load with the shunt's sense wires swapped from reading `from` to `to`:
+// shunt and current read negative, and the rest's -0.39 mV is -2.0 A through the reference
+// calibration (its offset is -0.98 A), beyond minus the take-off current already.
+std::string swapped_raw_log(int from, int to) {
+    std::string log;
+    for (int k = 0; k < 300; ++k) {
+        const bool load = k >= 100 && k < 200;
+        const bool swapped = k >= from && k < to;
+        log += std::to_string(630 + 67 * k) + ",16.60,4.150,4.150,4.150,4.150," +
+               (swapped ? (load ? "-10000,-4.1550," : "-50,-0.3900,") : (load ? "10000,4.1550," : "50,0.3900,")) + "\n";
+    }
+    return log;
+}
+
+// Runs the monitor over `log`, every OLED frame written to `oled_path`; returns the UART's
+// bytes, a `status` at the end included.
+std::string monitor_status_after(const std::string& log, const std::string& oled_path) {
+    fw::host::RawLogSource source(log);
+    fw::host::MockClock clock;
+    fw::host::LogSensors sensors(source, clock);
+    fw::host::DirectoryStorage storage(".", false);  // no card
+    fw::host::TextDisplay display(clock, oled_path);
+    fw::host::ScriptedSerial serial;
+    auto app = std::make_unique<fw::MonitorApp>(sensors, clock, storage, display, serial);
+    fw::MonitorAppConfig cfg;
+    cfg.monitor = battsim_generated::monitor_config();
+    app->begin(cfg);
+    serial.feed("hello\n");
+    while (!sensors.finished()) app->step();
+    serial.feed("status\n");
+    app->step();
+    return serial.output();
+}
+
 // The first n comma-separated fields of a CSV line.
 std::string first_fields(const std::string& line, int n) {
     size_t end = 0;
@@ -127,4 +161,24 @@ TEST_CASE("the status note's output list splits on commas with no empty items", 
         ++notes;
     }
     CHECK(notes == 9);  // "status" and one a switch
+}
+
+TEST_CASE("monitor says SIGN when the shunt's sense wires are swapped, not on a moment of braking", "[firmware]") {
+    const std::string dir = fwtest::temp_dir("fwsign");
+    struct Case {
+        int from, to;
+        bool reversed;
+    };
+    // Swapped from the start; only in the air (readings 120-199, 5.4 s); a brief reversal in
+    // the air (readings 120-145, 1.7 s, as an ESC's braking would be, but longer); none.
+    for (const Case c : {Case{0, 300, true}, Case{120, 200, true}, Case{120, 146, false}, Case{0, 0, false}}) {
+        INFO("swapped from reading " << c.from << " to " << c.to);
+        const std::string log = dir + "/swapped.csv";
+        fwtest::write_file(log, swapped_raw_log(c.from, c.to));
+        const std::string out = monitor_status_after(log, dir + "/oled.txt");
+        const std::string oled = fwtest::read_file(dir + "/oled.txt");
+        REQUIRE(out.find(" flights=") != std::string::npos);
+        CHECK((out.find(" current=reversed out=") != std::string::npos) == c.reversed);
+        CHECK((oled.find("SIGN") != std::string::npos) == c.reversed);
+    }
 }

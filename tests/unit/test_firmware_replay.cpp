@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -408,6 +409,35 @@ TEST_CASE("firmware keeps the long-term averages on the SD card across flights",
         differs = !fwtest::same_bits(fresh.statuses[i].avg_power_w, second.statuses[i].avg_power_w);
     }
     CHECK(differs);
+}
+
+TEST_CASE("firmware reset in the air counts the flight once, in a second log", "[firmware][data]") {
+    // Flight 30 cut at 202 s: the first boot takes off and never lands, the second boots in
+    // the air. The count is saved at a landing, so the first boot's take-off is never saved.
+    const std::string dir = fwtest::temp_dir("fwreset");
+    const std::string sd = dir + "/card";
+    REQUIRE(std::filesystem::create_directory(sd));
+    std::istringstream whole(fwtest::read_file(flight_path(30)));
+    std::string before, after, line;
+    while (std::getline(whole, line)) {
+        (std::stol(line.substr(0, line.find(','))) < 202000 ? before : after) += line + "\n";
+    }
+    REQUIRE_FALSE(before.empty());
+    REQUIRE_FALSE(after.empty());
+    fwtest::write_file(dir + "/before.csv", before);
+    fwtest::write_file(dir + "/after.csv", after);
+
+    const FirmwareRun first = run_monitor(dir + "/before.csv", sd);
+    CHECK(first.state.flights == 1);
+    CHECK(first.state.averages_saved == 0);
+    const FirmwareRun second = run_monitor(dir + "/after.csv", sd);
+    CHECK_FALSE(second.state.averages_loaded);
+    CHECK(second.state.log_path == std::string("battsim/log0002.csv"));
+    CHECK(second.state.averages_saved >= 1);
+    const std::string text = fwtest::read_file(sd + "/" + fw::kAveragesPath);
+    fw::StoredAverages stored;
+    REQUIRE(fw::parse_averages(text.data(), text.size(), stored));
+    CHECK(stored.flights == 1);
 }
 
 TEST_CASE("firmware counts the readings it missed from the log's gaps", "[firmware][data]") {

@@ -76,7 +76,9 @@ void draw_monitor_page(Display& d, const MonitorPage& page) {
     d.text(0, 4, r.c_str());
 
     r.clear();
-    if (s.warnings == 0) r.append("ok");
+    // Before everything: with the current reversed no estimate means anything.
+    if (page.current_reversed) r.append("SIGN ");
+    if (s.warnings == 0 && !page.current_reversed) r.append("ok");
     // The verdict first: the row is cut at 21 columns when everything is raised at once.
     if (s.warnings & (1u << core::kWarnShortFlight)) r.append("SHORT ");
     if (s.warnings & (1u << core::kWarnLowCapacity)) r.append("CAP ");

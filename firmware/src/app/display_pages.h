@@ -16,6 +16,7 @@ struct MonitorPage {
     const core::MonitorStatus* status = nullptr;
     ReadingCounters counters;
     bool sd_ok = true;
+    bool current_reversed = false;  // MonitorAppState::current_reversed
 };
 
 // 16.42V  23.5A FLY

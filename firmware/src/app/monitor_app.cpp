@@ -80,6 +80,7 @@ void MonitorApp::begin(const MonitorAppConfig& config) {
     series_cells_ = series_cells_for(mc.cells_in_series);
     format_series_header(series_cells_, header_);
     was_flying_ = false;
+    reversed_run_ = false;
     displayed_ = false;
     last_sync_ms_ = clock_.millis();
     // The log file is created when SD output is first on, not before: no empty files.
@@ -140,12 +141,29 @@ MonitorApp::Step MonitorApp::step() {
     // flying: the twin follows the same rule.
     if (s.sample_valid && s.initialised && s.flying) current_average_.update(s.current_a, s.dt_s);
     ++state_.samples;
+    note_reversed_current();
     if (s.flying && !was_flying_) ++state_.flights;
     const bool landed = was_flying_ && !s.flying;
     was_flying_ = s.flying;
     write_outputs();
     if (landed && config_.remember_averages) save_averages();
     return Step::Sample;
+}
+
+// Swapped sense wires turn a flying drone's current negative, so the monitor never sees a
+// take-off and reads the pack as resting for the whole flight. A drone carries no charger and
+// an ESC's braking feeds back for moments only: a current held below minus the take-off
+// current for 2 s is the wiring (or an offset as large), and the OLED and `status` say so.
+void MonitorApp::note_reversed_current() {
+    if (!(sample_.current_a <= -monitor_.config().flying.min_flying_current_a)) {
+        reversed_run_ = false;
+        return;
+    }
+    if (!reversed_run_) {
+        reversed_run_ = true;
+        reversed_since_us_ = sample_.time_us;
+    }
+    if (sample_.time_us - reversed_since_us_ >= kReversedHoldUs) state_.current_reversed = true;
 }
 
 void MonitorApp::write_outputs() {
@@ -212,6 +230,7 @@ void MonitorApp::draw_display() {
     page.status = &monitor_.status();
     page.counters = readings_.counters();
     page.sd_ok = state_.sd_ok || !state_.outputs.sd;
+    page.current_reversed = state_.current_reversed;
     draw_monitor_page(display_, page);
 }
 
@@ -287,6 +306,7 @@ void MonitorApp::send_status_note() {
     t.append_uint(state_.sd_errors);
     t.append(" flights=");
     t.append_uint(state_.flights);
+    if (state_.current_reversed) t.append(" current=reversed");
     t.append(" out=");
     // The outputs that are on, comma-separated with no empty items ("none" for none), so a
     // host can split the list.

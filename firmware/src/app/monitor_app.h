@@ -37,6 +37,10 @@ struct MonitorAppConfig {
     uint32_t poll_us = 1000;             // conversion-ready polling interval
 };
 
+// How long a current below minus the take-off current must last to be read as reversed wiring
+// (MonitorAppState::current_reversed): longer than any ESC's braking.
+constexpr uint64_t kReversedHoldUs = 2000000;
+
 struct MonitorAppState {
     bool sensors_ok = false;
     bool sd_ok = false;      // card present and log file open
@@ -47,6 +51,9 @@ struct MonitorAppState {
     uint32_t flights = 0;    // take-offs seen, including those of earlier boots
     uint32_t samples = 0;
     uint32_t averages_saved = 0;
+    // The current held below minus the take-off current for kReversedHoldUs: the shunt's
+    // sense wires are the wrong way round (or its offset is far off). Kept for the boot.
+    bool current_reversed = false;
     Outputs outputs;
 };
 
@@ -90,6 +97,7 @@ private:
     void draw_display();
     void send_status_note();
     void silence_buzzer();
+    void note_reversed_current();
 
     Sensors& sensors_;
     Clock& clock_;
@@ -112,6 +120,8 @@ private:
     bool card_ok_ = false;
     bool log_opened_ = false;  // one log file per boot, opened once
     bool was_flying_ = false;
+    bool reversed_run_ = false;      // the current is below minus the take-off current...
+    uint64_t reversed_since_us_ = 0;  // ... since this sample
     uint32_t last_sync_ms_ = 0;
     uint32_t last_display_ms_ = 0;
     bool displayed_ = false;

@@ -74,7 +74,7 @@ using logio::ByteStream;
 using logio::fixed;
 using logio::le;
 using logio::NoteLog;
-using logio::quoted;
+using logio::escaped_quoted;
 
 constexpr size_t kMaxTextLine = 64 * 1024;
 constexpr int kMaxFormatChars = 64;
@@ -149,7 +149,7 @@ void complete_format(DfFormat& f, const std::string& path, long line, const std:
     f.defined_at = where;
     // Text errors carry the line number in InputError itself; binary ones name the byte offset.
     const std::string head =
-        (line > 0 ? std::string() : where + ": ") + "FMT for type " + std::to_string(f.id) + " " + quoted(f.name);
+        (line > 0 ? std::string() : where + ": ") + "FMT for type " + std::to_string(f.id) + " " + escaped_quoted(f.name);
     if (f.length < 3 || f.length > 255)
         throw InputError(path, line, 0,
                          head + " declares length " + std::to_string(f.length) +
@@ -173,13 +173,13 @@ void complete_format(DfFormat& f, const std::string& path, long line, const std:
     f.why_not.clear();
     if (unknown) {
         f.decodable = false;
-        f.why_not = "its format " + quoted(f.format) + " uses the unknown format character " +
-                    quoted(std::string(1, unknown));
+        f.why_not = "its format " + escaped_quoted(f.format) + " uses the unknown format character " +
+                    escaped_quoted(std::string(1, unknown));
         f.offsets.clear();
     } else if (size != f.length) {
         throw InputError(path, line, 0,
                          head + " declares length " + std::to_string(f.length) + " but its format " +
-                             quoted(f.format) + " needs " + std::to_string(size) +
+                             escaped_quoted(f.format) + " needs " + std::to_string(size) +
                              " bytes (3-byte header + " + std::to_string(size - 3) + ")");
     } else if (f.labels.size() != f.format.size()) {
         f.decodable = false;
@@ -199,7 +199,7 @@ void complete_format(DfFormat& f, const std::string& path, long line, const std:
         if (f.role != Role::None)
             notes.add("fmt", where + ": " + f.name + " cannot be decoded: " + f.why_not);
         else
-            notes.add("fmt", where + ": messages " + quoted(f.name) + " are skipped: " + f.why_not);
+            notes.add("fmt", where + ": messages " + escaped_quoted(f.name) + " are skipped: " + f.why_not);
         return;
     }
     auto numeric = [&](int i) { return i >= 0 && char_is_number(f.format[static_cast<size_t>(i)]) ? i : -1; };
@@ -234,7 +234,7 @@ void complete_format(DfFormat& f, const std::string& path, long line, const std:
         if (f.volt < 0 || f.curr < 0) {
             f.decodable = false;
             f.why_not = "its FMT has no numeric Volt and Curr columns (columns: " +
-                        quoted([&] {
+                        escaped_quoted([&] {
                             std::string s;
                             for (auto& l : f.labels) s += (s.empty() ? "" : ",") + l;
                             return s;
@@ -251,7 +251,7 @@ void complete_format(DfFormat& f, const std::string& path, long line, const std:
         if (f.parm_name < 0 || f.parm_value < 0) {
             // Not fatal: parameters are extra information, the battery data does not need them.
             notes.add("fmt", where + ": PARM messages are skipped: their FMT has no text Name and numeric Value "
-                                     "columns (format " + quoted(f.format) + ")");
+                                     "columns (format " + escaped_quoted(f.format) + ")");
             f.role = Role::None;
         }
     }
@@ -472,7 +472,7 @@ private:
                 return;
             }
             throw InputError(path_, 0, 0, where + ": FMT message has an unreadable name/format/columns " +
-                                              quoted(f.name) + " " + quoted(f.format));
+                                              escaped_quoted(f.name) + " " + escaped_quoted(f.format));
         }
         size_t start = 0;
         while (start <= cols.size() && !cols.empty()) {
@@ -484,7 +484,7 @@ private:
         if (f.id == 128) {
             if (f.length != 89 || f.format != "BBnNZ")
                 throw InputError(path_, 0, 0, where + ": FMT redefines FMT itself as length " +
-                                                  std::to_string(f.length) + " format " + quoted(f.format) +
+                                                  std::to_string(f.length) + " format " + escaped_quoted(f.format) +
                                                   "; expected 89 and 'BBnNZ'");
             return;
         }
@@ -546,7 +546,7 @@ public:
     }
     std::string raw(int i) const override {
         if (i < 0 || static_cast<size_t>(i) + 1 >= v.size()) return "(missing)";
-        return quoted(v[static_cast<size_t>(i) + 1]);
+        return escaped_quoted(v[static_cast<size_t>(i) + 1]);
     }
     long column_of(int i) const override { return i + 2; }
     std::string text(int i) const override {
@@ -579,7 +579,7 @@ public:
             if (it == by_name_.end()) {
                 if (!(fields_.v.size() == 1 && name.empty())) {
                     if (other_lines_++ == 0) first_other_ = lineno_;
-                    if (other_example_.empty()) other_example_ = quoted(text, 30);
+                    if (other_example_.empty()) other_example_ = escaped_quoted(text, 30);
                 }
                 continue;
             }
@@ -666,20 +666,20 @@ private:
                                  " fields; expected FMT, type, length, name, format, columns");
         long id = 0, length = 0;
         if (!parse_long(v[1], id) || id < 0 || id > 255)
-            throw InputError(path_, lineno_, 2, "FMT type must be an integer 0..255, found " + quoted(v[1]));
+            throw InputError(path_, lineno_, 2, "FMT type must be an integer 0..255, found " + escaped_quoted(v[1]));
         if (!parse_long(v[2], length))
-            throw InputError(path_, lineno_, 3, "FMT length must be an integer, found " + quoted(v[2]));
+            throw InputError(path_, lineno_, 3, "FMT length must be an integer, found " + escaped_quoted(v[2]));
         DfFormat f;
         f.id = static_cast<int>(id);
         f.name = std::string(v[3]);
         if (v.size() > 4) f.format = std::string(v[4]);  // "FMT, 10, 3, STRT" has no columns at all
         if (f.name.empty() || f.name.size() > 16)
-            throw InputError(path_, lineno_, 4, "FMT name must be 1..16 characters, found " + quoted(v[3]));
+            throw InputError(path_, lineno_, 4, "FMT name must be 1..16 characters, found " + escaped_quoted(v[3]));
         for (size_t i = 5; i < v.size(); ++i)
             if (!v[i].empty()) f.labels.emplace_back(v[i]);
         if (length < 3 || length > 255)
             throw InputError(path_, lineno_, 3,
-                             "FMT for type " + std::to_string(f.id) + " " + quoted(f.name) +
+                             "FMT for type " + std::to_string(f.id) + " " + escaped_quoted(f.name) +
                                  " declares length " + std::string(v[2]) +
                                  "; a DataFlash message is 3..255 bytes (3-byte header + payload)");
         f.length = static_cast<int>(length);
@@ -1072,7 +1072,7 @@ private:
         for (char c : name)
             if (static_cast<unsigned char>(c) <= 0x20 || static_cast<unsigned char>(c) >= 0x7F) printable = false;
         if (!printable) {
-            notes_.add("parameter", where + ": PARM.Name " + quoted(name) + " is not a parameter name; row skipped");
+            notes_.add("parameter", where + ": PARM.Name " + escaped_quoted(name) + " is not a parameter name; row skipped");
             return;
         }
         if (first_params_.seen(name)) return;  // a later change; the first value is the one in force at start

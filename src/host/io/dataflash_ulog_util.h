@@ -90,7 +90,7 @@ inline void FirstParameters::add(const std::string& name, double value, NoteLog&
 }
 
 // Quotes bytes for a message: printable ASCII as is, anything else as \xNN.
-inline std::string quoted(std::string_view s, size_t max_len = 40) {
+inline std::string escaped_quoted(std::string_view s, size_t max_len = 40) {
     static const char* hex = "0123456789ABCDEF";
     std::string r = "'";
     for (size_t i = 0; i < s.size() && i < max_len; ++i) {

@@ -54,7 +54,7 @@ using logio::ByteStream;
 using logio::fixed;
 using logio::le;
 using logio::NoteLog;
-using logio::quoted;
+using logio::escaped_quoted;
 
 constexpr uint8_t kMagic[7] = {'U', 'L', 'o', 'g', 0x01, 0x12, 0x35};
 constexpr size_t kMaxDefinitionBytes = 8 * 1024 * 1024;  // all 'F' strings together
@@ -257,7 +257,7 @@ public:
                     if (type >= 'A' && type <= 'Z') {
                         // A message type of a newer ULog: the spec has readers skip it by its size.
                         notes_.add("unknown-type", "byte " + std::to_string(off) + ": unknown message type " +
-                                                       quoted(std::string(1, type)) + " (" + std::to_string(size) +
+                                                       escaped_quoted(std::string(1, type)) + " (" + std::to_string(size) +
                                                        " bytes) skipped");
                         break;
                     }
@@ -342,11 +342,11 @@ private:
         bool name_ok = !name.empty();
         for (char c : name) name_ok = name_ok && name_char_ok(c);
         if (!name_ok) {
-            notes_.add("parameter", at + ": key " + quoted(key) + " is not 'type name'; skipped");
+            notes_.add("parameter", at + ": key " + escaped_quoted(key) + " is not 'type name'; skipped");
             return;
         }
         if (type != "float" && type != "int32_t") {
-            notes_.add("parameter", at + " " + name + " has type " + quoted(type) +
+            notes_.add("parameter", at + " " + name + " has type " + escaped_quoted(type) +
                                         "; ULog parameters are int32_t or float; skipped");
             return;
         }
@@ -397,11 +397,11 @@ private:
         const std::string s(reinterpret_cast<const char*>(p), size);
         const size_t colon = s.find(':');
         if (colon == std::string::npos)
-            fail(off, "format message " + quoted(s) + " has no ':' between the message name and its fields");
+            fail(off, "format message " + escaped_quoted(s) + " has no ':' between the message name and its fields");
         const std::string name = s.substr(0, colon);
-        if (name.empty()) fail(off, "format message " + quoted(s) + " has an empty message name");
+        if (name.empty()) fail(off, "format message " + escaped_quoted(s) + " has an empty message name");
         for (char c : name)
-            if (!name_char_ok(c)) fail(off, "format message name " + quoted(name) + " has invalid characters");
+            if (!name_char_ok(c)) fail(off, "format message name " + escaped_quoted(name) + " has invalid characters");
         UFormat fmt;
         fmt.defined_at = off;
         size_t start = colon + 1;
@@ -415,19 +415,19 @@ private:
             if (item.empty()) continue;
             const size_t space = item.rfind(' ');
             if (space == std::string::npos)
-                fail(off, "format " + quoted(name) + ": field " + quoted(item) + " has no type (expected 'type name')");
+                fail(off, "format " + escaped_quoted(name) + ": field " + escaped_quoted(item) + " has no type (expected 'type name')");
             UField f;
             f.name = item.substr(space + 1);
             std::string type = item.substr(0, space);
             while (!type.empty() && type.back() == ' ') type.pop_back();
             for (char c : f.name)
                 if (!name_char_ok(c))
-                    fail(off, "format " + quoted(name) + ": field name " + quoted(f.name) + " has invalid characters");
+                    fail(off, "format " + escaped_quoted(name) + ": field name " + escaped_quoted(f.name) + " has invalid characters");
             const size_t open = type.find('[');
             const size_t close = type.find(']');
             if (open != std::string::npos) {
                 if (close == std::string::npos || close < open || close != type.size() - 1)
-                    fail(off, "format " + quoted(name) + ": unclosed or malformed array type " + quoted(type) +
+                    fail(off, "format " + escaped_quoted(name) + ": unclosed or malformed array type " + escaped_quoted(type) +
                                   " (expected type[N])");
                 const std::string n = type.substr(open + 1, close - open - 1);
                 long count = 0;
@@ -435,22 +435,22 @@ private:
                 for (char c : n) digits = digits && c >= '0' && c <= '9';
                 if (digits) count = std::stol(n);
                 if (!digits || count < 1 || count > static_cast<long>(kMaxMessageBytes))
-                    fail(off, "format " + quoted(name) + ": array length " + quoted(n) + " in " + quoted(type) +
+                    fail(off, "format " + escaped_quoted(name) + ": array length " + escaped_quoted(n) + " in " + escaped_quoted(type) +
                                   " must be an integer 1.." + std::to_string(kMaxMessageBytes));
                 f.count = count;
                 f.is_array = true;
                 type = type.substr(0, open);
             } else if (close != std::string::npos) {
-                fail(off, "format " + quoted(name) + ": stray ']' in type " + quoted(type));
+                fail(off, "format " + escaped_quoted(name) + ": stray ']' in type " + escaped_quoted(type));
             }
-            if (type.empty()) fail(off, "format " + quoted(name) + ": field " + quoted(f.name) + " has an empty type");
+            if (type.empty()) fail(off, "format " + escaped_quoted(name) + ": field " + escaped_quoted(f.name) + " has an empty type");
             for (char c : type)
                 if (!name_char_ok(c))
-                    fail(off, "format " + quoted(name) + ": type " + quoted(type) + " has invalid characters");
+                    fail(off, "format " + escaped_quoted(name) + ": type " + escaped_quoted(type) + " has invalid characters");
             f.type = type;
             fmt.fields.push_back(std::move(f));
         }
-        if (fmt.fields.empty()) fail(off, "format " + quoted(name) + " defines no fields");
+        if (fmt.fields.empty()) fail(off, "format " + escaped_quoted(name) + " defines no fields");
         formats_[name] = std::move(fmt);
         sizes_.clear();  // a (re)definition may change nested sizes
     }
@@ -468,17 +468,17 @@ private:
                 fail(off, "recursive format definition: " + loop + type);
             }
         if (static_cast<int>(chain.size()) >= kMaxNesting)
-            fail(off, "format nesting deeper than " + std::to_string(kMaxNesting) + " levels at " + quoted(type));
+            fail(off, "format nesting deeper than " + std::to_string(kMaxNesting) + " levels at " + escaped_quoted(type));
         auto it = formats_.find(type);
         if (it == formats_.end())
-            fail(off, "unknown type " + quoted(type) + " used in format " + quoted(chain.empty() ? type : chain.back()) +
+            fail(off, "unknown type " + escaped_quoted(type) + " used in format " + escaped_quoted(chain.empty() ? type : chain.back()) +
                           " (neither a basic type nor a defined format)");
         chain.push_back(type);
         size_t total = 0;
         for (const auto& f : it->second.fields) {
             total += type_size(f.type, chain, off) * static_cast<size_t>(f.count);
             if (total > kMaxMessageBytes)
-                fail(off, "format " + quoted(type) + " is larger than " + std::to_string(kMaxMessageBytes) +
+                fail(off, "format " + escaped_quoted(type) + " is larger than " + std::to_string(kMaxMessageBytes) +
                               " bytes, more than any ULog message can carry");
         }
         chain.pop_back();
@@ -528,13 +528,13 @@ private:
             s.count = f.count;
             auto need_number = [&](Slot& dst, bool array_ok) {
                 if (basic_size(f.type) < 0 || (f.is_array && !array_ok))
-                    fail(off, "battery_status field " + quoted(f.name) + " has type " + quoted(f.type) +
+                    fail(off, "battery_status field " + escaped_quoted(f.name) + " has type " + escaped_quoted(f.type) +
                                   (f.is_array ? "[" + std::to_string(f.count) + "]" : "") + ", expected a number");
                 if (!dst.present) dst = s;
             };
             if (f.name == "timestamp") {
                 if (f.type != "uint64_t" || f.is_array)
-                    fail(off, "battery_status field 'timestamp' must be uint64_t, found " + quoted(f.type));
+                    fail(off, "battery_status field 'timestamp' must be uint64_t, found " + escaped_quoted(f.type));
                 if (!l.timestamp.present) l.timestamp = s;
             } else if (f.name == "voltage_v") {
                 need_number(l.voltage, false);

@@ -35,7 +35,7 @@ bool ends_with(const std::string& s, const char* suffix) {
 
 // gnuplot single-quoted string: a quote is written twice. What is not UTF-8 (a Latin-1 log
 // name) is replaced, or the SVG is not well-formed XML.
-std::string quoted(const std::string& s) {
+std::string gnuplot_quoted(const std::string& s) {
     std::string q = "'";
     for (char c : valid_utf8(s)) {
         if (c == '\'') q += "''";
@@ -177,7 +177,7 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
     script += svg ? "set terminal svg size " : "set terminal pngcairo size ";
     script += std::to_string(width_px) + "," + std::to_string(height) + " font 'DejaVu Sans,10' noenhanced\n";
     script += "set encoding utf8\n";  // units such as mΩ in labels
-    script += "set output " + quoted(temp) + "\n";
+    script += "set output " + gnuplot_quoted(temp) + "\n";
     // Data first, as datablocks; a blank line breaks a line at missing values.
     int block = 0;
     for (const Panel& p : panels) {
@@ -203,7 +203,7 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
     bool any_y2 = false;
     for (const Panel& p : panels) any_y2 = any_y2 || p.y2_used();
     script += "set lmargin 11\nset rmargin " + std::string(any_y2 ? "11" : "3") + "\n";
-    script += "set multiplot layout " + std::to_string(panels.size()) + ",1 title " + quoted(title) + "\n";
+    script += "set multiplot layout " + std::to_string(panels.size()) + ",1 title " + gnuplot_quoted(title) + "\n";
     block = 0;
     for (const Panel& p : panels) {
         script += "unset arrow\nunset label\nset grid\n";
@@ -213,10 +213,10 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
         } else {
             script += "set tmargin -1\nset key top right opaque box\n";
         }
-        script += "set title " + quoted(p.title) + "\n";
-        script += "set xlabel " + quoted(p.xlabel) + "\nset ylabel " + quoted(p.ylabel) + "\n";
+        script += "set title " + gnuplot_quoted(p.title) + "\n";
+        script += "set xlabel " + gnuplot_quoted(p.xlabel) + "\nset ylabel " + gnuplot_quoted(p.ylabel) + "\n";
         if (p.y2_used()) {
-            script += "set ytics nomirror\nset y2tics\nset y2label " + quoted(p.y2label) + "\n";
+            script += "set ytics nomirror\nset y2tics\nset y2label " + gnuplot_quoted(p.y2label) + "\n";
         } else {
             script += "set ytics mirror\nunset y2tics\nunset y2label\n";
         }
@@ -236,7 +236,7 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
             std::string x;
             append_number(x, "%.9g", m.first);
             script += "set arrow from " + x + ", graph 0 to " + x + ", graph 1 nohead dt 2 lw 1.5 lc rgb 'black'\n";
-            script += "set label " + quoted(m.second) + " at " + x + ", graph 0.06 rotate by 90 offset -1,0 front\n";
+            script += "set label " + gnuplot_quoted(m.second) + " at " + x + ", graph 0.06 rotate by 90 offset -1,0 front\n";
         }
         // A plot of legend entries alone trips an assertion in gnuplot 5.4: an undefined
         // function, drawn as nothing, comes first.
@@ -253,9 +253,9 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
                 append_number(w, "%.2g", s.width);
                 cmd += " lw " + w;
             }
-            if (!s.color.empty()) cmd += " lc rgb " + quoted(s.color);
+            if (!s.color.empty()) cmd += " lc rgb " + gnuplot_quoted(s.color);
             if (s.has_points()) cmd += s.y2 ? " axes x1y2" : " axes x1y1";
-            cmd += " title " + quoted(s.has_points() || s.title.empty() ? s.title : s.title + " (no values)");
+            cmd += " title " + gnuplot_quoted(s.has_points() || s.title.empty() ? s.title : s.title + " (no values)");
         }
         script += cmd + "\n";
     }
