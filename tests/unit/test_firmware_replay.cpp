@@ -183,6 +183,7 @@ TEST_CASE("firmware on the raw flights: samples and cell-independent status equa
         }
         CHECK(cell4_differs == inconsistent_rows);
         CHECK(inconsistent_rows > 0);  // else this test would not need its second half
+        CHECK_FALSE(fw.state.current_reversed);  // no SIGN on a rightly wired flight
     }
 }
 
@@ -438,6 +439,31 @@ TEST_CASE("firmware reset in the air counts the flight once, in a second log", "
     fw::StoredAverages stored;
     REQUIRE(fw::parse_averages(text.data(), text.size(), stored));
     CHECK(stored.flights == 1);
+}
+
+TEST_CASE("firmware on flight 30 with the shunt's sense wires swapped says so and flies no flight", "[firmware][data]") {
+    // Every shunt and current reading's sign turned (columns 7 and 8 of the raw log).
+    const std::string dir = fwtest::temp_dir("fwswapped");
+    std::istringstream whole(fwtest::read_file(flight_path(30)));
+    std::string swapped, line;
+    while (std::getline(whole, line)) {
+        std::vector<std::string> f;
+        for (size_t a = 0, b; a <= line.size(); a = b + 1) {
+            b = std::min(line.find(',', a), line.size());
+            f.push_back(line.substr(a, b - a));
+        }
+        REQUIRE(f.size() >= 8);
+        for (size_t k : {6u, 7u}) f[k] = f[k][0] == '-' ? f[k].substr(1) : "-" + f[k];
+        for (size_t k = 0; k < f.size(); ++k) swapped += (k ? "," : "") + f[k];
+        swapped += "\n";
+    }
+    fwtest::write_file(dir + "/swapped.csv", swapped);
+    const FirmwareRun fw = run_monitor(dir + "/swapped.csv", "");
+    CHECK(fw.state.current_reversed);
+    CHECK(fw.state.flights == 0);
+    // From 2 s after the first sample: the rest already reads -2.0 A.
+    REQUIRE(fw.samples.size() > 100);
+    CHECK(fw.samples[0].current_a < -1.9f);
 }
 
 TEST_CASE("firmware counts the readings it missed from the log's gaps", "[firmware][data]") {
