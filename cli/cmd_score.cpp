@@ -42,10 +42,9 @@ std::function<int()> setup(CLI::App& sub) {
                    "noise; copy k adds 7919 k to each seed); figures pool every copy, with the copies' range beside them")
         ->check(CLI::Range(1, 100));
     sub.add_option("--log-format", a->log_format,
-                   "Fly every scenario with this log format instead of its own: raw (4 cells only), csv, edgetx "
-                   "(a radio's telemetry log), dataflash (an ArduPilot .bin log) or ulog (a PX4 .ulg log), as "
-                   "`battsim simulate --format`")
-        ->check(CLI::IsMember({"raw", "csv", "edgetx", "dataflash", "ulog"}));
+                   "Fly every scenario with this log format instead of its own, as `battsim simulate --format`: " +
+                       host::sim::sim_log_format_help())
+        ->check(CLI::IsMember(host::sim::sim_log_format_names()));
     sub.add_option("--columns", a->columns, "Estimator columns to run, comma-separated (default: all but the diagnostic solve-truth)");
     return [a]() -> int {
         std::vector<std::string> paths = a->paths;

@@ -33,9 +33,7 @@ std::function<int()> setup(CLI::App& sub) {
                    "Write NAME.csv (NAME.bin for dataflash, NAME.ulg for ulog) and NAME.truth.json here for every scenario");
     sub.add_option("--seed", a->seed, "Override the scenario's seed");
     sub.add_option("--format", a->format,
-                   "Override the log format: raw (4 cells only), csv, edgetx (a radio's telemetry log: pack "
-                   "voltage and current in 0.1 V and 0.1 A steps every log.interval_s, no cells), dataflash (an "
-                   "ArduPilot .bin log: BAT and BCL at 10 Hz) or ulog (a PX4 .ulg log: battery_status at 5 Hz)");
+                   "Override the log format: " + host::sim::sim_log_format_help());
     sub.add_option("--cutoff-v-per-cell", a->cutoff, "Override the truth's loaded cutoff voltage per cell (default: the monitor config's min_flight_voltage_v per cell)");
     return [a]() -> int {
         if (a->output.empty() == a->out_dir.empty()) {

@@ -391,3 +391,29 @@ TEST_CASE("A ground path carrying the main current: the bus and cell 1 read I·R
     // are tap differences, cell 4 is bus − tap 3, so only the bus and cell 1 move.
     check_lead("ground_lead_ohm", 0.002, 0);
 }
+
+TEST_CASE("Simulated log formats: one table names them, for scenarios, both commands and their messages", "[sim][sensor]") {
+    REQUIRE(sim_log_formats().size() == 5);
+    std::vector<std::string> names = sim_log_format_names();
+    REQUIRE(names == std::vector<std::string>{"raw", "csv", "edgetx", "dataflash", "ulog"});
+    for (const SimLogFormatEntry& e : sim_log_formats()) {
+        INFO(e.name);
+        SimLogFormat parsed = SimLogFormat::Csv;
+        CHECK(parse_sim_log_format(e.name, parsed));
+        CHECK(parsed == e.format);
+        CHECK(std::string(sim_log_format_name(e.format)) == e.name);
+        CHECK(std::string(sim_log_extension(e.format)) == e.extension);
+    }
+    SimLogFormat untouched = SimLogFormat::Radio;
+    CHECK_FALSE(parse_sim_log_format("auto", untouched));  // a scenario's default, not a format
+    CHECK_FALSE(parse_sim_log_format("ULOG", untouched));
+    CHECK(untouched == SimLogFormat::Radio);
+    CHECK(sim_log_format_help() ==
+          "raw (4 cells only), csv, edgetx (a radio's telemetry log: pack voltage and current in 0.1 V and 0.1 A "
+          "steps every log.interval_s, no cells), dataflash (an ArduPilot .bin log: BAT and BCL at 10 Hz) or ulog "
+          "(a PX4 .ulg log: battery_status at 5 Hz)");
+    CHECK(log_format_problem("xml", 4) ==
+          "expected \"auto\", \"raw\", \"csv\", \"edgetx\", \"dataflash\" or \"ulog\", found \"xml\"");
+    CHECK(log_format_problem("auto", 6).empty());
+    CHECK(log_format_problem("raw", 6) == "the raw logger format has exactly 4 cells; use \"csv\" for 6 cells");
+}

@@ -142,9 +142,14 @@ void resolve_defaults(Scenario& s) {
 }
 
 std::string log_format_problem(const std::string& format, int cells) {
-    if (format != "auto" && format != "raw" && format != "csv" && format != "edgetx" && format != "dataflash" &&
-        format != "ulog")
-        return "expected \"auto\", \"raw\", \"csv\", \"edgetx\", \"dataflash\" or \"ulog\", found \"" + format + "\"";
+    SimLogFormat parsed;
+    if (format != "auto" && !parse_sim_log_format(format, parsed)) {
+        std::string names = "\"auto\"";
+        const std::vector<std::string> others = sim_log_format_names();
+        for (size_t i = 0; i < others.size(); ++i)
+            names += (i + 1 == others.size() ? " or \"" : ", \"") + others[i] + "\"";
+        return "expected " + names + ", found \"" + format + "\"";
+    }
     if (format == "raw" && cells != 4)
         return "the raw logger format has exactly 4 cells; use \"csv\" for " + std::to_string(cells) + " cells";
     return std::string();
@@ -161,11 +166,8 @@ std::string override_log_format(std::vector<Scenario>& scenarios, const std::str
 }
 
 SimLogFormat log_format_of(const Scenario& s) {
-    if (s.log_format == "raw") return SimLogFormat::Raw;
-    if (s.log_format == "csv") return SimLogFormat::Csv;
-    if (s.log_format == "edgetx") return SimLogFormat::Radio;
-    if (s.log_format == "dataflash") return SimLogFormat::DataFlash;
-    if (s.log_format == "ulog") return SimLogFormat::ULog;
+    SimLogFormat format;
+    if (parse_sim_log_format(s.log_format, format)) return format;
     return s.pack.cells == 4 ? SimLogFormat::Raw : SimLogFormat::Csv;
 }
 

@@ -47,19 +47,55 @@ void append_fixed(std::string& out, int64_t value, int decimals) {
 
 }  // namespace
 
+const std::vector<SimLogFormatEntry>& sim_log_formats() {
+    static const std::vector<SimLogFormatEntry> formats{
+        {SimLogFormat::Raw, "raw", ".csv", "4 cells only"},
+        {SimLogFormat::Csv, "csv", ".csv", ""},
+        {SimLogFormat::Radio, "edgetx", ".csv",
+         "a radio's telemetry log: pack voltage and current in 0.1 V and 0.1 A steps every log.interval_s, no cells"},
+        {SimLogFormat::DataFlash, "dataflash", ".bin", "an ArduPilot .bin log: BAT and BCL at 10 Hz"},
+        {SimLogFormat::ULog, "ulog", ".ulg", "a PX4 .ulg log: battery_status at 5 Hz"},
+    };
+    return formats;
+}
+
 const char* sim_log_format_name(SimLogFormat f) {
-    switch (f) {
-        case SimLogFormat::Raw: return "raw";
-        case SimLogFormat::Csv: return "csv";
-        case SimLogFormat::Radio: return "edgetx";
-        case SimLogFormat::DataFlash: return "dataflash";
-        case SimLogFormat::ULog: return "ulog";
-    }
+    for (const SimLogFormatEntry& e : sim_log_formats())
+        if (e.format == f) return e.name;
     return "csv";
 }
 
 const char* sim_log_extension(SimLogFormat f) {
-    return f == SimLogFormat::DataFlash ? ".bin" : f == SimLogFormat::ULog ? ".ulg" : ".csv";
+    for (const SimLogFormatEntry& e : sim_log_formats())
+        if (e.format == f) return e.extension;
+    return ".csv";
+}
+
+bool parse_sim_log_format(const std::string& name, SimLogFormat& out) {
+    for (const SimLogFormatEntry& e : sim_log_formats()) {
+        if (name == e.name) {
+            out = e.format;
+            return true;
+        }
+    }
+    return false;
+}
+
+std::vector<std::string> sim_log_format_names() {
+    std::vector<std::string> names;
+    for (const SimLogFormatEntry& e : sim_log_formats()) names.emplace_back(e.name);
+    return names;
+}
+
+std::string sim_log_format_help() {
+    const std::vector<SimLogFormatEntry>& formats = sim_log_formats();
+    std::string help;
+    for (size_t i = 0; i < formats.size(); ++i) {
+        if (i > 0) help += i + 1 == formats.size() ? " or " : ", ";
+        help += formats[i].name;
+        if (formats[i].description[0] != '\0') help += std::string(" (") + formats[i].description + ")";
+    }
+    return help;
 }
 
 float firmware_current_ma(int32_t shunt_count, const core::ShuntCalibration& shunt) {

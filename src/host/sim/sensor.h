@@ -170,9 +170,25 @@ private:
 // log interval (the rows are thinned by the caller), no cells.
 // DataFlash and ULog: an autopilot's binary log (autopilot_log.h), written by the caller.
 enum class SimLogFormat { Raw, Csv, Radio, DataFlash, ULog };
-// The format's name as scenarios and the commands' --format give it, and its file extension.
+// A format's name (as scenarios and `simulate --format` / `score --log-format` give it), its
+// file extension and a few words for help texts.
+struct SimLogFormatEntry {
+    SimLogFormat format;
+    const char* name;
+    const char* extension;
+    const char* description;  // empty: the name says enough
+};
+// Every SimLogFormat, in the order help texts and messages list them: the one list a new
+// simulated format is added to. The names, the extension, the scenario reader's message and
+// both commands' option checks and help read it.
+const std::vector<SimLogFormatEntry>& sim_log_formats();
 const char* sim_log_format_name(SimLogFormat f);
 const char* sim_log_extension(SimLogFormat f);
+// The format named `name`; false when no entry has that name.
+bool parse_sim_log_format(const std::string& name, SimLogFormat& out);
+// The names for an option's check, and "raw (…), csv, … or ulog (…)" for its help.
+std::vector<std::string> sim_log_format_names();
+std::string sim_log_format_help();
 std::string format_header(SimLogFormat f, int cells);
 void format_record(SimLogFormat f, int cells, const core::ShuntCalibration& shunt, const LogRecord& r,
                    std::string& out);
