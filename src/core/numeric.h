@@ -6,7 +6,8 @@
 namespace battsim {
 namespace core {
 
-inline float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
+// NaN gives lo: a NaN state must not become an index (a table lookup casts the result).
+inline float clampf(float x, float lo, float hi) { return x > lo ? (x < hi ? x : hi) : lo; }
 inline float minf(float a, float b) { return a < b ? a : b; }
 inline float maxf(float a, float b) { return a > b ? a : b; }
 inline bool finitef(float x) { return isfinite(x) != 0; }

@@ -185,6 +185,10 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         m.current_average.short_time_s = m.power_average.short_time_s;
         m.current_average.long_time_s = m.power_average.long_time_s;
         r.number("remembered_average_power_w", m.power_average.initial_value, 0, kBig);
+        // The remaining time divides by it: 1e-38 W had written `inf` on every row before the flight.
+        if (m.power_average.initial_value > 0.0f && m.power_average.initial_value < 0.01f)
+            r.fail(r.child("remembered_average_power_w"), "expected 0 (none) or at least 0.01 W, found " +
+                                                              config_number(m.power_average.initial_value).dump());
         r.number("min_flying_current_a", m.flying.min_flying_current_a, 0, kBig);
         r.number("landed_hold_s", m.flying.landed_hold_s, 0, kBig);
         r.number("takeoff_confirm_s", m.flying.takeoff_confirm_s, 0, kBig);
@@ -286,6 +290,10 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
                 if (k > 0 && !(jc.ocv.cell_voltage_v[k] >= jc.ocv.cell_voltage_v[k - 1]))
                     r.fail(r.child("ocv_cell_voltage_v") + "[" + std::to_string(k) + "]", "must not fall as SOC rises");
             }
+            // A flat table has no slope anywhere: the filter could never read charge off the
+            // voltage, and the capacity stayed at its rated value without a word.
+            if (!(jc.ocv.cell_voltage_v[jc.ocv.points - 1] > jc.ocv.cell_voltage_v[0]))
+                r.fail(r.child("ocv_cell_voltage_v"), "expected the full end above the empty end; a flat table reads no charge");
         }
     }
     if (const json* s = root.member("sensor")) {
@@ -299,6 +307,14 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("min_cell_voltage_v", m.sensor.min_cell_voltage_v, 0, 100);
         r.number("max_cell_voltage_v", m.sensor.max_cell_voltage_v, 0, 100);
         r.number("max_cell_sum_error_v", m.sensor.max_cell_sum_error_v, 0, 100);
+        // Limits the wrong way round keep every sample out (or every cell reading, with a
+        // sensor-fault warning on a good log): said here, where the mistake is.
+        if (!(m.sensor.min_pack_voltage_v < m.sensor.max_pack_voltage_v))
+            r.fail(r.child("min_pack_voltage_v"), "must be below max_pack_voltage_v");
+        if (!(m.sensor.min_current_a < m.sensor.max_current_a))
+            r.fail(r.child("min_current_a"), "must be below max_current_a");
+        if (!(m.sensor.min_cell_voltage_v < m.sensor.max_cell_voltage_v))
+            r.fail(r.child("min_cell_voltage_v"), "must be below max_cell_voltage_v");
     }
     if (const json* s = root.member("telemetry")) {
         ObjectReader r(*s, root.child("telemetry"), origin);
@@ -512,9 +528,12 @@ std::vector<std::string> config_notes(const core::MonitorConfig& config, const L
     // A config for another pack runs without complaint (a 4S log with a 6S config read a
     // 0.5 Ah pack and a model error of 256 V), so say what the log shows.
     const int cells = config.cells_in_series;
+    // Each such note says how to get the config the log asks for, when it knows the log.
+    const std::string advice = log.path.empty() ? std::string(kOtherPackEnd)
+                                                : kMakeConfigAdvice + log.path + kMakeConfigAdviceEnd;
     if (log.cells > 0 && log.cells != cells) {
         notes.push_back("the log has " + std::to_string(log.cells) + " cell voltages but the config " +
-                        std::to_string(cells) + " cells in series (cells_in_series)" + kOtherPackEnd);
+                        std::to_string(cells) + " cells in series (cells_in_series)" + advice);
     }
     // No LiPo, LiHV or Li-ion cell rests outside this range unless it is damaged.
     constexpr double kRestMinV = 2.9, kRestMaxV = 4.45;
@@ -524,11 +543,9 @@ std::vector<std::string> config_notes(const core::MonitorConfig& config, const L
             char buf[160];
             std::snprintf(buf, sizeof buf, "the pack rests at %.2f V, %.3f V per cell for the config's %d cells in series",
                           log.resting_voltage_v, per_cell_v, cells);
-            notes.push_back(std::string(buf) + ", outside any lithium cell's resting range (2.9-4.45 V)" + kOtherPackEnd);
+            notes.push_back(std::string(buf) + ", outside any lithium cell's resting range (2.9-4.45 V)" + advice);
         }
     }
-    const std::string advice = log.path.empty() ? std::string(kOtherPackEnd)
-                                                : kMakeConfigAdvice + log.path + kMakeConfigAdviceEnd;
     if (log.declared_cells > 0 && log.declared_cells != cells)
         notes.push_back("the log's autopilot was set for " + std::to_string(log.declared_cells) + " cells (" +
                         log.declared_cells_from + "), the config has " + std::to_string(cells) + advice);

@@ -56,7 +56,7 @@ const std::map<std::string, std::string>& config_key_descriptions() {
     {"monitor.resistance_keeps_e0", "Reference estimator: when its adapted model adopts the online resistance, keep the open-circuit voltage E0 and move the curve points instead; false re-derives E0 (the dissertation's behaviour), which moves it by volts on fitted models with a large `curve_current_a`."},
     {"monitor.short_average_time_s", "Time constant (s) of the short power and current averages over flying samples; the reference estimator's remaining time divides by the short power average; 0: the latest sample."},
     {"monitor.long_average_time_s", "Time constant (s) of the long power and current averages, reported and kept by the firmware on its SD card between flights; 0: the latest sample."},
-    {"monitor.remembered_average_power_w", "Starting value (W) of the power averages, so the first minutes' remaining time starts from the pack's usual demand; 0: from the first flying sample (the firmware replaces it with the average kept on its SD card)."},
+    {"monitor.remembered_average_power_w", "Starting value (W) of the power averages, so the first minutes' remaining time starts from the pack's usual demand; 0: from the first flying sample, otherwise at least 0.01 W (the firmware replaces it with the average kept on its SD card)."},
     {"monitor.min_flying_current_a", "Current (A) at or above which the drone counts as flying; the joint estimator compares the offset-corrected current with this plus 3 σ of the learnt offset."},
     {"monitor.landed_hold_s", "How long (s) the current must stay below `min_flying_current_a` before the drone counts as landed, so throttle dips in the air do not end the flight."},
     {"monitor.takeoff_confirm_s", "How long (s) the current must hold at or above `min_flying_current_a` before a flight starts, so arming blips on the ground do not start one; 0: at once."},
@@ -164,15 +164,15 @@ const std::map<std::string, std::string>& config_key_descriptions() {
     {"joint.cell_step_noise_floor_v", "Floor (V) of the per-sample cell voltage noise in a step's variance, since a steady cell can read one quantisation level throughout (the INA3221's 8 mV step / √12)."},
     {"joint.cell_step_max_wait_samples", "Samples the current may go on moving after leaving a steady window; not settled by then, it is no step."},
     // joint: the OCV table.
-    {"joint.ocv_cell_voltage_v", "Per-cell open-circuit voltage table (V), 2 to 21 values at evenly spaced state of charge from empty (first) to full (last), never falling; without it the joint estimator reads the state of charge off the Tremblay curve, far off. Write one with `battsim discharge --ocv-points N` or `battsim fit-ocv`."},
+    {"joint.ocv_cell_voltage_v", "Per-cell open-circuit voltage table (V), 2 to 21 values at evenly spaced state of charge from empty (first) to full (last), never falling and the full end above the empty one; without it the joint estimator reads the state of charge off the Tremblay curve, far off. Write one with `battsim discharge --ocv-points N` or `battsim fit-ocv`."},
     // sensor: shunt calibration and plausibility limits (a sample outside them is a sensor fault).
     {"sensor.shunt_offset_ma", "Shunt calibration offset (mA): current mA = shunt mV / `shunt_scale_mv_per_10a` × 10000 + this, for the firmware and for logs read with `--current-source shunt`."},
     {"sensor.shunt_scale_mv_per_10a", "Shunt calibration scale: shunt mV per 10 A (formula at `shunt_offset_ma`); calibrate against a clamp meter at two currents."},
     {"sensor.max_pack_voltage_v", "A pack voltage above this (V) is a sensor fault and the sample is kept out of the estimators; set it above the full pack."},
-    {"sensor.min_pack_voltage_v", "A pack voltage below this (V) is a sensor fault and the sample is kept out of the estimators; battsim make-config sets it to 2.0 V per cell, below what a loaded lithium pack shows."},
+    {"sensor.min_pack_voltage_v", "A pack voltage below this (V) is a sensor fault and the sample is kept out of the estimators; below `max_pack_voltage_v`; battsim make-config sets it to 2.0 V per cell, below what a loaded lithium pack shows."},
     {"sensor.max_current_a", "A current above this (A, positive = discharge) is a sensor fault and the sample is kept out of the estimators."},
-    {"sensor.min_current_a", "A current below this (A, negative = charging) is a sensor fault and the sample is kept out of the estimators."},
-    {"sensor.min_cell_voltage_v", "A cell reading below this (V), as from a loose balance lead, is a sensor fault: the sample's cells are kept out of the cell checks, the pack reading still counts."},
+    {"sensor.min_current_a", "A current below this (A, negative = charging) is a sensor fault and the sample is kept out of the estimators; below `max_current_a`."},
+    {"sensor.min_cell_voltage_v", "A cell reading below this (V), as from a loose balance lead, is a sensor fault: the sample's cells are kept out of the cell checks, the pack reading still counts; below `max_cell_voltage_v`."},
     {"sensor.max_cell_voltage_v", "A cell reading above this (V) is a sensor fault: the sample's cells are kept out of the cell checks, the pack reading still counts."},
     {"sensor.max_cell_sum_error_v", "Cells whose sum misses the pack voltage by more than this (V) are a sensor fault: kept out of the cell checks, the pack reading still counts."},
     // telemetry: the MAVLink output (docs/telemetry.md).

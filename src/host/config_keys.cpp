@@ -51,7 +51,7 @@ bool within(const std::string& prefix, const std::string& path) {
 // What the probe puts at a member the reader looks for, in turn until one reads: a section,
 // an array of objects, an array of numbers.
 const json& probe_form(size_t k) {
-    static const json forms[] = {json::object(), json::array({json::object()}), json::array({1.0, 1.0})};
+    static const json forms[] = {json::object(), json::array({json::object()}), json::array({1.0, 2.0})};
     return forms[k];
 }
 constexpr size_t kProbeForms = 3;

@@ -255,3 +255,32 @@ TEST_CASE("config_notes: a temperature dependence on a log without a temperature
     c.extensions.temperature.resistance_activation_k = 0.0f;
     CHECK(config_notes(c, none).empty());
 }
+
+TEST_CASE("Config values the reader's ranges allow but the monitor cannot use are refused by name", "[config]") {
+    // Found by a sweep of every key at its range's ends: each had run without a word.
+    json j = config_to_json(default_config());
+    j["sensor"]["min_current_a"] = 500;  // above max_current_a: every sample kept out
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("$.sensor.min_current_a: must be below max_current_a"));
+    j = config_to_json(default_config());
+    j["sensor"]["min_pack_voltage_v"] = j["sensor"]["max_pack_voltage_v"];
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("$.sensor.min_pack_voltage_v: must be below max_pack_voltage_v"));
+    j = config_to_json(default_config());
+    j["sensor"]["min_cell_voltage_v"] = 5;  // every cell reading a fault, a warning on a good log
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"), Catch::Contains("$.sensor.min_cell_voltage_v: must be below max_cell_voltage_v"));
+    // A flat OCV table: no slope to read charge from, the capacity frozen at its rated value.
+    j = config_to_json(default_config());
+    j["joint"]["ocv_cell_voltage_v"] = {3.7, 3.7, 3.7};
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"),
+                      Catch::Contains("$.joint.ocv_cell_voltage_v: expected the full end above the empty end"));
+    j["joint"]["ocv_cell_voltage_v"] = {3.3, 3.7, 3.7, 4.2};  // a plateau inside is a curve
+    CHECK(config_from_json(j, "x.json").monitor.joint.ocv.points == 4);
+    // A remembered power the remaining time divides by: 1e-38 W had written inf on every row.
+    j = config_to_json(default_config());
+    j["monitor"]["remembered_average_power_w"] = 1e-38;
+    CHECK_THROWS_WITH(config_from_json(j, "x.json"),
+                      Catch::Contains("$.monitor.remembered_average_power_w: expected 0 (none) or at least 0.01 W"));
+    j["monitor"]["remembered_average_power_w"] = 0;
+    CHECK(config_from_json(j, "x.json").monitor.power_average.initial_value == 0.0f);
+    j["monitor"]["remembered_average_power_w"] = 0.01;
+    CHECK(config_from_json(j, "x.json").monitor.power_average.initial_value == 0.01f);
+}

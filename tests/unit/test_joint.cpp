@@ -13,6 +13,7 @@
 #include "core/estimate/joint_estimator.h"
 #include "core/estimate/power_time_solver.h"
 #include "core/model/ocv.h"
+#include "core/numeric.h"
 #include "ecm_plant.h"
 
 using namespace battsim::core;
@@ -1330,3 +1331,25 @@ TEST_CASE("Capacity standard error: the filter's and a systematic part in propor
     CHECK(sigma_at_landing > 0.04f);
 }
 
+
+TEST_CASE("Joint estimator: a configured resistance too small to square in float is no prior, and no crash", "[joint][truth]") {
+    // A config's R of 1e-19 Ω and below (accepted: the range is 0 … 100) squared its prior's
+    // σ to 0 or to a weight past float's range: R0 became NaN, then the state of charge, and
+    // the OCV table was indexed with it (a crash, found by a sweep of every config key).
+    for (float factor : {4e-18f, 4e-24f, 4e-37f}) {
+        Flight f;
+        f.configured_resistance_factor = factor;  // × 25 mΩ
+        const FlightResult r = fly(f);
+        INFO("configured R " << 0.025f * factor << " Ω: R0 " << r.end.resistance_ohm << " Ω, capacity "
+                             << r.end.capacity_ah << " Ah");
+        REQUIRE(std::isfinite(r.end.resistance_ohm));
+        REQUIRE(std::isfinite(r.end.capacity_ah));
+        CHECK(r.end.resistance_ohm == Approx(0.025).epsilon(0.15));  // measured alone
+        CHECK(r.end.capacity_ah == Approx(1.5).epsilon(0.15));
+    }
+    // And a NaN clamped is the range's low end, never a NaN to cast to an index.
+    CHECK(battsim::core::clampf(NAN, 0.0f, 1.0f) == 0.0f);
+    CHECK(battsim::core::clampf(-0.0f, 0.0f, 1.0f) == 0.0f);
+    CHECK(battsim::core::clampf(2.0f, 0.0f, 1.0f) == 1.0f);
+    CHECK(battsim::core::clampf(0.25f, 0.0f, 1.0f) == 0.25f);
+}

@@ -287,9 +287,14 @@ float JointEstimator::fuse_with_prior(bool valid, float measured_ohm, float sigm
     // little to trust the differences alone. sigma_out may be null.
     const float prior_ohm = rated_.internal_resistance_ohm;
     const float prior_sigma = config_.resistance_prior_fraction * prior_ohm;
-    if (valid && sigma_ohm > 0.0f && prior_sigma > 0.0f) {
-        const float wp = 1.0f / (prior_sigma * prior_sigma);
-        const float we = 1.0f / (sigma_ohm * sigma_ohm);
+    // The squares compared, not the sigmas: a configured R of 1e-19 Ω squares to 0 or to a
+    // weight past float's range, and an infinite weight made R0 NaN (an OCV table index).
+    const float prior_var = prior_sigma * prior_sigma;
+    const float measured_var = sigma_ohm * sigma_ohm;
+    constexpr float kMinVar = 1e-30f;
+    if (valid && measured_var > kMinVar && prior_var > kMinVar) {
+        const float wp = 1.0f / prior_var;
+        const float we = 1.0f / measured_var;
         if (sigma_out) *sigma_out = sqrtf(1.0f / (wp + we));
         return (wp * prior_ohm + we * measured_ohm) / (wp + we);
     }
