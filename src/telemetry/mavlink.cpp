@@ -275,6 +275,7 @@ void MavlinkTelemetry::configure(const TelemetryConfig& config, const core::Moni
     const float interval_us = config.interval_s > 0.0f ? config.interval_s * 1.0e6f : 1.0e6f;
     interval_us_ = static_cast<uint64_t>(interval_us);
     schedule_.configure(config.text_repeat_s, config.clear_hold_s, monitor);
+    reversed_.configure(monitor.flying.min_flying_current_a);
     next_us_ = 0;
     started_ = false;
 }
@@ -306,6 +307,13 @@ size_t MavlinkTelemetry::update(const core::Sample& sample, const core::MonitorS
         warning_text(static_cast<core::Warning>(w), rated_capacity_ah_, rated_resistance_ohm_, status,
                      reinterpret_cast<char*>(payload + 1));
         // text is char[50], NUL-terminated only when shorter; id 0 and chunk_seq 0: one chunk
+        n += framer_.frame(kStatusTextId, kStatusTextCrcExtra, payload, kStatusTextLength, out + n);
+    }
+    if (!reversed_.reversed() && reversed_.update(sample.time_us, sample.current_a)) {
+        memset(payload, 0, kStatusTextLength);
+        payload[0] = kMavSeverityWarning;
+        TextBuffer t(reinterpret_cast<char*>(payload + 1), kStatusTextChars + 1);
+        t.append(kReversedText);
         n += framer_.frame(kStatusTextId, kStatusTextCrcExtra, payload, kStatusTextLength, out + n);
     }
     const uint8_t withdrawn = schedule_.withdrawn();

@@ -17,6 +17,7 @@
 #include "core/monitor.h"
 #include "core/sample.h"
 #include "telemetry/warning_schedule.h"
+#include "telemetry/wiring_check.h"
 
 namespace battsim {
 namespace telemetry {
@@ -104,6 +105,8 @@ struct TelemetryConfig {
     float clear_hold_s = 5.0f;                 // in flight, a told verdict off this long is withdrawn (0: never)
 };
 
+constexpr const char* kReversedText = "battsim: current reversed, swap shunt sense wires";
+
 // The monitor's status in BATTERY_STATUS terms (docs/telemetry.md gives each field's source).
 BatteryStatusFields battery_status_fields(const TelemetryConfig& config, const core::Sample& sample,
                                           const core::MonitorStatus& status);
@@ -125,9 +128,12 @@ size_t withdrawal_text(core::Warning w, float rated_capacity_ah, float rated_res
 // of the samples' own time (the first sample sends at once), and a STATUSTEXT at severity
 // WARNING when WarningSchedule says a warning is due (raised; repeated in flight), and one at
 // NOTICE when it withdraws a verdict. A warning is told or withdrawn, never both at once.
+// Once a boot, at WARNING, kReversedText when the current reads reversed (wiring_check.h):
+// the monitor then sees no flight, and no verdict would ever come.
 class MavlinkTelemetry {
 public:
-    static constexpr size_t kMaxBytesPerUpdate = (2 + core::kWarnCount) * kMaxFrameBytes;
+    // HEARTBEAT, BATTERY_STATUS, a text per warning and the wiring's text.
+    static constexpr size_t kMaxBytesPerUpdate = (3 + core::kWarnCount) * kMaxFrameBytes;
 
     void configure(const TelemetryConfig& config, const core::MonitorConfig& monitor);
     // Writes the frames due at this sample into `out` (room for kMaxBytesPerUpdate);
@@ -143,6 +149,7 @@ private:
     uint64_t next_us_ = 0;
     bool started_ = false;
     WarningSchedule schedule_;
+    ReversedCurrentCheck reversed_;
 };
 
 }  // namespace telemetry

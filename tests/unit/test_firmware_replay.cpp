@@ -458,12 +458,34 @@ TEST_CASE("firmware on flight 30 with the shunt's sense wires swapped says so an
         swapped += "\n";
     }
     fwtest::write_file(dir + "/swapped.csv", swapped);
-    const FirmwareRun fw = run_monitor(dir + "/swapped.csv", "");
+    const FirmwareRun fw = run_monitor(dir + "/swapped.csv", "", {{0, "hello\n"}}, true);
     CHECK(fw.state.current_reversed);
     CHECK(fw.state.flights == 0);
     // From 2 s after the first sample: the rest already reads -2.0 A.
     REQUIRE(fw.samples.size() > 100);
     CHECK(fw.samples[0].current_a < -1.9f);
+    // The MAVLink output says it once, 2 s after the first sample, and then only the
+    // sensor fault the OLED shows as SENS from 171.8 s: the monitor saw no flight to warn
+    // about.
+    const mavtest::Stream m = mavtest::decode(fw.mavlink, false);
+    REQUIRE(m.error.empty());
+    std::vector<std::string> texts;
+    for (const mavtest::Frame& f : m.frames)
+        if (f.msgid == telemetry::kStatusTextId) texts.push_back(mavtest::text(f));
+    CHECK(texts == std::vector<std::string>{telemetry::kReversedText, "battsim: sensor fault: reading out of range"});
+    // So does `battsim replay --said` on the log itself, its current read from the shunt
+    // column as the firmware reads it, at the same time.
+    const fwtest::Run r = fwtest::run(BATTSIM_BINARY, "replay " + fwtest::q(dir + "/swapped.csv") + " --config " +
+                                                          fwtest::q(fwtest::reference_config_path()) +
+                                                          " --current-source shunt --said --json");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const nlohmann::json said = nlohmann::json::parse(r.out)["said"];
+    REQUIRE(said.size() == 2);
+    CHECK(said[0]["text"] == telemetry::kReversedText);
+    CHECK(said[1]["text"] == texts[1]);
+    CHECK(said[0]["time_s"].get<double>() ==
+          Approx((fw.samples[0].time_us + telemetry::ReversedCurrentCheck::kHoldUs) * 1e-6).margin(0.07));
 }
 
 TEST_CASE("firmware counts the readings it missed from the log's gaps", "[firmware][data]") {

@@ -526,3 +526,48 @@ TEST_CASE("Telemetry: the withdrawals' sentences, by hand", "[telemetry]") {
     st.resistance_ohm = 99.0f;  // absurd on purpose: within 50 characters
     CHECK(telemetry::withdrawal_text(core::kWarnHighResistance, 1.55f, 0.02f, st, text) <= telemetry::kStatusTextChars);
 }
+
+TEST_CASE("Telemetry: a current held reversed for 2 s is texted once, as swapped shunt sense wires", "[telemetry]") {
+    // Swapped sense wires: the monitor sees no flight and would never warn; the text is the
+    // pilot's only word of it. The firmware's OLED `SIGN` reads the same check.
+    const auto texts_over = [](const std::vector<float>& currents_a) {
+        telemetry::MavlinkTelemetry t;
+        telemetry::TelemetryConfig cfg;
+        cfg.interval_s = 1000.0f;  // the heartbeats out of the way
+        core::MonitorConfig m = rated_4s();
+        m.flying.min_flying_current_a = 1.0f;
+        t.configure(cfg, m);
+        std::vector<std::pair<double, std::string>> said;
+        core::Sample s;
+        core::MonitorStatus st;
+        for (size_t k = 0; k < currents_a.size(); ++k) {
+            s.time_us = st.time_us = 100000u * static_cast<uint64_t>(k);  // every 0.1 s
+            s.current_a = currents_a[k];
+            for (const mavtest::Frame& f : mavtest::decode(run(t, s, st), false).frames) {
+                if (f.msgid != telemetry::kStatusTextId) continue;
+                uint8_t severity = 0;
+                said.emplace_back(s.time_us * 1e-6, mavtest::text(f, &severity));
+                CHECK(severity == telemetry::kMavSeverityWarning);
+            }
+        }
+        return said;
+    };
+    std::vector<float> currents(100, 0.5f);  // 10 s on the ground
+    CHECK(texts_over(currents).empty());
+    for (size_t k = 10; k < 100; ++k) currents[k] = -12.0f;  // reversed from 1.0 s on
+    const auto reversed = texts_over(currents);
+    REQUIRE(reversed.size() == 1);
+    CHECK(reversed[0].first == Approx(3.0));  // held 2 s
+    CHECK(reversed[0].second == "battsim: current reversed, swap shunt sense wires");
+    CHECK(reversed[0].second.size() <= telemetry::kStatusTextChars);
+    // A 1.8 s reversal (an ESC braking) and a 2 s one broken by one sample above minus the
+    // take-off current do not count; exactly at minus the take-off current for 2 s does.
+    std::vector<float> brief(100, 5.0f);
+    for (size_t k = 10; k < 29; ++k) brief[k] = -8.0f;                    // 1.0 … 2.8 s
+    for (size_t k = 40; k < 61; ++k) brief[k] = k == 50 ? -0.9f : -8.0f;  // 4.0 … 6.0 s
+    CHECK(texts_over(brief).empty());
+    for (size_t k = 65; k < 90; ++k) brief[k] = -1.0f;  // from 6.5 s
+    const auto at_bar = texts_over(brief);
+    REQUIRE(at_bar.size() == 1);
+    CHECK(at_bar[0].first == Approx(8.5));
+}

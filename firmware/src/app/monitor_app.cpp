@@ -80,7 +80,7 @@ void MonitorApp::begin(const MonitorAppConfig& config) {
     series_cells_ = series_cells_for(mc.cells_in_series);
     format_series_header(series_cells_, header_);
     was_flying_ = false;
-    reversed_run_ = false;
+    reversed_check_.configure(mc.flying.min_flying_current_a);
     displayed_ = false;
     last_sync_ms_ = clock_.millis();
     // The log file is created when SD output is first on, not before: no empty files.
@@ -141,29 +141,13 @@ MonitorApp::Step MonitorApp::step() {
     // flying: the twin follows the same rule.
     if (s.sample_valid && s.initialised && s.flying) current_average_.update(s.current_a, s.dt_s);
     ++state_.samples;
-    note_reversed_current();
+    state_.current_reversed = reversed_check_.update(sample_.time_us, sample_.current_a);
     if (s.flying && !was_flying_) ++state_.flights;
     const bool landed = was_flying_ && !s.flying;
     was_flying_ = s.flying;
     write_outputs();
     if (landed && config_.remember_averages) save_averages();
     return Step::Sample;
-}
-
-// Swapped sense wires turn a flying drone's current negative, so the monitor never sees a
-// take-off and reads the pack as resting for the whole flight. A drone carries no charger and
-// an ESC's braking feeds back for moments only: a current held below minus the take-off
-// current for 2 s is the wiring (or an offset as large), and the OLED and `status` say so.
-void MonitorApp::note_reversed_current() {
-    if (!(sample_.current_a <= -monitor_.config().flying.min_flying_current_a)) {
-        reversed_run_ = false;
-        return;
-    }
-    if (!reversed_run_) {
-        reversed_run_ = true;
-        reversed_since_us_ = sample_.time_us;
-    }
-    if (sample_.time_us - reversed_since_us_ >= kReversedHoldUs) state_.current_reversed = true;
 }
 
 void MonitorApp::write_outputs() {

@@ -15,6 +15,7 @@
 #include "core/estimate/rolling_average.h"
 #include "core/monitor.h"
 #include "telemetry/mavlink.h"
+#include "telemetry/wiring_check.h"
 
 namespace battsim {
 namespace fw {
@@ -37,10 +38,6 @@ struct MonitorAppConfig {
     uint32_t poll_us = 1000;             // conversion-ready polling interval
 };
 
-// How long a current below minus the take-off current must last to be read as reversed wiring
-// (MonitorAppState::current_reversed): longer than any ESC's braking.
-constexpr uint64_t kReversedHoldUs = 2000000;
-
 struct MonitorAppState {
     bool sensors_ok = false;
     bool sd_ok = false;      // card present and log file open
@@ -51,8 +48,8 @@ struct MonitorAppState {
     uint32_t flights = 0;    // take-offs seen, including those of earlier boots
     uint32_t samples = 0;
     uint32_t averages_saved = 0;
-    // The current held below minus the take-off current for kReversedHoldUs: the shunt's
-    // sense wires are the wrong way round (or its offset is far off). Kept for the boot.
+    // The current held below minus the take-off current for 2 s (telemetry::ReversedCurrentCheck):
+    // the shunt's sense wires are the wrong way round (or its offset is far off). Kept for the boot.
     bool current_reversed = false;
     Outputs outputs;
 };
@@ -97,7 +94,6 @@ private:
     void draw_display();
     void send_status_note();
     void silence_buzzer();
-    void note_reversed_current();
 
     Sensors& sensors_;
     Clock& clock_;
@@ -120,8 +116,7 @@ private:
     bool card_ok_ = false;
     bool log_opened_ = false;  // one log file per boot, opened once
     bool was_flying_ = false;
-    bool reversed_run_ = false;      // the current is below minus the take-off current...
-    uint64_t reversed_since_us_ = 0;  // ... since this sample
+    telemetry::ReversedCurrentCheck reversed_check_;
     uint32_t last_sync_ms_ = 0;
     uint32_t last_display_ms_ = 0;
     bool displayed_ = false;
