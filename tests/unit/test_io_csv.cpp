@@ -448,7 +448,7 @@ TEST_CASE("bad input: duplicate time stamps are kept and noted once", "[io]") {
 TEST_CASE("bad input: headered CSV missing the voltage or current column", "[io]") {
     TempDir t;
     const std::string p = t.write("nov.csv", "time_s,current_a,temp\n0,1,2\n");
-    CHECK(read_error(p) == p + ":1: missing voltage column \"voltage_v\"; columns found: time_s, current_a, temp");
+    CHECK(read_error(p) == p + ":1: missing voltage column (expected voltage_v or voltage_mv); columns found: time_s, current_a, temp");
     const std::string q = t.write("noi.csv", "time_s,voltage_v\n0,1\n");
     CHECK(read_error(q) ==
           q + ":1: missing current column (expected current_a or current_ma); columns found: time_s, voltage_v");
@@ -560,6 +560,14 @@ TEST_CASE("headered CSV: cell columns in millivolts by name, and one column per 
     CHECK(s[0].cell_voltage_v[0] == Approx(4.1));
     CHECK(s[0].cell_voltage_v[1] == Approx(4.096));
     CHECK(s[0].cell_voltage_v[2] == Approx(4.104));  // units may differ per column
+    // The pack voltage by name in millivolts too, as a logger writing cell1_mv writes it.
+    const std::string pack_mv = t.write("pmv.csv", "time_s,voltage_mv,current_ma,cell1_mv\n0,4100,1500,4100\n");
+    REQUIRE(read_all(pack_mv, ReaderOptions()).size() == 1);
+    CHECK(read_all(pack_mv, ReaderOptions())[0].voltage_v == Approx(4.1));
+    const std::string both = t.write("vv.csv", "time_s,voltage_v,voltage_mv,current_a\n0,4.1,4100,1\n");
+    CHECK(read_error(both) == both + ":1:3: columns \"voltage_v\" (field 2) and \"voltage_mv\" (field 3) both give the "
+                                     "voltage; expected one, or choose it with --voltage-col NAME (in a manifest, "
+                                     "columns.voltage or voltage_col)");
     const std::string two = t.write("two.csv", "time_s,voltage_v,current_a,cell1_v,cell1_mv\n0,4.1,1,4.1,4100\n");
     CHECK(read_error(two) == two + ":1:5: cell 1 has two columns (cell1_v, cell1_mv); expected one per cell, or choose with --cell-cols");
 }
@@ -840,4 +848,20 @@ TEST_CASE("a clock step the pack could not have flown through is moved back; a g
     // And one within half again the capacity (a label's rating can be low): 10 Ah over the hour on an 8 Ah pack.
     opt.clock_step_capacity_ah = 8.0;
     CHECK(read_all(stepped, opt)[3].time_us == 3600200000u);
+}
+
+TEST_CASE("bad input: a compressed log and standard input say so", "[io]") {
+    TempDir t;
+    const std::string gz = t.write("log.csv.gz", std::string("\x1F\x8B\x08\x00\x00\x00\x00\x00\x00\x03", 10));
+    CHECK(read_error(gz) == gz + ": the file is gzip-compressed; expected a log itself: unpack it first (gunzip)");
+    const std::string zip = t.write("logs.zip", std::string("PK\x03\x04\x14\x00\x00\x00", 8));
+    CHECK(read_error(zip) == zip + ": the file is a zip archive; expected a log itself: unpack it first (unzip)");
+    const std::string xz = t.write("log.csv.xz", std::string("\xFD" "7zXZ\x00\x00\x04", 8));
+    CHECK(read_error(xz) == xz + ": the file is xz-compressed; expected a log itself: unpack it first (unxz)");
+    // A text log that happens to begin with "PK" is still text.
+    const std::string pk = t.write("pk.csv", "PK_time_s,voltage_v,current_a\n0,16.5,1\n");
+    CHECK_THROWS_WITH(read_all(pk, ReaderOptions()), Catch::Contains("missing time column"));
+    CHECK(read_error("-") ==
+          "-: a log is not read from standard input (its format is detected before it is read); expected a log "
+          "file: save the stream to a file first (a file named -: give ./-)");
 }

@@ -78,3 +78,35 @@ TEST_CASE("Summary: a flickering warning keeps its first 16 spells and counts th
     CHECK((*w)["active_s"] == 0.0);  // never on for two samples in a row
     CHECK((*w)["active_at_end"] == true);
 }
+
+TEST_CASE("Summary: times stamped in Unix time keep their microseconds", "[summary]") {
+    // A log stamped in Unix time (1.7e9 s) had its times rounded to 9 significant digits:
+    // to 10 s, so a 3.3 s spell read as none and a warning's time up to 5 s off.
+    host::SummaryAccumulator acc;
+    core::MonitorStatus s;
+    s.initialised = true;
+    s.sample_valid = true;
+    s.flying = true;
+    constexpr uint64_t kEpochUs = 1700000000000000ull;
+    constexpr uint8_t kShort = 1u << core::kWarnShortFlight;
+    for (int k = 0; k <= 600; ++k) {  // every 0.1 s plus 1 µs: 0 … 60 s
+        s.time_us = kEpochUs + 100001ull * static_cast<uint64_t>(k);
+        s.warnings = (k >= 100 && k < 133) ? kShort : 0;  // on from 10.0001 s, off at 13.300133 s
+        if (s.warnings && !(s.warnings_raised & kShort)) s.warning_time_us[core::kWarnShortFlight] = s.time_us;
+        s.warnings_raised |= s.warnings;
+        acc.add(s);
+    }
+    const json j = acc.to_json(4);
+    const json* w = warning(j, "short_flight");
+    REQUIRE(w != nullptr);
+    CHECK((*w)["first_time_s"].get<double>() == 1700000010.0001);
+    REQUIRE((*w)["spells"].size() == 1);
+    CHECK((*w)["spells"][0]["from_s"].get<double>() == 1700000010.0001);
+    CHECK((*w)["spells"][0]["to_s"].get<double>() == 1700000013.300133);  // the first sample off
+    CHECK(j["flight"]["start_s"].get<double>() == 1700000000.0);
+    CHECK(j["flight"]["end_s"].get<double>() == 1700000060.0006);
+    CHECK(j["flight"]["duration_s"].get<double>() == Approx(60.0006).margin(1e-6));
+    // Below 1000 s the stamps print as before (9 significant digits were the microsecond).
+    CHECK(host::time_s_of_us(141558000ull) == 141.558);
+    CHECK(host::round_time_s(141.55800000000002) == 141.558);
+}

@@ -370,8 +370,8 @@ nlohmann::json discharge_to_json(const DischargeResult& r, bool with_table) {
     j["battsim_version"] = BATTSIM_VERSION;  // as every other report: which release wrote it
     j["input"] = {{"path", r.path}, {"format", to_string(r.info.format)}, {"notes", r.info.notes}};
     j["samples"] = {{"read", r.samples_read}, {"kept", r.samples_kept}, {"curve_points", r.curve.size()}};
-    j["kept_from_s"] = round_sig(r.start_time_s, 9);
-    j["kept_to_s"] = round_sig(r.end_time_s, 9);
+    j["kept_from_s"] = round_time_s(r.start_time_s);
+    j["kept_to_s"] = round_time_s(r.end_time_s);
     j["duration_s"] = round_sig(r.duration_s, 7);
     j["mean_current_a"] = round_sig(r.mean_current_a, 6);
     j["mean_c_rate_per_h"] = round_sig(mean_c_rate(r), 4);

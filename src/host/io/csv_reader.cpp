@@ -769,7 +769,13 @@ private:
         }
 
         // Voltage (volts unless the name ends in _mv).
-        voltage_col_ = m.voltage.empty() ? require("voltage", "voltage_v") : require("voltage", m.voltage);
+        if (!m.voltage.empty()) {
+            voltage_col_ = require("voltage", m.voltage);
+        } else {
+            voltage_col_ = find_one_of({"voltage_v", "voltage_mv"}, "voltage", "--voltage-col",
+                                       "columns.voltage or voltage_col");
+            if (voltage_col_ < 0) missing("voltage", "(expected voltage_v or voltage_mv)");
+        }
         voltage_scale_ = has_unit(lower_names_[static_cast<std::size_t>(voltage_col_)], "mv") ? 1e-3 : 1.0;
 
         // Current.

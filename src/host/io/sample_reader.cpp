@@ -67,6 +67,10 @@ constexpr int kFmtSearchLines = 100;
 std::vector<unsigned char> peek(const std::string& path) {
     // Check the kind of file before opening it: opening a FIFO would block, and a pipe
     // cannot be read twice (once here to detect the format, once by the reader).
+    if (path == "-")
+        throw InputError(path, 0, 0,
+                         "a log is not read from standard input (its format is detected before it is read); "
+                         "expected a log file: save the stream to a file first (a file named -: give ./-)");
     struct stat st;
     errno = 0;
     if (::stat(path.c_str(), &st) != 0) {
@@ -160,6 +164,24 @@ LogFormat detect(const std::string& path, const std::vector<unsigned char>& head
     if (head.size() >= sizeof kUlogMagic && std::memcmp(head.data(), kUlogMagic, sizeof kUlogMagic) == 0)
         return LogFormat::Ulog;
     if (head.size() >= 2 && head[0] == 0xA3 && head[1] == 0x95) return LogFormat::DataflashBinary;
+    // A compressed log (flight logs are often kept gzipped) would otherwise read as "binary".
+    struct Packed {
+        const char* magic;
+        size_t size;
+        const char* what;
+        const char* unpack;
+    };
+    static const Packed kPacked[] = {{"\x1F\x8B", 2, "gzip-compressed", "gunzip"},
+                                     {"PK\x03\x04", 4, "a zip archive", "unzip"},
+                                     {"\xFD" "7zXZ\x00", 6, "xz-compressed", "unxz"},
+                                     {"\x28\xB5\x2F\xFD", 4, "zstd-compressed", "unzstd"}};
+    for (const Packed& k : kPacked) {
+        if (head.size() >= k.size && std::memcmp(head.data(), k.magic, k.size) == 0) {
+            throw InputError(path, 0, 0,
+                             std::string("the file is ") + k.what + "; expected a log itself: unpack it first (" +
+                                 k.unpack + ")");
+        }
+    }
     std::string charset;
     const std::string wide = wide_text(head, charset);
     if (!wide.empty())

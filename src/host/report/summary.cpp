@@ -27,6 +27,13 @@ double round_sig(double x, int digits) {
     return std::round(x * scale) / scale;
 }
 
+double time_s_of_us(uint64_t time_us) { return static_cast<double>(time_us) / 1e6; }
+
+double round_time_s(double time_s) {
+    if (!std::isfinite(time_s)) return time_s;
+    return std::round(time_s * 1e6) / 1e6;
+}
+
 std::string fixed_text(const json& v, int decimals, const char* none, double scale) {
     if (!v.is_number()) return none;
     char buf[64];
@@ -243,7 +250,6 @@ json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
     if (!have_flight_) {
         j["flight"] = nullptr;
     } else {
-        const double start_s = flight_first_us_ * 1e-6;
         const double dur_s = (flight_last_us_ - flight_first_us_) * 1e-6;
         const uint64_t cut20_us = flight_first_us_ + static_cast<uint64_t>(0.2 * (flight_last_us_ - flight_first_us_));
 
@@ -264,8 +270,8 @@ json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
         };
         const Totals& f = at_last_flying_;
         json flight;
-        flight["start_s"] = round_sig(start_s, 9);
-        flight["end_s"] = round_sig(flight_last_us_ * 1e-6, 9);
+        flight["start_s"] = time_s_of_us(flight_first_us_);
+        flight["end_s"] = time_s_of_us(flight_last_us_);
         flight["duration_s"] = round_sig(dur_s, 7);
         flight["samples"] = static_cast<uint64_t>(f.n);
         // The window runs from the first take-off to the last flying sample: more than one
@@ -296,7 +302,7 @@ json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
             {"wh", round_sig((last_flying_.consumed_mwh - first_flying_.consumed_mwh) * 1e-3)}};
         flight["remaining_time_s"] = {{"at10", remaining_at(0.1)}, {"at20", remaining_at(0.2)}, {"at50", remaining_at(0.5)}};
         // In log time, as the warnings' first_time_s; null: never in flight.
-        const auto began = [](bool seen, uint64_t us) { return seen ? json(round_sig(us * 1e-6, 9)) : json(nullptr); };
+        const auto began = [](bool seen, uint64_t us) { return seen ? json(time_s_of_us(us)) : json(nullptr); };
         flight["remaining_time_s"]["low_from_s"] = began(low_seen_, low_from_us_);
         flight["remaining_time_s"]["critical_from_s"] = began(critical_seen_, critical_from_us_);
         flight["total_time_s"] = {{"final", last_flying_.time_valid ? json(round_sig(last_flying_.total_time_s)) : json(nullptr)}};
@@ -330,7 +336,7 @@ json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
     }
 
     if (have_initial_) {
-        j["initial_state"] = {{"time_s", round_sig(initial_time_us_ * 1e-6, 9)},
+        j["initial_state"] = {{"time_s", time_s_of_us(initial_time_us_)},
                               {"consumed_mah", round_sig(initial_consumed_mah_)},
                               {"consumed_mwh", round_sig(initial_consumed_mwh_)},
                               {"from_rest", !initial_forced_}};
@@ -346,7 +352,7 @@ json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
             if (!(last_.warnings_raised & bit)) continue;
             json e;
             e["name"] = warning_name(static_cast<core::Warning>(w));
-            e["first_time_s"] = round_sig(last_.warning_time_us[w] * 1e-6, 9);
+            e["first_time_s"] = time_s_of_us(last_.warning_time_us[w]);
             e["flight_time_s"] = have_flight_ && last_.warning_time_us[w] >= flight_first_us_
                                      ? json(round_sig((last_.warning_time_us[w] - flight_first_us_) * 1e-6, 7))
                                      : json(nullptr);
@@ -355,8 +361,8 @@ json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
             // when still on at the end); the short flight with the causes seen meanwhile.
             json spells = json::array();
             for (const Spell& sp : spells_[w]) {
-                json o = {{"from_s", round_sig(sp.from_us * 1e-6, 9)},
-                          {"to_s", sp.open ? json(nullptr) : json(round_sig(sp.to_us * 1e-6, 9))}};
+                json o = {{"from_s", time_s_of_us(sp.from_us)},
+                          {"to_s", sp.open ? json(nullptr) : json(time_s_of_us(sp.to_us))}};
                 if (w == core::kWarnShortFlight) o["cause"] = short_cause_names(sp.cause);
                 spells.push_back(o);
             }

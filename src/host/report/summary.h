@@ -21,6 +21,10 @@ constexpr int kSummaryVersion = 1;
 
 // Rounds to `digits` significant digits so summaries print short, stable numbers.
 double round_sig(double x, int digits = 6);
+// A time stamp in seconds to the microsecond, whatever its size: significant digits would
+// round a Unix-time stamp (1.7e9 s) to 10 s and read a 3 s warning spell as none.
+double time_s_of_us(uint64_t time_us);
+double round_time_s(double time_s);
 
 // A summary number for people: `decimals` fixed decimals of the value × `scale`, `none` for
 // a null (or any non-number); -0.000 prints as 0.000. The tables and the brief share it.

@@ -48,7 +48,7 @@ nlohmann::json said_json(const std::vector<SaidText>& said, double flight_start_
     for (const SaidText& t : said) {
         const double time_s = t.time_us * 1e-6;
         const bool in_flight = std::isfinite(flight_start_s) && time_s >= flight_start_s;
-        out.push_back({{"time_s", round_sig(time_s, 9)},
+        out.push_back({{"time_s", time_s_of_us(t.time_us)},
                        {"flight_time_s", in_flight ? nlohmann::json(round_sig(time_s - flight_start_s, 7)) : nlohmann::json(nullptr)},
                        {"severity", t.severity == telemetry::kMavSeverityWarning  ? "warning"
                                     : t.severity == telemetry::kMavSeverityNotice ? "notice"
