@@ -2,7 +2,9 @@
 // a take-off and reads the pack as resting for the whole flight. A drone carries no charger
 // and an ESC's braking feeds back for moments only: a current held below minus the take-off
 // current for kHoldUs is the wiring (or an offset as large). Latched for the boot; the
-// firmware's OLED and `status`, and the MAVLink text, each keep one of these.
+// firmware's OLED and `status`, and the MAVLink text, each keep one of these: the MAVLink
+// output can be switched off or have no port, and the OLED must see it still (one comparison
+// a sample each).
 #pragma once
 #include <stdint.h>
 

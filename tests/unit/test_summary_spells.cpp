@@ -11,6 +11,15 @@ using nlohmann::json;
 
 namespace {
 
+// A status as a flying monitor's, initialised and with a valid sample.
+core::MonitorStatus flying_status() {
+    core::MonitorStatus s;
+    s.initialised = true;
+    s.sample_valid = true;
+    s.flying = true;
+    return s;
+}
+
 const json* warning(const json& summary, const char* name) {
     for (const json& w : summary["warnings"])
         if (w["name"] == name) return &w;
@@ -21,10 +30,7 @@ const json* warning(const json& summary, const char* name) {
 
 TEST_CASE("Summary: a short flight that clears and holds again has two spells, each with its causes", "[summary]") {
     host::SummaryAccumulator acc;
-    core::MonitorStatus s;
-    s.initialised = true;
-    s.sample_valid = true;
-    s.flying = true;
+    core::MonitorStatus s = flying_status();
     constexpr uint8_t kShort = 1u << core::kWarnShortFlight;
     for (int k = 0; k <= 100; ++k) {  // one sample a second, 0 … 100 s
         s.time_us = 1000000ull * static_cast<uint64_t>(k);
@@ -83,10 +89,7 @@ TEST_CASE("Summary: times stamped in Unix time keep their microseconds", "[summa
     // A log stamped in Unix time (1.7e9 s) had its times rounded to 9 significant digits:
     // to 10 s, so a 3.3 s spell read as none and a warning's time up to 5 s off.
     host::SummaryAccumulator acc;
-    core::MonitorStatus s;
-    s.initialised = true;
-    s.sample_valid = true;
-    s.flying = true;
+    core::MonitorStatus s = flying_status();
     constexpr uint64_t kEpochUs = 1700000000000000ull;
     constexpr uint8_t kShort = 1u << core::kWarnShortFlight;
     for (int k = 0; k <= 600; ++k) {  // every 0.1 s plus 1 µs: 0 … 60 s
