@@ -1,4 +1,5 @@
 #include "host/replay.h"
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -21,6 +22,12 @@ namespace {
 // lost the pack: the simulated suites' flights sit at 0.5–13 mV per cell, the dissertation's
 // racing flights at 6–28 mV, the Matrice 100's middle half at 7–38 mV.
 constexpr double kLostModelVPerCell = 0.25;
+// The same for the configured model (and the reference estimator's adapted one): a cell's
+// whole curve spans about 1.2 V, so a model further off than this on average describes no pack.
+// The dissertation's original parameters, the worst real fit shipped, sit at 0.20–0.35 V per
+// cell on its flights; the reference's adaptation brings them to 0.02–0.06, and the Matrice 100
+// fleet's to at most 0.17.
+constexpr double kNoPackModelVPerCell = 1.0;
 constexpr double kMaxRealtimeWaitS = 2.0;  // --realtime: the longest wait for one sample
 // A flight that starts within the take-off confirmation and this much more of the log's first
 // sample had no ground before it: the log opened loaded (a sample or two of a slow log included).
@@ -237,6 +244,35 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
                             " (mean; tens of mV when it follows the pack): its filter lost the pack, and its capacity, "
                             "state of charge and remaining time are not to be trusted. Does the config's curve fit this "
                             "pack? (battsim fit-ocv)");
+        }
+    }
+    // Said only when no note above explains it already (a config for another pack, a count
+    // past the capacity: both put the model volts off).
+    const bool explained = std::isfinite(facts.capacity_passed_s) ||
+                           std::any_of(notes.begin(), notes.end(), [](const std::string& n) { return is_other_pack_note(n); });
+    if (body["flight"].is_object() && !explained) {
+        // A config whose model is volts off every reading (a typed extension setting an order of
+        // magnitude out: resistance_activation_k −1e5 put flight 29's model 78 V off) had
+        // replayed with no word; the reference estimator's figures rest on that model.
+        const nlohmann::json& err = body["flight"]["voltage_error_v"];
+        const int cells = std::max(1, options.config.monitor.cells_in_series);
+        const bool reference = options.config.monitor.estimator == core::EstimatorKind::Reference;
+        for (const char* which : {"model", "adapted"}) {
+            if (!reference && std::string(which) == "adapted") continue;  // the joint note above
+            const nlohmann::json& e = err[which]["mean_abs"];
+            if (!e.is_number() || !(e.get<double>() / cells > kNoPackModelVPerCell)) continue;
+            char buf[200];
+            std::snprintf(buf, sizeof buf, "the %s is %.2f V per cell off the measurement over the flight",
+                          std::string(which) == "model" ? "config's battery model"
+                                                         : "reference estimator's adapted model",
+                          e.get<double>() / cells);
+            notes.push_back(std::string(buf) +
+                            " (mean; a cell's whole curve spans about 1.2 V): it describes no pack, so " +
+                            (reference ? "the capacity, resistance and remaining time are not to be trusted"
+                                       : "its model-error figures mean nothing") +
+                            ". Check the config's battery settings and its battery.extensions (a value an order of "
+                            "magnitude out), or fit them to this log (battsim residual LOG -c CONFIG -o FITTED.json)");
+            break;  // the adapted model starts from the configured one: one note says it
         }
     }
     if (!notes.empty()) j["config_notes"] = notes;

@@ -702,6 +702,38 @@ TEST_CASE("replay notes a joint estimator that lost the pack by its own model's 
         CHECK(n.get<std::string>().find("its filter lost the pack") == std::string::npos);
 }
 
+TEST_CASE("replay notes a config whose battery model describes no pack", "[cli]") {
+    // The fitted config of the dissertation's flight 29 with one extension setting's sign typed
+    // wrong (resistance_activation_k -1e5 K): its model runs about 20 V per cell off the bundled
+    // 4S flight, which had replayed with no word. The config as fitted stays 0.16 V per cell off.
+    const std::string dir = clitest::temp_dir();
+    const std::string log = kSource + "/logs/example-4s.csv";
+    const std::string good = kSource + "/configs/fitted/pbms-flight29-dinogy1.json";
+    nlohmann::json cfg = nlohmann::json::parse(clitest::read_file(good));
+    cfg["battery"]["extensions"]["temperature"]["resistance_activation_k"] = -1e5;
+    clitest::write_file(dir + "/typo.json", cfg.dump());
+    const auto noted = [](const nlohmann::json& j, const std::string& part) {
+        int n = 0;
+        for (const auto& note : j.value("config_notes", nlohmann::json::array()))
+            n += note.get<std::string>().find("describes no pack") != std::string::npos &&
+                 note.get<std::string>().find(part) != std::string::npos;
+        return n;
+    };
+    const auto ref = clitest::run_json("replay " + q(log) + " -c " + q(dir + "/typo.json") + " --json");
+    CHECK(ref["flight"]["voltage_error_v"]["model"]["mean_abs"].get<double>() > 4 * 1.0);
+    CHECK(noted(ref, "the capacity, resistance and remaining time are not to be trusted") == 1);
+    CHECK(noted(ref, "battery.extensions") == 1);
+    const auto joint = clitest::run_json("replay " + q(log) + " -c " + q(dir + "/typo.json") + " --estimator joint --json");
+    CHECK(noted(joint, "its model-error figures mean nothing") == 1);
+    // The brief says it on stderr.
+    const auto brief = run("replay " + q(log) + " -c " + q(dir + "/typo.json"));
+    CHECK(brief.exit_code == 0);
+    CHECK_THAT(brief.err, Catch::Contains("19.96 V per cell off the measurement"));
+    const auto fitted = clitest::run_json("replay " + q(log) + " -c " + q(good) + " --json");
+    CHECK(fitted["flight"]["voltage_error_v"]["model"]["mean_abs"].get<double>() < 4 * 0.2);
+    CHECK(noted(fitted, "") == 0);
+}
+
 TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes the config that corrects it", "[cli][truth]") {
     // The simulated racing flight whose current sensor reads 8 % high; the truth holds the
     // charge the pack gave over the log, which is what a charger puts back.
