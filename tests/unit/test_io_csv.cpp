@@ -260,6 +260,39 @@ TEST_CASE("bad input: empty file", "[io]") {
     const std::string b = t.write("blank.csv", "\n  \n\n");
     CHECK_THROWS_WITH(open_csv(b, ReaderOptions()), b + ": file holds only blank lines; expected a header row");
     CHECK_THROWS_WITH(open_raw_pbms(b, ReaderOptions()), b + ": no data rows (the file holds only blank lines)");
+    const std::string c = t.write("comments.csv", "# pack 3\n\n  # 2026-12-07\n");
+    CHECK_THROWS_WITH(open_csv(c, ReaderOptions()),
+                      c + ": file holds only comment lines ('#') and blank lines; expected a header row");
+    CHECK_THROWS_WITH(open_raw_pbms(c, ReaderOptions()),
+                      c + ": no data rows (the file holds only comment lines ('#') and blank lines)");
+}
+
+TEST_CASE("comment lines ('#') are skipped before the header and between rows, and counted", "[io]") {
+    // A lab rig's preamble and a note between runs; the samples are those of the file without them.
+    TempDir t;
+    const std::string p = t.write("lab.csv",
+                                  "# cell B3, 25 C\n  # charger: 4.20 V CV\ntime_s,voltage_v,current_a\n0,16.8,0.5\n"
+                                  "# load switched\n1,16.7,10\n2,16.6,10\n");
+    SourceInfo info;
+    const auto s = read_all(p, ReaderOptions(), &info);
+    REQUIRE(s.size() == 3);
+    CHECK(s[1].time_us == 1000000u);
+    CHECK(s[1].current_a == 10.0f);
+    CHECK(s[2].voltage_v == 16.6f);
+    REQUIRE(info.notes.size() == 1);
+    CHECK(info.notes[0] == "3 comment lines (starting with '#') skipped (first on line 1)");
+    // A raw log too; detection looks past the comment.
+    const std::string r = t.write("raw.csv", std::string("# flight 7\n") + kRawRow1 + kRawRow2);
+    CHECK(detect_log_format(r) == LogFormat::RawPbms);
+    SourceInfo raw_info;
+    CHECK(read_all(r, ReaderOptions(), &raw_info).size() == 2);
+    CHECK(raw_info.notes == std::vector<std::string>{"1 comment line (starting with '#') skipped (first on line 1)"});
+    // A header written as a comment is said to be one.
+    const std::string h = t.write("hashed.csv", "#time_s,voltage_v,current_a\n0,16.8,0.5\n1,16.7,10\n");
+    CHECK(read_error(h) == h + ":2: cannot detect the log format: the first line after the comments holds 3 fields of "
+                               "numbers and no header; expected a header row (CSV) or the 8 fields of a predictive-bms "
+                               "log (time_ms, bus_voltage_v, cell1_v..cell4_v, current_ma, shunt_mv) (line 1 starts "
+                               "with '#' and is skipped as a comment: if it is the header, remove the '#')");
 }
 
 TEST_CASE("bad input: header only", "[io]") {

@@ -292,26 +292,44 @@ protected:
     }
 
     // Reads the first data row, so a file without data fails when it is opened.
-    void prime(const std::string& no_data_message) {
+    // only_skipped: the message goes on to say what the file held instead (a raw log, which
+    // has no header line: every line was blank or a comment).
+    void prime(const std::string& no_data_message, bool only_skipped = false) {
         has_pending_ = read_row(pending_);
         if (!has_pending_) {
             if (cut_line_ > 0) {
                 throw InputError(info_.path, cut_line_, 0,
                                  "no complete data rows: the only data line is cut off (no newline at the end)");
             }
-            throw InputError(info_.path, 0, 0, lines_.line_number() == 0 ? "file is empty" : no_data_message + no_rows_detail());
+            throw InputError(info_.path, 0, 0,
+                             lines_.line_number() == 0 ? "file is empty"
+                             : only_skipped ? no_data_message + " (the file holds only " + only_skipped_text() + ")"
+                                            : no_data_message + no_rows_detail());
         }
     }
     // Why the rows there are gave no sample (appended to "no data rows..."); "" if none were skipped.
     virtual std::string no_rows_detail() const { return ""; }
 
-    // Next line that is not blank; false at the end of the file.
+    // What a file without a header or data row holds: "blank lines", "comment lines ('#')".
+    std::string only_skipped_text() const {
+        return comment_count_ == 0  ? std::string("blank lines")
+               : blank_count_ == 0 ? std::string("comment lines ('#')")
+                                   : std::string("comment lines ('#') and blank lines");
+    }
+
+    // Next line that is neither blank nor a comment ('#' first); false at the end of the file.
     bool next_nonblank(std::string_view& line) {
         for (;;) {
             if (!lines_.next(line)) return false;
             std::size_t i = 0;
             while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
-            if (i < line.size()) return true;
+            if (i < line.size() && line[i] != '#') return true;
+            if (i < line.size()) {
+                // A comment: a lab rig's preamble (pack, date, settings) or a note between runs.
+                if (comment_count_ == 0) first_comment_line_ = lines_.line_number();
+                ++comment_count_;
+                continue;
+            }
             if (blank_count_ == 0) first_blank_line_ = lines_.line_number();
             ++blank_count_;
         }
@@ -466,6 +484,11 @@ private:
             info_.notes.push_back(std::to_string(blank_count_) + (blank_count_ == 1 ? " blank line" : " blank lines") +
                                   " skipped (first on line " + std::to_string(first_blank_line_) + ")");
         }
+        if (comment_count_ > 0) {
+            info_.notes.push_back(std::to_string(comment_count_) +
+                                  (comment_count_ == 1 ? " comment line" : " comment lines") +
+                                  " (starting with '#') skipped (first on line " + std::to_string(first_comment_line_) + ")");
+        }
     }
 
     core::Sample pending_;
@@ -480,6 +503,8 @@ private:
     long first_dup_line_ = 0;
     long blank_count_ = 0;
     long first_blank_line_ = 0;
+    long comment_count_ = 0;
+    long first_comment_line_ = 0;
 };
 
 // ---------------------------------------------------------------------------------------
@@ -500,7 +525,7 @@ public:
         time_field_ = 0;
         info_.cell_count = 4;
         info_.has_temperature = false;
-        prime("no data rows (the file holds only blank lines)");
+        prime("no data rows", true);
     }
 
 private:
@@ -549,7 +574,7 @@ public:
         if (!any) {
             throw InputError(path, 0, 0,
                              lines_.line_number() == 0 ? "file is empty"
-                                                       : "file holds only blank lines; expected a header row");
+                                                       : "file holds only " + only_skipped_text() + "; expected a header row");
         }
         header_line_ = lines_.line_number();
         if (line.find('\r') != std::string_view::npos) {

@@ -226,9 +226,15 @@ LogFormat detect(const std::string& path, const std::vector<unsigned char>& head
                              "): expected a ULog (.ulg), DataFlash (.bin) or text (CSV) log");
     }
 
-    // First non-blank line: all numbers means no header row.
+    // First line neither blank nor a comment ('#', as the readers skip): all numbers means no header row.
+    long comment_line = 0;  // the last comment before it, 1-based
     for (std::size_t i = 0; i < lines.size(); ++i) {
-        if (lines[i].find_first_not_of(" \t") == std::string_view::npos) continue;
+        const std::size_t first = lines[i].find_first_not_of(" \t");
+        if (first == std::string_view::npos) continue;
+        if (lines[i][first] == '#') {
+            comment_line = static_cast<long>(i) + 1;
+            continue;
+        }
         std::vector<std::string_view> fields;
         long bad = 0;
         if (!text::split_fields(lines[i], fields, bad)) return LogFormat::Csv;
@@ -246,10 +252,15 @@ LogFormat detect(const std::string& path, const std::vector<unsigned char>& head
         const std::size_t n = fields.size();
         if (n == 8 || (n == 9 && fields[8].empty())) return LogFormat::RawPbms;
         throw InputError(path, static_cast<long>(i) + 1, 0,
-                         "cannot detect the log format: the first line holds " + std::to_string(n) +
+                         "cannot detect the log format: the first line" +
+                             std::string(comment_line > 0 ? " after the comments" : "") + " holds " + std::to_string(n) +
                              " fields of numbers and no header; expected a header row (CSV) or the 8 fields "
                              "of a predictive-bms log (time_ms, bus_voltage_v, cell1_v..cell4_v, current_ma, "
-                             "shunt_mv)");
+                             "shunt_mv)" +
+                             (comment_line > 0 ? " (line " + std::to_string(comment_line) +
+                                                     " starts with '#' and is skipped as a comment: if it is the "
+                                                     "header, remove the '#')"
+                                               : std::string()));
     }
     return LogFormat::Csv;
 }
