@@ -467,15 +467,29 @@ TEST_CASE("bad input: truncated last line is skipped with a note", "[io]") {
     }
 }
 
-TEST_CASE("bad input: duplicate time stamps are kept and noted once", "[io]") {
+TEST_CASE("bad input: duplicate time stamps are kept and noted once; a repeated row is read once", "[io]") {
     TempDir t;
-    const std::string p = t.write("dup.csv", "time_ms,voltage_v,current_a\n1,12,1\n2,12,1\n2,12,2\n2,12,3\n3,12,1\n3,12,1\n");
+    // Rows at one time with other readings are measurements of their own; a row that repeats
+    // the one before it in every field is one measurement written twice.
+    const std::string p = t.write("dup.csv", "time_ms,voltage_v,current_a\n1,12,1\n2,12,1\n2,12,2\n2,12,3\n3,12,1\n"
+                                             "3,12,1\n3,12.0,1.0\n4,12,1\n");
     SourceInfo info;
     const auto s = read_all(p, ReaderOptions(), &info);
     REQUIRE(s.size() == 6);
     CHECK(s[3].current_a == 3.0f);
-    REQUIRE(info.notes.size() == 1);
-    CHECK(info.notes[0] == "3 rows repeat the time stamp of the row before (first on line 4); kept");
+    CHECK(s[4].time_us == 3000u);
+    CHECK(s[5].time_us == 4000u);
+    REQUIRE(info.notes.size() == 2);
+    CHECK(info.notes[0] == "2 rows repeat the row before, time and every reading (first on line 7): read once");
+    CHECK(info.notes[1] == "2 rows repeat the time stamp of the row before (first on line 4); kept");
+    // Cells and temperature count as readings: a row differing only there is kept.
+    const std::string c = t.write("cells.csv", "time_s,voltage_v,current_a,cell1_v,cell2_v,temperature_c\n"
+                                               "0,8,1,4,4,20\n0,8,1,4,4.01,20\n0,8,1,4,4.01,21\n0,8,1,4,4.01,21\n");
+    SourceInfo cell_info;
+    CHECK(read_all(c, ReaderOptions(), &cell_info).size() == 3);
+    CHECK(cell_info.notes == std::vector<std::string>{
+                                 "1 row repeats the row before, time and every reading (first on line 5): read once",
+                                 "2 rows repeat the time stamp of the row before (first on line 3); kept"});
 }
 
 TEST_CASE("bad input: headered CSV missing the voltage or current column", "[io]") {

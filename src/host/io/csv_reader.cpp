@@ -263,6 +263,16 @@ bool parse_clock_us(std::string_view s, std::uint64_t& us) {
 
 // Shared line loop of both CSV readers: blank lines, field count, trailing comma,
 // cut-off last line, time order and the notes.
+// Every reading of two samples alike (the time aside).
+bool same_readings(const core::Sample& a, const core::Sample& b) {
+    if (a.voltage_v != b.voltage_v || a.current_a != b.current_a || a.cell_count != b.cell_count ||
+        a.has_temperature != b.has_temperature || (a.has_temperature && a.temperature_c != b.temperature_c))
+        return false;
+    for (int c = 0; c < a.cell_count && c < core::kMaxCells; ++c)
+        if (a.cell_voltage_v[c] != b.cell_voltage_v[c]) return false;
+    return true;
+}
+
 class TextSampleReader : public SampleReader {
 public:
     const SourceInfo& info() const override { return info_; }
@@ -458,11 +468,20 @@ private:
                                      "time goes backwards: " + seconds_text(out.time_us) + " is earlier than " +
                                          seconds_text(last_time_us_) + " on line " + std::to_string(last_time_line_));
                 }
+                if (out.time_us == last_time_us_ && same_readings(out, last_sample_)) {
+                    // A logger that wrote a row twice measured once: read twice, each filter
+                    // had taken the reading as two (every row of the bundled flight doubled
+                    // moved its capacity at 20 % from 1.589 to 1.624 Ah).
+                    if (repeat_count_ == 0) first_repeat_line_ = ln;
+                    ++repeat_count_;
+                    continue;
+                }
                 if (out.time_us == last_time_us_) {
                     if (dup_count_ == 0) first_dup_line_ = ln;
                     ++dup_count_;
                 }
             }
+            last_sample_ = out;
             last_time_us_ = out.time_us;
             last_time_line_ = ln;
             ++rows_;
@@ -474,6 +493,12 @@ private:
     void finish() {
         finished_ = true;
         finish_notes();
+        if (repeat_count_ > 0) {
+            info_.notes.push_back(std::to_string(repeat_count_) +
+                                  (repeat_count_ == 1 ? " row repeats" : " rows repeat") +
+                                  " the row before, time and every reading (first on line " +
+                                  std::to_string(first_repeat_line_) + "): read once");
+        }
         if (dup_count_ > 0) {
             info_.notes.push_back(std::to_string(dup_count_) +
                                   (dup_count_ == 1 ? " row repeats" : " rows repeat") +
@@ -498,6 +523,9 @@ private:
     bool all_trailing_ = true;
     long rows_ = 0;
     std::uint64_t last_time_us_ = 0;
+    core::Sample last_sample_;
+    long repeat_count_ = 0;
+    long first_repeat_line_ = 0;
     long last_time_line_ = 0;
     long dup_count_ = 0;
     long first_dup_line_ = 0;
