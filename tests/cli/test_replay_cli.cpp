@@ -702,6 +702,25 @@ TEST_CASE("replay notes a joint estimator that lost the pack by its own model's 
         CHECK(n.get<std::string>().find("its filter lost the pack") == std::string::npos);
 }
 
+TEST_CASE("replay of a log with every row written twice gives the flight of the log as written once", "[cli]") {
+    // Read twice, each filter had taken every reading as two: the capacity at 20 % moved from
+    // 1.589 to 1.624 Ah.
+    const std::string dir = clitest::temp_dir();
+    const std::string log = kSource + "/logs/example-4s.csv";
+    std::string doubled;
+    std::istringstream in(clitest::read_file(log));
+    for (std::string line; std::getline(in, line);) doubled += line + "\n" + line + "\n";
+    clitest::write_file(dir + "/doubled.csv", doubled);
+    const std::string cfg = " -c " + q(kSource + "/configs/sim-4s.json") + " --estimator joint --json";
+    const auto once = clitest::run_json("replay " + q(log) + cfg);
+    const auto twice = clitest::run_json("replay " + q(dir + "/doubled.csv") + cfg);
+    CHECK(twice["flight"] == once["flight"]);
+    CHECK(twice["samples"] == once["samples"]);
+    CHECK(twice["flight"]["capacity_ah"]["first20_mean"].get<double>() == Approx(1.589).margin(0.0005));
+    CHECK(twice["input"]["notes"] == nlohmann::json::array({"3913 rows repeat the row before, time and every reading "
+                                                              "(first on line 2): read once"}));
+}
+
 TEST_CASE("replay notes a config whose battery model describes no pack", "[cli]") {
     // The fitted config of the dissertation's flight 29 with one extension setting's sign typed
     // wrong (resistance_activation_k -1e5 K): its model runs about 20 V per cell off the bundled
