@@ -34,6 +34,8 @@ public:
     // The warnings withdrawn by the last due(): told, then off in flight for clear_hold_s.
     // Never a warning due in the same update.
     uint8_t withdrawn() const { return withdrawn_now_; }
+    // The repeat (µs; 0: once), for a message of the caller's own that follows the same rule.
+    uint64_t repeat_us() const { return repeat_us_; }
     // Warning `w` was told at `time_us`: its next repeat counts from here.
     void told(int w, uint64_t time_us) {
         told_us_[w] = time_us;

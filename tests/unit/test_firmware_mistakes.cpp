@@ -1,6 +1,7 @@
 // The firmware under a builder's usual mistakes, on small raw logs written here (no shared
 // data): a board whose INA3221 does not answer, and the serial `status` note a host parses.
 #include <memory>
+#include <sstream>
 #include <string>
 
 #include "app/logger_app.h"
@@ -41,21 +42,24 @@ std::string swapped_raw_log(int from, int to) {
 
 // Runs the monitor over `log`, every OLED frame written to `oled_path`; returns the UART's
 // bytes, a `status` at the end included.
-std::string monitor_status_after(const std::string& log, const std::string& oled_path) {
+std::string monitor_status_after(const std::string& log, const std::string& oled_path, std::string* buzzer_record = nullptr) {
     fw::host::RawLogSource source(log);
     fw::host::MockClock clock;
     fw::host::LogSensors sensors(source, clock);
     fw::host::DirectoryStorage storage(".", false);  // no card
     fw::host::TextDisplay display(clock, oled_path);
     fw::host::ScriptedSerial serial;
+    fw::host::RecordingBuzzer buzzer(clock);
     auto app = std::make_unique<fw::MonitorApp>(sensors, clock, storage, display, serial);
     fw::MonitorAppConfig cfg;
     cfg.monitor = battsim_generated::monitor_config();
+    if (buzzer_record != nullptr) app->attach_buzzer(buzzer);
     app->begin(cfg);
     serial.feed("hello\n");
     while (!sensors.finished()) app->step();
     serial.feed("status\n");
     app->step();
+    if (buzzer_record != nullptr) *buzzer_record = buzzer.record();
     return serial.output();
 }
 
@@ -175,10 +179,22 @@ TEST_CASE("monitor says SIGN when the shunt's sense wires are swapped, not on a 
         INFO("swapped from reading " << c.from << " to " << c.to);
         const std::string log = dir + "/swapped.csv";
         fwtest::write_file(log, swapped_raw_log(c.from, c.to));
-        const std::string out = monitor_status_after(log, dir + "/oled.txt");
+        std::string buzzer;
+        const std::string out = monitor_status_after(log, dir + "/oled.txt", &buzzer);
         const std::string oled = fwtest::read_file(dir + "/oled.txt");
         REQUIRE(out.find(" flights=") != std::string::npos);
         CHECK((out.find(" current=reversed out=") != std::string::npos) == c.reversed);
         CHECK((oled.find("SIGN") != std::string::npos) == c.reversed);
+        // The buzzer too (a build without an OLED): one long beep, a sensor fault's, 2 s into the reversal.
+        int beeps = 0;
+        std::istringstream in(buzzer);
+        std::string line, first_on;
+        while (std::getline(in, line))
+            if (line.size() > 2 && line.compare(line.size() - 2, 2, ",1") == 0 && beeps++ == 0) first_on = line;
+        CHECK(beeps == (c.reversed ? 1 : 0));
+        if (c.reversed) {
+            INFO(buzzer);
+            CHECK(std::stod(first_on) > 2.0);
+        }
     }
 }

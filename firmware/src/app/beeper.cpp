@@ -16,6 +16,8 @@ void Beeper::configure(const telemetry::TelemetryConfig& config, const core::Mon
     pending_ = 0;
     pattern_start_us_ = 0;
     pattern_beeps_ = 0;
+    reversed_told_ = false;
+    reversed_told_us_ = 0;
 }
 
 int Beeper::long_beeps(core::Warning w) {
@@ -33,7 +35,7 @@ int Beeper::long_beeps(core::Warning w) {
     }
 }
 
-bool Beeper::update(const core::MonitorStatus& status) {
+bool Beeper::update(const core::MonitorStatus& status, bool current_reversed) {
     const uint64_t t = status.time_us;
     pending_ |= schedule_.due(status);
     const uint64_t long_us = us(kLongOnMs + kLongGapMs);
@@ -54,6 +56,15 @@ bool Beeper::update(const core::MonitorStatus& status) {
             pattern_start_us_ = t;
             pattern_beeps_ = long_beeps(static_cast<core::Warning>(best));
         }
+    }
+    if (pattern_beeps_ == 0 && current_reversed &&
+        (!reversed_told_ || (schedule_.repeat_us() > 0 && t >= reversed_told_us_ + schedule_.repeat_us()))) {
+        // A craft without an OLED or a ground station heard nothing of its wiring, and flew
+        // with a monitor that never sees it take off.
+        reversed_told_ = true;
+        reversed_told_us_ = t;
+        pattern_start_us_ = t;
+        pattern_beeps_ = long_beeps(core::kWarnSensorFault);
     }
     if (pattern_beeps_ > 0) return (t - pattern_start_us_) % long_us < us(kLongOnMs);
 

@@ -161,7 +161,7 @@ void MonitorApp::write_outputs() {
     }
     if (buzzer_ != nullptr) {
         // The beeper follows every sample, so switching it back on resumes in step.
-        const bool on = beeper_.update(s) && state_.outputs.buzzer;
+        const bool on = beeper_.update(s, state_.current_reversed) && state_.outputs.buzzer;
         if (on != buzzing_) buzzer_->set(on);
         buzzing_ = on;
     }
