@@ -67,7 +67,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--config-out", a->config_out,
                    "Write the config with the current-sensor corrections this replay found here: the gain "
                    "--charged-mah suggests (battery.extensions.current_sensor.gain), the offset learnt on the ground "
-                   "when it was a sensor fault (extensions.current_sensor.offset_a); none found: exit 1, nothing written");
+                   "when it was a sensor fault (battery.extensions.current_sensor.offset_a); none found: exit 1, nothing written");
     add_input_options(sub, a->input);
     return [a, charged]() -> int {
         host::ReplayOptions opt;

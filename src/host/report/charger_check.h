@@ -15,7 +15,7 @@ namespace host {
 struct ChargerCheckOptions {
     double charged_ah = 0;      // what the charger put back, the pack charged full before the log
     double tolerance = 0.03;    // |counted / charged − 1| beyond this is a sensor fault
-    double current_gain = 1.0;  // the config's current-sensor gain (extensions.current_sensor.gain)
+    double current_gain = 1.0;  // the config's current-sensor gain (battery.extensions.current_sensor.gain)
 };
 
 // The check as JSON (`charger_check` in the summary): charged_ah, counted_ah, ratio,
