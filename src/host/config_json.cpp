@@ -583,6 +583,19 @@ std::vector<std::string> config_notes(const core::MonitorConfig& config, const L
                         ": the model's voltage past there is not a battery's, and voltage_error_v.model counts it (a "
                         "pack not charged full at the start reads so too: the model is no rest curve)");
     }
+    // Short of the capacity the same term runs away already: Matrice 100 flight 41, read as
+    // 3.93 Ah drawn of 4.65 before take-off, ran 1 V per cell off at 98 % and 105 V off after
+    // the landing, 6.3 V on average, with no note (57 likewise).
+    if (!std::isfinite(log.capacity_passed_s) && std::isfinite(log.pole_runaway_s)) {
+        char buf[240];
+        std::snprintf(buf, sizeof buf,
+                      "the config's model ran over 1 V per cell off the measurement %.1f s into the log, with the charge "
+                      "counted since full at %.0f %% of the config's capacity (%.3g Ah)",
+                      log.pole_runaway_s, 100.0 * log.pole_runaway_share, capacity_ah);
+        notes.push_back(std::string(buf) +
+                        ": near the capacity the model's voltage runs away, and voltage_error_v.model counts it (a "
+                        "capacity set too small, or a pack read as less charged than it is, does this)");
+    }
     if (log.temperature_samples == 0) {
         const std::string note = missing_temperature_note(config, false);
         if (!note.empty()) notes.push_back(note);

@@ -49,6 +49,11 @@ struct LogFacts {
     // Log time (s) at which the charge counted since full first passed the config's
     // capacity; NaN = never.
     double capacity_passed_s = NAN;
+    // Log time (s) at which the configured model, the count past kPoleShare of the capacity,
+    // first ran more than 1 V per cell off the measurement, and the count's share then; NaN = never.
+    static constexpr double kPoleShare = 0.8;
+    double pole_runaway_s = NAN;
+    double pole_runaway_share = NAN;
     // Samples that carry a temperature; -1 = no log read.
     long temperature_samples = -1;
 };

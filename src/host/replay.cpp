@@ -24,7 +24,7 @@ namespace {
 constexpr double kLostModelVPerCell = 0.25;
 // The same for the configured model (and the reference estimator's adapted one): a cell's
 // whole curve spans about 1.2 V, so a model further off than this on average describes no pack.
-// The dissertation's original parameters, the worst real fit shipped, sit at 0.20–0.35 V per
+// The dissertation's original parameters, the worst real fit shipped, sit at 0.25–0.35 V per
 // cell on its flights; the reference's adaptation brings them to 0.02–0.06, and the Matrice 100
 // fleet's to at most 0.17.
 constexpr double kNoPackModelVPerCell = 1.0;
@@ -148,6 +148,13 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
         shape.add(sample);
         if (std::isnan(facts.capacity_passed_s) && status.initialised && status.consumed_mah > capacity_mah)
             facts.capacity_passed_s = static_cast<double>(sample.time_us - t0_us) * 1e-6;
+        if (std::isnan(facts.pole_runaway_s) && status.initialised && status.sample_valid &&
+            status.consumed_mah > LogFacts::kPoleShare * capacity_mah &&
+            std::fabs(static_cast<double>(status.model_voltage_v) - static_cast<double>(sample.voltage_v)) >
+                kNoPackModelVPerCell * std::max(1, options.config.monitor.cells_in_series)) {
+            facts.pole_runaway_s = static_cast<double>(sample.time_us - t0_us) * 1e-6;
+            facts.pole_runaway_share = static_cast<double>(status.consumed_mah) / capacity_mah;
+        }
         summary.add(status);
         if (series) series->add(sample, status);
         if (observer) observer(sample, status);
@@ -248,7 +255,7 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     }
     // Said only when no note above explains it already (a config for another pack, a count
     // past the capacity: both put the model volts off).
-    const bool explained = std::isfinite(facts.capacity_passed_s) ||
+    const bool explained = std::isfinite(facts.capacity_passed_s) || std::isfinite(facts.pole_runaway_s) ||
                            std::any_of(notes.begin(), notes.end(), [](const std::string& n) { return is_other_pack_note(n); });
     if (body["flight"].is_object() && !explained) {
         // A config whose model is volts off every reading (a typed extension setting an order of

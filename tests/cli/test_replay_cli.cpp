@@ -753,6 +753,20 @@ TEST_CASE("replay notes a config whose battery model describes no pack", "[cli]"
     CHECK(noted(fitted, "") == 0);
 }
 
+TEST_CASE("replay says a model that runs away short of its capacity, not that it describes no pack", "[cli][data]") {
+    // Matrice 100 flight 41 with the fleet's estimated config: read as 3.93 of 4.65 Ah drawn
+    // before take-off, its model runs past 1 V per cell off at 98 % of the capacity and ends
+    // 105 V off after the landing (6.3 V on average), with the count never past the capacity.
+    const auto j = clitest::run_json("replay " + q(kData + "/cmu-m100/flights/41.csv") + " -c " +
+                                     q(kSource + "/configs/dji-tb47d-6s.json") + " --json");
+    CHECK(j["flight"]["voltage_error_v"]["model"]["mean_abs"].get<double>() > 6 * 1.0);
+    std::vector<std::string> notes;
+    for (const auto& n : j.value("config_notes", nlohmann::json::array())) notes.push_back(n.get<std::string>());
+    REQUIRE(notes.size() == 1);
+    CHECK_THAT(notes[0], Catch::StartsWith("the config's model ran over 1 V per cell off the measurement 99.9 s into the "
+                                           "log, with the charge counted since full at 98 % of the config's capacity (4.65 Ah)"));
+}
+
 TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes the config that corrects it", "[cli][truth]") {
     // The simulated racing flight whose current sensor reads 8 % high; the truth holds the
     // charge the pack gave over the log, which is what a charger puts back.
