@@ -21,12 +21,13 @@ namespace {
 
 // The beeps (start, length in ms) while `status` is held from `from_ms` to `to_ms`.
 using Beeps = std::vector<std::pair<long, long>>;
-Beeps listen(fw::Beeper& b, core::MonitorStatus& status, long from_ms, long to_ms) {
+// current_reversed: the firmware's swapped-wires check, held the whole time.
+Beeps listen(fw::Beeper& b, core::MonitorStatus& status, long from_ms, long to_ms, bool current_reversed = false) {
     Beeps out;
     long on_since = -1;
     for (long t = from_ms; t < to_ms; t += 10) {
         status.time_us = static_cast<uint64_t>(t) * 1000u;
-        const bool on = b.update(status);
+        const bool on = b.update(status, current_reversed);
         if (on && on_since < 0) on_since = t;
         if (!on && on_since >= 0) {
             out.emplace_back(on_since, t - on_since);
@@ -113,42 +114,20 @@ TEST_CASE("Beeper: swapped shunt wires beep as a sensor fault, on the ground, ag
     core::MonitorStatus s = flying_status();
     s.flying = false;
     s.time_valid = false;
-    const auto hear = [&](bool reversed, long from_ms, long to_ms) {
-        Beeps out;
-        long on_since = -1;
-        for (long t = from_ms; t < to_ms; t += 10) {
-            s.time_us = static_cast<uint64_t>(t) * 1000u;
-            const bool on = b.update(s, reversed);
-            if (on && on_since < 0) on_since = t;
-            if (!on && on_since >= 0) {
-                out.emplace_back(on_since, t - on_since);
-                on_since = -1;
-            }
-        }
-        return out;
-    };
-    CHECK(hear(false, 0, 5000).empty());
-    CHECK(hear(true, 5000, 35000) == Beeps{{5000, 400}});
-    CHECK(hear(true, 35000, 70000) == Beeps{{35000, 400}, {65000, 400}});
+    CHECK(listen(b, s, 0, 5000).empty());
+    CHECK(listen(b, s, 5000, 35000, true) == Beeps{{5000, 400}});
+    CHECK(listen(b, s, 35000, 70000, true) == Beeps{{35000, 400}, {65000, 400}});
     // A warning due at once comes first; the wiring's beep follows its pattern.
     s.warnings_raised = s.warnings = 1u << core::kWarnCellOutlier;
     s.flying = true;
-    CHECK(hear(true, 95000, 98000) == Beeps{{95000, 400}, {95900, 400}, {96800, 400}});
+    CHECK(listen(b, s, 95000, 98000, true) == Beeps{{95000, 400}, {95900, 400}, {96800, 400}});
     // repeat_s 0: once.
     fw::Beeper once;
     telemetry::TelemetryConfig quiet;
     quiet.text_repeat_s = 0.0f;
     once.configure(quiet, core::MonitorConfig{});
     core::MonitorStatus g;
-    int beeps = 0;
-    bool was = false;
-    for (long t = 0; t < 200000; t += 10) {
-        g.time_us = static_cast<uint64_t>(t) * 1000u;
-        const bool on = once.update(g, true);
-        beeps += on && !was;
-        was = on;
-    }
-    CHECK(beeps == 1);
+    CHECK(listen(once, g, 0, 200000, true) == Beeps{{0, 400}});
 }
 
 TEST_CASE("Beeper: the firmware build beeps a simulated weak cell and short flight as the monitor raises them",
