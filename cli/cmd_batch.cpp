@@ -210,9 +210,13 @@ std::function<int()> setup(CLI::App& sub) {
                    "Write each log's summary JSON here as <log stem>.json, as it completes (logs of one stem: "
                    "<path below their common directory, / as __>.json)");
     sub.add_option("--shard", a->shard, "Replay only shard K of N (K/N, 1-based): inputs whose index mod N is K-1");
-    sub.add_option("--compare", a->compare,
+    auto* compare = sub.add_option("--compare", a->compare,
                    "Compare each summary with GOLDEN_DIR/<log stem>.json (named as --out names it); exit 1 on a change");
-    sub.add_option("--tolerance", a->tolerance, "--compare: relative tolerance (plus 1e-9 absolute)")->capture_default_str();
+    // Finite, and only with --compare: inf had passed every comparison, and alone it did nothing.
+    sub.add_option("--tolerance", a->tolerance, "--compare: relative tolerance (plus 1e-9 absolute)")
+        ->capture_default_str()
+        ->check(number_in(0.0, 1.0e6))
+        ->needs(compare);
     sub.add_flag("--no-progress", a->no_progress, "No progress bar (it is shown only when stderr is a terminal)");
     add_input_options(sub, a->input);
     // Here --format is the table's format (as for merge); the logs' format moves to

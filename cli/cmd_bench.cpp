@@ -146,7 +146,8 @@ std::function<int()> setup(CLI::App& sub) {
         add_input_options(*s, a->input);
     }
     mon->add_option("LOG", a->paths, "Log to replay")->required()->expected(1);
-    mon->add_option("--passes", a->passes, "Passes over the log (default: until --min-time)");
+    // Read as unsigned, -1 had wrapped to 2^64 - 1 passes and hung.
+    mon->add_option("--passes", a->passes, "Passes over the log (default: until --min-time)")->check(CLI::Range(1, 100000000));
     mon->add_option("--min-time", a->min_time, "Seconds of updates to time at least")->check(number_in(0.0, 3600.0))->capture_default_str();
     rep->add_option("LOG", a->paths, "Log to replay")->required()->expected(1);
     rep->add_option("--min-time", a->min_time, "Seconds to keep replaying")->check(number_in(0.0, 3600.0))->capture_default_str();

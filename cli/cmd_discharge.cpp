@@ -24,10 +24,11 @@ struct DischargeArgs {
 std::function<int()> setup(CLI::App& sub) {
     auto a = std::make_shared<DischargeArgs>();
     sub.add_option("LOG", a->log, "Discharge log (any supported format)")->required();
+    // Above 0: 0 is their unset value, and a typed 0 had read as the config's.
     sub.add_option("--min-voltage", a->min_v, "Battery connected above this; bottom of the tables (default: the config's min_voltage_v)")
-        ->check(number_in(0.0, host::discharge::kMaxTableVoltage_v));
+        ->check(number_in(0.0, host::discharge::kMaxTableVoltage_v, true));
     sub.add_option("--max-voltage", a->max_v, "Top of the tables (default: the config's max_voltage_v)")
-        ->check(number_in(0.0, host::discharge::kMaxTableVoltage_v));
+        ->check(number_in(0.0, host::discharge::kMaxTableVoltage_v, true));
     sub.add_option("--reaction", a->reaction_s, "Smoothing: moving-average (exponential) time constant in s; 0 = none")->check(number_in(0.0, 1.0e6))->capture_default_str();
     CLI::Option* reaction = sub.get_option("--reaction");
     sub.add_option("--alpha", a->alpha, "Smoothing: fixed per-sample constant in (0, 1] instead of --reaction")

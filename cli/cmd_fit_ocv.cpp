@@ -130,9 +130,10 @@ std::function<int()> setup(CLI::App& sub) {
         for (const host::fit::OcvStitchLog& l : logs) inputs.push_back({"a log", l.path});
         add_named(inputs, "a --test log", a->test_logs);
         // The configs the manifest names are inputs too; only the one fitted (the first
-        // log's, when -c is not given) may be written back over.
+        // log's, when -c is not given) may be written back over (with -c, that one had been
+        // too, and a config of the fleet's replaced by another's table).
         for (size_t k = 0; k < items.size(); ++k)
-            inputs.push_back({"the config of " + items[k].path, items[k].config_path, k == 0});
+            inputs.push_back({"the config of " + items[k].path, items[k].config_path, k == 0 && a->input.config.empty()});
         const std::vector<host::NamedPath> outputs{printed_output("--json", a->json),
                                                    text_output("-o/--output", a->output, true),
                                                    text_output("--report", a->report),

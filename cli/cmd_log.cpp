@@ -30,7 +30,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_flag("--append", a->options.append, "Continue an existing file (its header must match the device's)");
     sub.add_option("--max-wait", a->options.max_wait_s,
                    "Stop when the device has been gone this many seconds (default: wait until Ctrl-C)")
-        ->check(number_in(0.0, 1.0e7));
+        ->check(number_in(0.0, 1.0e7, true));  // 0 had meant "never", as if not given
     sub.add_option("--fsync-interval", a->options.fsync_interval_s, "Seconds between fsyncs of the output")
         ->capture_default_str()
         ->check(number_in(0.0, 1.0e7));

@@ -120,7 +120,7 @@ int run(const MakeConfigArgs& a) {
 
 std::function<int()> setup(CLI::App& sub) {
     auto a = std::make_shared<MakeConfigArgs>();
-    sub.add_option("--from-log", a->from_log,
+    auto* from_log = sub.add_option("--from-log", a->from_log,
                    "Take what an autopilot log says about its pack: PX4 BAT1_N_CELLS, BAT1_CAPACITY, BAT1_R_INTERNAL; "
                    "ArduPilot BATT_CAPACITY, BATT_LOW_VOLT (or LOW_VOLT, FS_BATT_VOLTAGE), BATT_LOW_TIMER; the cell "
                    "count from its cell columns or how high it rests");
@@ -128,7 +128,7 @@ std::function<int()> setup(CLI::App& sub) {
                    "A config written for this monitor board (e.g. by replay --config-out after a charger check): take "
                    "its board settings, not the reference logger's: the shunt calibration, the current sensor's range and "
                    "correction (battery.extensions.current_sensor), which cells' readings carry a lead, the telemetry");
-    sub.add_option("--format", a->format, "Log format of --from-log (as replay)")->capture_default_str();
+    sub.add_option("--format", a->format, "Log format of --from-log (as replay)")->capture_default_str()->needs(from_log);
     sub.add_option("--cells", a->cells, "Cells in series")->check(CLI::Range(1, 12));
     sub.add_option("--capacity-mah", a->capacity_mah, "Rated capacity (mAh)")->check(number_in(0.0, 1.0e6, true));
     sub.add_option("--resistance-mohm", a->resistance_mohm,

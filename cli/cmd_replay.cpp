@@ -59,7 +59,7 @@ std::function<int()> setup(CLI::App& sub) {
     auto* charged = sub.add_option("--charged-mah", a->charged_mah,
                                    "What the charger put back after this log (the pack charged full before it): "
                                    "checks the current sensor against it (summary `charger_check`)")
-                        ->check(number_in(0.0, 1.0e7, true));  // refused before the replay, not after it
+                        ->check(number_in(1.0, 1.0e7));  // refused before the replay, not after it; under 1 mAh is no charge
     sub.add_option("--charger-tolerance", a->charger_tolerance,
                    "With --charged-mah: a count off by more than this fraction is a sensor fault (default 0.03)")
         ->check(number_in(0.0, 1.0, true))

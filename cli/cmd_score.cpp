@@ -65,6 +65,8 @@ std::function<int()> setup(CLI::App& sub) {
         std::vector<host::NamedPath> inputs;
         for (const host::sim::Scenario& s : scenarios) {
             inputs.push_back({"a scenario", s.source_path});
+            // The monitor config it names is read too (-o over it had replaced it with the table).
+            inputs.push_back({"the monitor config of " + s.name, s.monitor_config_path});
             const std::string log = s.name + host::sim::sim_log_extension(host::sim::log_format_of(s));
             if (!a->logs_dir.empty()) inputs.push_back({"--logs' " + log, a->logs_dir + "/" + log});
         }

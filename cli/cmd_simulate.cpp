@@ -34,7 +34,9 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--seed", a->seed, "Override the scenario's seed");
     sub.add_option("--format", a->format,
                    "Override the log format: " + host::sim::sim_log_format_help());
-    sub.add_option("--cutoff-v-per-cell", a->cutoff, "Override the truth's loaded cutoff voltage per cell (default: the monitor config's min_flight_voltage_v per cell)");
+    // Checked as typed: "nan" had read as the option not given (NaN is its unset value).
+    sub.add_option("--cutoff-v-per-cell", a->cutoff, "Override the truth's loaded cutoff voltage per cell (default: the monitor config's min_flight_voltage_v per cell)")
+        ->check(number_in(2.0, 4.5));
     return [a]() -> int {
         if (a->output.empty() == a->out_dir.empty()) {
             std::cerr << "battsim simulate: give exactly one of -o/--output (one scenario) or --out-dir\n";
@@ -42,10 +44,6 @@ std::function<int()> setup(CLI::App& sub) {
         }
         if (!a->truth.empty() && a->output.empty()) {
             std::cerr << "battsim simulate: --truth goes with -o/--output\n";
-            return kExitUsage;
-        }
-        if (!std::isnan(a->cutoff) && !(a->cutoff >= 2.0 && a->cutoff <= 4.5)) {
-            std::cerr << "battsim simulate: --cutoff-v-per-cell: expected a voltage in [2, 4.5]\n";
             return kExitUsage;
         }
         std::vector<std::string> files;
@@ -83,6 +81,8 @@ std::function<int()> setup(CLI::App& sub) {
         std::vector<std::pair<std::string, std::string>> targets;
         std::vector<host::NamedPath> inputs, outputs{{"--out-dir", a->out_dir, false, host::Dash::Refused, true}};
         add_named(inputs, "a scenario", files);
+        // The monitor config each names is read too: -o or --truth over it had replaced it.
+        for (const host::sim::Scenario& s : scenarios) inputs.push_back({"the monitor config of " + s.name, s.monitor_config_path});
         for (const host::sim::Scenario& s : scenarios) {
             if (!a->out_dir.empty()) {
                 targets.emplace_back(a->out_dir + "/" + s.name + host::sim::sim_log_extension(host::sim::log_format_of(s)),

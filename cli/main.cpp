@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <functional>
 #include <iostream>
 #include <string>
 
@@ -36,6 +37,18 @@ int main(int argc, char** argv) {
         CLI::App* sub = app.add_subcommand(c.name, c.description);
         actions.emplace_back(sub, c.setup(*sub));
     }
+    // An empty value (an unset shell variable: `-o "$OUT"`) had read as the option not given,
+    // so an output went unwritten with exit 0, or failed after the work with exit 5. Every
+    // option that takes a value refuses it; no option means anything by "".
+    const CLI::Validator non_empty(
+        [](std::string& v) { return v.empty() ? std::string("expected a value, found an empty string") : std::string(); },
+        "", "NON_EMPTY");
+    const std::function<void(CLI::App*)> refuse_empty = [&](CLI::App* a) {
+        for (CLI::Option* o : a->get_options())
+            if (o->get_type_size_max() > 0) o->check(non_empty);
+        for (CLI::App* s : a->get_subcommands([](CLI::App*) { return true; })) refuse_empty(s);
+    };
+    refuse_empty(&app);
     // CLI11 answers a misspelt command with "A subcommand is required"; name it instead.
     if (argc > 1 && argv[1][0] != '-') {
         const std::string word = argv[1];

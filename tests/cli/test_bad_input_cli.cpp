@@ -102,6 +102,64 @@ TEST_CASE("a charger count or tolerance that is no positive number is refused be
     }
 }
 
+TEST_CASE("option values found by a sweep of every command's options: refused before the work", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    // An empty value (an unset shell variable) had read as the option not given: the output
+    // went unwritten with exit 0 (--series, -o) or failed after the work with exit 5.
+    for (const std::string& args : {"replay " + q(kExample) + " --series ''", "replay " + q(kExample) + " -c ''",
+                                    std::string("replay ''"), "batch " + q(kExample) + " -o ''", std::string("score -o ''"),
+                                    "export-config -c " + q(kConfig) + " -o ''"}) {
+        INFO(args);
+        const auto r = run(args);
+        CHECK(r.exit_code == 2);
+        CHECK_THAT(r.err, Catch::Contains("expected a value, found an empty string"));
+    }
+    // -o over a config a scenario names (score, simulate) replaced it with a table or a log.
+    const std::string suite = dir + "/suite";
+    std::filesystem::create_directories(suite);
+    clitest::write_file(dir + "/pack.json", clitest::read_file(kConfig));
+    nlohmann::json sc = nlohmann::json::parse(clitest::read_file(kSource + "/configs/scenarios/4s-racing-healthy-a.json"));
+    sc["monitor_config"] = "../pack.json";
+    clitest::write_file(suite + "/sc.json", sc.dump());
+    for (const std::string& args : {"score " + q(suite + "/sc.json") + " -j1 -o " + q(dir + "/pack.json"),
+                                    "simulate " + q(suite + "/sc.json") + " -o " + q(dir + "/pack.json"),
+                                    "simulate " + q(suite + "/sc.json") + " -o " + q(dir + "/s.csv") + " --truth " +
+                                        q(dir + "/pack.json")}) {
+        INFO(args);
+        const auto r = run(args);
+        CHECK(r.exit_code == 2);
+        CHECK_THAT(r.err, Catch::Contains("the monitor config of"));
+        CHECK(clitest::read_file(dir + "/pack.json") == clitest::read_file(kConfig));
+    }
+    // fit --add values outside the config reader's ranges had written a config nothing loads.
+    for (const char* add : {"thermal:-300", "temperature:1e300", "rc:1e-300", "hysteresis:5"}) {
+        INFO(add);
+        const auto r = run("fit " + q(kExample) + " -c " + q(kConfig) + " --add " + add + " -o " + q(dir + "/f.json"));
+        CHECK(r.exit_code == 2);
+        CHECK_THAT(r.err, Catch::Contains(std::string("--add ") + add + ": "));
+        CHECK_FALSE(std::filesystem::exists(dir + "/f.json"));
+    }
+    // bench --passes -1 had wrapped to 2^64 - 1 passes (a hang); log --max-wait 0 had meant
+    // "wait for ever"; --charged-mah below 1 mAh had printed LONG_MIN percent.
+    const std::pair<std::string, std::string> refused[] = {
+        {"bench monitor " + q(kExample) + " --passes -1", "--passes: Value -1 not in range 1 to 100000000"},
+        {"log --port /nonexistent --out " + q(dir + "/l.csv") + " --max-wait 0", "--max-wait: expected a number in (0, "},
+        {"replay " + q(kExample) + " --charged-mah 1e-300", "--charged-mah: expected a number in [1, "},
+        // Options that act only with another had been dropped alone; a name given twice, kept twice.
+        {"batch " + q(kExample) + " --tolerance 0.1 -o " + q(dir + "/t.md"), "--tolerance requires --compare"},
+        {"make-config --format ulog --cells 4 --capacity-mah 1500 -o " + q(dir + "/m.json"), "--format requires --from-log"},
+        {"score --columns joint,joint -j1 " + q(kSource + "/configs/scenarios/4s-racing-healthy-a.json"),
+         "--columns: \"joint\" given twice"},
+        {"residual " + q(kExample) + " --fixed q,q", "--fixed: parameter \"q\" given twice"},
+        {"fit " + q(kExample) + " --params abc", "unknown parameter \"abc\"; expected one of e0, r, kappa"}};
+    for (const auto& [args, said] : refused) {
+        INFO(args);
+        const auto r = run(args);
+        CHECK(r.exit_code == 2);
+        CHECK_THAT(r.err, Catch::Contains(said));
+    }
+}
+
 TEST_CASE("a charger count far from the monitor's suggests no gain and writes no config", "[cli]") {
     // 2,000,000 mAh for a 1.55 Ah flight (Ah typed as mAh): the gain it implied was out of
     // the range the config reader accepts, so --config-out had left an unloadable config.
@@ -152,9 +210,9 @@ TEST_CASE("option typos are refused with the range in plain figures", "[cli]") {
         {"replay " + q(kExample) + " --speed 2", "--speed requires --realtime"},
         {"replay " + q(kExample) + " --realtime --speed 1e-30", "--speed: expected a number in [0.001, 1e+06]"},
         {"make-config --cells 4 --capacity-mah 0", "--capacity-mah: expected a number in (0, 1e+06], found 0"},
-        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --max-voltage 100000", "--max-voltage: expected a number in [0, 200], found 100000"},
+        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --max-voltage 100000", "--max-voltage: expected a number in (0, 200], found 100000"},
         {"discharge " + q(kExample) + " -c " + q(kConfig) + " --alpha nan", "--alpha: expected a number in (0, 1]"},
-        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --min-voltage nan", "--min-voltage: expected a number in [0, 200], found nan"},
+        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --min-voltage nan", "--min-voltage: expected a number in (0, 200], found nan"},
         {"fit-ocv " + q(kExample) + " --prior-sigma nan", "--prior-sigma: expected a number in (0, 1e+06]"},
     };
     for (const Case& c : cases) {

@@ -811,7 +811,7 @@ TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes
     CHECK_THAT(brief.out, Catch::Contains(std::string(" Ah charged ") + ratio));
     const auto bad = run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --charged-mah -5");
     CHECK(bad.exit_code == 2);
-    CHECK_THAT(bad.err, Catch::Contains("--charged-mah: expected a number in (0, 1e+07], found -5"));
+    CHECK_THAT(bad.err, Catch::Contains("--charged-mah: expected a number in [1, 1e+07], found -5"));
     // Without a charger's count a gain error has nothing to correct it, and no offset was learnt.
     const auto nothing = run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --estimator joint --config-out " + q(dir + "/x.json"));
     CHECK(nothing.exit_code == 1);
@@ -820,7 +820,7 @@ TEST_CASE("replay --charged-mah finds an injected current-sensor gain and writes
     // Zero is a count, and a wrong one: refused, not read as "no check".
     const auto zero = run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --charged-mah 0");
     CHECK(zero.exit_code == 2);
-    CHECK_THAT(zero.err, Catch::Contains("--charged-mah: expected a number in (0,"));
+    CHECK_THAT(zero.err, Catch::Contains("--charged-mah: expected a number in [1,"));
     CHECK(run("replay " + q(dir + "/g.csv") + " -c " + q(config) + " --charger-tolerance 0.05").exit_code == 2);
     // A charger's count that includes a deficit the log never saw (the pack not full at the
     // start) gets no verdict, and no config is written from it.

@@ -62,7 +62,11 @@ TEST_CASE("simulate: one cell flies; more than the sensors read, no resistance a
     // A cutoff of 0 V per cell is no cutoff (it had passed as "not given").
     const auto zero = run("simulate " + q(scenario(dir, "z", 4)) + " -o " + q(dir + "/z.csv") + " --cutoff-v-per-cell 0");
     CHECK(zero.exit_code == 2);
-    CHECK_THAT(zero.err, Catch::Contains("--cutoff-v-per-cell: expected a voltage in [2, 4.5]"));
+    CHECK_THAT(zero.err, Catch::Contains("--cutoff-v-per-cell: expected a number in [2, 4.5], found 0"));
+    // Nor is "nan" (NaN is the option's unset value: it had read as not given).
+    const auto nan = run("simulate " + q(scenario(dir, "z", 4)) + " -o " + q(dir + "/z.csv") + " --cutoff-v-per-cell nan");
+    CHECK(nan.exit_code == 2);
+    CHECK_THAT(nan.err, Catch::Contains("--cutoff-v-per-cell: expected a number in [2, 4.5], found nan"));
 }
 
 TEST_CASE("score names the scenario whose simulated log cannot be read back", "[cli][sim]") {

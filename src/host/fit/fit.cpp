@@ -89,7 +89,9 @@ std::vector<Def> expand(const std::string& name, const ModelSpec& s, double full
     if (name == "gain") return one(Kind::Gain, "", 0.9, 1.1, 0.01);
     if (name == "offset") return one(Kind::Offset, "A", -10, 10, 0.01);
     if (name == "lead") return one(Kind::Lead, "s", -1, 1, 0.01);
-    throw std::invalid_argument("unknown parameter \"" + name + "\"");
+    std::string known;
+    for (const std::string& k : known_parameter_names()) known += (known.empty() ? "" : ", ") + k;
+    throw std::invalid_argument("unknown parameter \"" + name + "\"; expected one of " + known);
 }
 
 double get(const ModelSpec& s, const NaturalParams& n, const Def& d) {

@@ -25,6 +25,18 @@ double parse_number(const std::string& what, const std::string& text) {
     return v;
 }
 
+// The value after ':' within the range the config reader accepts for its key: outside it
+// (thermal:-300, temperature:1e300) the fit had written a config no command could load.
+double parse_in(const std::string& what, const std::string& text, double lo, double hi, const char* unit) {
+    const double v = parse_number(what, text);
+    if (!(v >= lo && v <= hi)) {
+        char range[96];
+        std::snprintf(range, sizeof range, "%g to %g %s", lo, hi, unit);
+        throw std::invalid_argument("--add " + what + ": expected " + range + " after ':', found \"" + text + "\"");
+    }
+    return v;
+}
+
 std::string join_labels(const std::vector<Trace>& traces) {
     std::string s;
     for (const Trace& t : traces) s += (s.empty() ? "" : "+") + t.label;
@@ -43,8 +55,7 @@ std::vector<std::string> enable_extension(ModelSpec& s, const std::string& what)
             throw std::invalid_argument("--add rc: at most " + std::to_string(core::kMaxRcBranches) + " RC branches");
         static const float kDefaultTau[core::kMaxRcBranches] = {2.0f, 20.0f, 200.0f};
         const int b = s.ext.rc_count;
-        s.ext.rc[b].time_constant_s = has_arg ? static_cast<float>(parse_number(what, arg)) : kDefaultTau[b];
-        if (!(s.ext.rc[b].time_constant_s > 0)) throw std::invalid_argument("--add rc: time constant must be positive");
+        s.ext.rc[b].time_constant_s = has_arg ? static_cast<float>(parse_in(what, arg, 1e-3, 1e9, "s")) : kDefaultTau[b];
         // A quarter of the ohmic resistance: the right order for LiPo polarisation and
         // large enough for the time constant to have a gradient.
         s.ext.rc[b].resistance_ohm = std::max(0.25f * s.battery.internal_resistance_ohm, 1e-4f);
@@ -54,16 +65,19 @@ std::vector<std::string> enable_extension(ModelSpec& s, const std::string& what)
     }
     if (name == "temperature") {
         s.ext.temperature.enabled = true;
-        if (has_arg) s.ext.temperature.reference_c = static_cast<float>(parse_number(what, arg));
+        if (has_arg) s.ext.temperature.reference_c = static_cast<float>(parse_in(what, arg, -100, 200, "degC"));
         return {"temp_r", "temp_k", "temp_q", "temp_e0"};
     }
     if (name == "thermal") {
         s.ext.thermal.enabled = true;
-        if (has_arg) s.ext.thermal.ambient_c = static_cast<float>(parse_number(what, arg));
+        if (has_arg) s.ext.thermal.ambient_c = static_cast<float>(parse_in(what, arg, -100, 200, "degC"));
         // Without a temperature measurement only the product of thermal resistance and
         // activation is identified, so the resistance stays as configured.
         return {"thermal_tau"};
     }
+    // The other effects take no value: "hysteresis:5" had dropped its 5 without a word.
+    if (has_arg && (name == "hysteresis" || name == "sensor" || name == "timing"))
+        throw std::invalid_argument("--add " + what + ": " + name + " takes no value after ':'");
     if (name == "hysteresis") {
         if (s.ext.hysteresis.magnitude_v == 0.0f) s.ext.hysteresis.magnitude_v = 1e-3f;
         return {"hyst_m", "hyst_rate"};

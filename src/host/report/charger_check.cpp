@@ -1,5 +1,6 @@
 #include "host/report/charger_check.h"
 
+#include <cstdio>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -40,7 +41,13 @@ json charger_check(const json& summary, const ChargerCheckOptions& o) {
     // other notes (the start's deficit is measured against the count) only mislead.
     const bool plausible = ratio >= 0.5 && ratio <= 2.0;
     if (!plausible) {
-        notes.push_back("the monitor counted " + std::to_string(static_cast<long>(std::lround(ratio * 100.0))) +
+        // Rounded to a whole percent while that fits a long (--charged-mah 1e-300 had printed LONG_MIN).
+        char pct[32];
+        if (ratio * 100.0 < 1e9)
+            std::snprintf(pct, sizeof pct, "%ld", static_cast<long>(std::lround(ratio * 100.0)));
+        else
+            std::snprintf(pct, sizeof pct, "%.3g", ratio * 100.0);
+        notes.push_back("the monitor counted " + std::string(pct) +
                         " % of the charger's count: check --charged-mah (in mAh) and that the log is of this charge; "
                         "no gain suggested");
     }

@@ -84,6 +84,9 @@ std::vector<EstimatorColumn> select_columns(const std::string& names) {
             for (const EstimatorColumn& c : all) known += (known.empty() ? "" : ", ") + c.name;
             throw std::invalid_argument("unknown estimator \"" + name + "\"; expected " + known);
         }
+        // Twice is one column printed twice, and its flights scored twice.
+        if (std::any_of(columns.begin(), columns.end(), [&](const EstimatorColumn& c) { return c.name == name; }))
+            throw std::invalid_argument("\"" + name + "\" given twice");
         columns.push_back(*it);
     }
     return columns;
