@@ -64,6 +64,12 @@ std::function<int()> setup(CLI::App& sub) {
         if (int rc = check_outputs(command, inputs, outputs)) return rc;
         // A flight given twice weighs twice in the shares' mean error.
         if (int rc = check_logs_once(command, std::vector<host::NamedPath>(inputs.begin() + 1, inputs.end()))) return rc;
+        // A log that cannot be read is said first (a missing one had been answered with the
+        // default config's missing table, exit 1).
+        if (int rc = run_job(command, [&] {
+                for (const std::string& log : a->logs) host::open_reader(log, opt.reader);
+            }))
+            return rc;
         // Without a table the joint estimator's capacity is off by far more than any
         // polarisation shape moves it: the best share would be a fit to that error (on flight
         // 30 with the built-in config: 76 % off the rests' capacity at the edge of the shares).

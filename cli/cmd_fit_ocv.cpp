@@ -63,12 +63,14 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_flag("--json", a->json, "Print the report on standard output");
     sub.add_option("--plot", a->plot, "Draw the table, the config's curve and each flight's voltage with the sag added back (.png or .svg)");
     sub.add_option("--points,--ocv-points", a->options.points, "Table points from empty to full")->check(CLI::Range(2, 21))->capture_default_str();
+    // The sigmas from 1 µV, below any measurement: at 1e-300 V the fit's weights overflowed to a
+    // singular system reported as "the logs hold too little current".
     sub.add_option("--prior-sigma", a->options.prior_sigma_v,
                    "Per cell, V: how far the table may leave the config's curve where no flight reaches")
-        ->check(number_in(0.0, 1.0e6, true))
+        ->check(number_in(1.0e-6, 1.0e6))
         ->capture_default_str();
     sub.add_option("--smooth-sigma", a->options.smooth_sigma_v, "Per cell, V: second difference of that distance")
-        ->check(number_in(0.0, 1.0e6, true))
+        ->check(number_in(1.0e-6, 1.0e6))
         ->capture_default_str();
     sub.add_option("--fast-time", a->options.fast_time_s, "Seconds: the fast polarisation's low-pass of the current")
         ->check(number_in(0.0, 1.0e6, true))
@@ -78,7 +80,7 @@ std::function<int()> setup(CLI::App& sub) {
         ->capture_default_str();
     sub.add_option("--empty-sigma", a->options.empty_sigma_v,
                    "Per cell, V: how far the empty point (SOC 0) may leave the config's (its minimum voltage)")
-        ->check(number_in(0.0, 1.0e6, true))
+        ->check(number_in(1.0e-6, 1.0e6))
         ->capture_default_str();
     sub.add_option("--rest-weight", a->options.rest_weight, "Weight of a sample at rest (|I| < 1 A) against one in flight")
         ->check(number_in(0.0, 1.0e6, true))

@@ -151,13 +151,20 @@ TEST_CASE("option values found by a sweep of every command's options: refused be
         {"score --columns joint,joint -j1 " + q(kSource + "/configs/scenarios/4s-racing-healthy-a.json"),
          "--columns: \"joint\" given twice"},
         {"residual " + q(kExample) + " --fixed q,q", "--fixed: parameter \"q\" given twice"},
-        {"fit " + q(kExample) + " --params abc", "unknown parameter \"abc\"; expected one of e0, r, kappa"}};
+        {"fit " + q(kExample) + " --params abc", "unknown parameter \"abc\"; expected one of e0, r, kappa"},
+        {"discharge " + q(kExample) + " -c " + q(kConfig) + " --decimate 5000",
+         "--decimate 5000 averages the discharge's 3913 samples into 1 point; expected at most 1956"},
+        {"batch " + q(kExample) + " -j -1 -o " + q(dir + "/t.md"), "--jobs: Value -1 not in range 1 to 1024"}};
     for (const auto& [args, said] : refused) {
         INFO(args);
         const auto r = run(args);
         CHECK(r.exit_code == 2);
         CHECK_THAT(r.err, Catch::Contains(said));
     }
+    // A missing log is said as such before the default config's missing OCV table (exit 1).
+    const auto cal = run("calibrate " + q(dir + "/nonexistent.csv"));
+    CHECK(cal.exit_code == 3);
+    CHECK_THAT(cal.err, Catch::Contains("nonexistent.csv: cannot open file: No such file or directory"));
 }
 
 TEST_CASE("a charger count far from the monitor's suggests no gain and writes no config", "[cli]") {
@@ -213,7 +220,7 @@ TEST_CASE("option typos are refused with the range in plain figures", "[cli]") {
         {"discharge " + q(kExample) + " -c " + q(kConfig) + " --max-voltage 100000", "--max-voltage: expected a number in (0, 200], found 100000"},
         {"discharge " + q(kExample) + " -c " + q(kConfig) + " --alpha nan", "--alpha: expected a number in (0, 1]"},
         {"discharge " + q(kExample) + " -c " + q(kConfig) + " --min-voltage nan", "--min-voltage: expected a number in (0, 200], found nan"},
-        {"fit-ocv " + q(kExample) + " --prior-sigma nan", "--prior-sigma: expected a number in (0, 1e+06]"},
+        {"fit-ocv " + q(kExample) + " --prior-sigma nan", "--prior-sigma: expected a number in [1e-06, 1e+06]"},
     };
     for (const Case& c : cases) {
         INFO(c.args);

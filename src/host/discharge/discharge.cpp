@@ -280,7 +280,11 @@ DischargeResult process_discharge(const std::string& path, const DischargeOption
         p.consumed_mwh /= n;
         r.curve.push_back(p);
     }
-    // Gradient dV/dQ over a span of the capacity, centred where the curve allows.
+    // One averaged point is no curve: said with its cause, not later as a table's "fewer than 2 points".
+    if (r.curve.size() < 2 && raw.size() >= 2)
+        throw std::invalid_argument("--decimate " + std::to_string(o.decimate) + " averages the discharge's " +
+                                    std::to_string(raw.size()) + " samples into " + std::to_string(r.curve.size()) +
+                                    " point; expected at most " + std::to_string(raw.size() / 2) + " to keep a curve");
     const double span_mah = std::max(o.gradient_span * r.capacity_mah, 1e-9);
     for (size_t i = 0; i < r.curve.size(); ++i) {
         size_t lo = i, hi = i;
