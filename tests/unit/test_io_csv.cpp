@@ -287,6 +287,11 @@ TEST_CASE("comment lines ('#') are skipped before the header and between rows, a
     SourceInfo raw_info;
     CHECK(read_all(r, ReaderOptions(), &raw_info).size() == 2);
     CHECK(raw_info.notes == std::vector<std::string>{"1 comment line (starting with '#') skipped (first on line 1)"});
+    // A first column named "#" (an index) is a header, not a comment.
+    const std::string idx = t.write("index.csv", "#,time_s,voltage_v,current_a\n1,0,16.8,0.5\n2,1,16.7,10\n");
+    SourceInfo idx_info;
+    CHECK(read_all(idx, ReaderOptions(), &idx_info).size() == 2);
+    CHECK(idx_info.notes.empty());
     // A header written as a comment is said to be one.
     const std::string h = t.write("hashed.csv", "#time_s,voltage_v,current_a\n0,16.8,0.5\n1,16.7,10\n");
     CHECK(read_error(h) == h + ":2: cannot detect the log format: the first line after the comments holds 3 fields of "

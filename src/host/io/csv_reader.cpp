@@ -333,7 +333,8 @@ protected:
             if (!lines_.next(line)) return false;
             std::size_t i = 0;
             while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
-            if (i < line.size() && line[i] != '#') return true;
+            // "#," is a header or row whose first field is "#" (an index column), not a comment.
+            if (i < line.size() && (line[i] != '#' || (i + 1 < line.size() && line[i + 1] == ','))) return true;
             if (i < line.size()) {
                 // A comment: a lab rig's preamble (pack, date, settings) or a note between runs.
                 if (comment_count_ == 0) first_comment_line_ = lines_.line_number();

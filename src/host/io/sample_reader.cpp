@@ -231,7 +231,7 @@ LogFormat detect(const std::string& path, const std::vector<unsigned char>& head
     for (std::size_t i = 0; i < lines.size(); ++i) {
         const std::size_t first = lines[i].find_first_not_of(" \t");
         if (first == std::string_view::npos) continue;
-        if (lines[i][first] == '#') {
+        if (lines[i][first] == '#' && lines[i].substr(first + 1, 1) != ",") {  // "#," is a field named "#"
             comment_line = static_cast<long>(i) + 1;
             continue;
         }
