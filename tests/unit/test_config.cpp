@@ -158,6 +158,9 @@ TEST_CASE("Config files: errors give the line and column of the key or value", "
     CHECK(read_text_file(range, text) == TextRead::Ok);
     CHECK(text.size() == 82);
     CHECK(error_of(temp.path("absent.json")) == temp.path("absent.json") + ": cannot open config file: no such file");
+    // A name longer than the system takes is said as such (it had read "no such file").
+    const std::string long_name = temp.path(std::string(5000, 'a') + ".json");
+    CHECK(error_of(long_name) == long_name + ": cannot open config file: the path is too long");
     // Values checked while parsed whole keep only the path (no text to locate in).
     json j = config_to_json(default_config());
     j["joint"]["cutoff_delay_s"] = -3;

@@ -167,7 +167,8 @@ ShardSpec parse_shard(const std::string& text) {
     const size_t slash = text.find('/');
     auto number = [&](const std::string& s) -> size_t {
         if (s.empty() || s.size() > 9 || s.find_first_not_of("0123456789") != std::string::npos)
-            throw std::invalid_argument("--shard: expected K/N with whole numbers 1 <= K <= N, found \"" + text + "\"");
+            throw std::invalid_argument("--shard: expected K/N with whole numbers 1 <= K <= N <= 999999999, found \"" +
+                                        text + "\"");
         return static_cast<size_t>(std::stoul(s));
     };
     if (slash == std::string::npos)

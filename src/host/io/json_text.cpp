@@ -1,5 +1,6 @@
 #include "host/io/json_text.h"
 
+#include <cerrno>
 #include <filesystem>
 #include <fstream>
 
@@ -197,8 +198,15 @@ bool parse_json_text(const std::string& text, nlohmann::json& out, JsonSyntaxErr
 TextRead read_text_file(const std::string& path, std::string& text, std::size_t max_bytes) {
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) return TextRead::IsDirectory;
+    errno = 0;
     std::ifstream in(path, std::ios::binary);
-    if (!in) return std::filesystem::exists(std::filesystem::symlink_status(path, ec)) ? TextRead::CannotOpen : TextRead::Missing;
+    if (!in) {
+        // Said by its cause: a 5,000-character name had read "no such file".
+        const int err = errno;
+        if (err == EACCES || err == EPERM) return TextRead::Denied;
+        if (err == ENAMETOOLONG) return TextRead::NameTooLong;
+        return std::filesystem::exists(std::filesystem::symlink_status(path, ec)) ? TextRead::CannotOpen : TextRead::Missing;
+    }
     text.clear();
     char block[64 * 1024];
     while (in) {
@@ -213,6 +221,8 @@ std::string text_read_message(TextRead r, const std::string& what) {
     switch (r) {
         case TextRead::Ok: return "";
         case TextRead::Missing: return "cannot open " + what + ": no such file";
+        case TextRead::Denied: return "cannot open " + what + ": permission denied";
+        case TextRead::NameTooLong: return "cannot open " + what + ": the path is too long";
         case TextRead::CannotOpen: return "cannot open " + what;
         case TextRead::IsDirectory: return "cannot open " + what + ": it is a directory";
         case TextRead::TooLarge: return what + " is larger than " + std::to_string(kMaxTextFileBytes >> 20) + " MiB";

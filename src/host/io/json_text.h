@@ -115,7 +115,7 @@ std::string json_brief(const nlohmann::json& j);
 
 // Reads a document (config, scenario, manifest, table) whole. Capped, so that a path to a
 // device or a runaway file gives a message instead of eating the memory.
-enum class TextRead { Ok, Missing, CannotOpen, IsDirectory, TooLarge };
+enum class TextRead { Ok, Missing, Denied, NameTooLong, CannotOpen, IsDirectory, TooLarge };
 constexpr std::size_t kMaxTextFileBytes = 64u * 1024u * 1024u;
 TextRead read_text_file(const std::string& path, std::string& text, std::size_t max_bytes = kMaxTextFileBytes);
 // "cannot open config file: no such file", "cannot open config file", "cannot open config
