@@ -17,6 +17,7 @@ struct FitArgs {
     std::string window = "all";
     size_t max_points = 20000;
     int max_iterations = 100;
+    StartArgs starts;
     bool sample_weights = false;
     ModelJobArgs common;
 };
@@ -44,6 +45,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iteration limit")
         ->check(CLI::Range(1, 100000))
         ->capture_default_str();
+    add_start_options(sub, a->starts, "the fit");
     sub.add_flag("--sample-weights", a->sample_weights, "Weight logs by their sample count instead of equally");
     add_model_job_options(sub, a->common, "fit report", "Plot measured and model voltage per log (.png or .svg)");
     return [a]() -> int {
@@ -81,6 +83,8 @@ std::function<int()> setup(CLI::App& sub) {
         job.options.per_log_params = a->per_log;
         job.options.max_points_per_log = a->max_points;
         job.options.lm.max_iterations = a->max_iterations;
+        job.options.starts = a->starts.starts;
+        job.options.jobs = a->starts.threads();
         job.options.equal_log_weights = !a->sample_weights;
         nlohmann::json report;
         const int rc = run_job(me, [&] {

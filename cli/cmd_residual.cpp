@@ -16,6 +16,7 @@ struct ResidualArgs {
     std::string initial = "free";
     int blocks = 20, max_effects = 4, max_iterations = 100;
     double min_gain = 0.02, max_p = 0.05;
+    StartArgs starts;
     ModelJobArgs common;
 };
 
@@ -39,6 +40,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--min-gain", a->min_gain, "Least share of the held-out error variance an effect must remove")->check(number_in(0.0, 1.0))->capture_default_str();
     sub.add_option("--max-p", a->max_p, "Significance level of the Wilcoxon signed-rank test over the held-out blocks")->check(number_in(0.0, 1.0, true))->capture_default_str();
     sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iterations per refit")->check(CLI::Range(1, 100000))->capture_default_str();
+    add_start_options(sub, a->starts, "every refit");
     add_model_job_options(sub, a->common, "report", "Plot voltage, residual before/after, autocorrelation, histogram (.png or .svg)");
     return [a]() -> int {
         const char* me = "battsim residual";
@@ -64,6 +66,8 @@ std::function<int()> setup(CLI::App& sub) {
         job.options.min_gain = a->min_gain;
         job.options.max_p = a->max_p;
         job.options.max_iterations = a->max_iterations;
+        job.options.starts = a->starts.starts;
+        job.options.jobs = a->starts.threads();
         host::residual::ResidualReport report;
         nlohmann::json j;
         const int rc = run_job(me, [&] {

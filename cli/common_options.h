@@ -43,6 +43,13 @@ struct ModelJobArgs {
     bool json = false;
     InputArgs input;
 };
+// The fits' starting points (fit, residual): --starts and -j/--jobs.
+struct StartArgs {
+    int starts = 1;
+    int jobs = 0;  // 0 = the machine's cores
+    int threads() const;
+};
+void add_start_options(CLI::App& sub, StartArgs& a, const std::string& each_fit);
 // Adds those options after the command's own; `report` names the report in the help
 // ("fit report"), `plot_help` says what the plot shows.
 void add_model_job_options(CLI::App& sub, ModelJobArgs& a, const std::string& report, const std::string& plot_help);

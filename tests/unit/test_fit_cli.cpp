@@ -97,6 +97,42 @@ TEST_CASE("battsim fit names the parameters its logs barely determine", "[fit][c
     std::remove(full.c_str());
 }
 
+TEST_CASE("battsim fit --starts reports every start, the same whatever -j", "[fit][cli]") {
+    // A short flight: five starts, each in the report.
+    synth::Options o;
+    o.rest_s = 5;
+    o.flight_s = 20;
+    o.after_s = 0;
+    o.seed = 7;
+    const std::string log = synth::write_log("cli-starts", o);
+    const std::string args = "fit " + log + " -c " + kConfig + " --starts 5";
+    const auto a = testsupport::run_program(BATTSIM_BINARY, args + " --json -j 1");
+    const auto b = testsupport::run_program(BATTSIM_BINARY, args + " --json -j 2");
+    REQUIRE(a.exit_code == 0);
+    CHECK(a.out == b.out);
+    const nlohmann::json r = nlohmann::json::parse(a.out);
+    CHECK(r["options"]["starts"] == 5);
+    REQUIRE(r["solver"]["starts"].size() == 5);
+    const int best = r["solver"]["best_start"].get<int>();
+    CHECK(r["solver"]["starts"][best]["cost_ratio"] == 1.0);
+    CHECK(r["solver"]["near_best"].get<int>() >= 1);
+    for (const auto& p : r["parameters"]) {
+        INFO(p.dump());
+        REQUIRE(p.contains("near_best_range"));
+        CHECK(p["near_best_range"][0].get<double>() <= p["value"].get<double>());
+        CHECK(p["value"].get<double>() <= p["near_best_range"][1].get<double>());
+    }
+    const auto text = testsupport::run_program(BATTSIM_BINARY, args);
+    INFO(text.out);
+    CHECK_THAT(text.out, Catch::Contains("5 starts: the best from start " + std::to_string(best) +
+                                         " (0 = the config's values, which reached RMSE "));
+    // One start (the default): no multi-start report.
+    const auto one = testsupport::run_program(BATTSIM_BINARY, "fit " + log + " -c " + kConfig + " --json");
+    CHECK_FALSE(nlohmann::json::parse(one.out)["solver"].contains("starts"));
+    CHECK(testsupport::run_program(BATTSIM_BINARY, args.substr(0, args.size() - 1) + "0").exit_code == 2);
+    std::remove(log.c_str());
+}
+
 TEST_CASE("battsim fit exit codes", "[fit][cli]") {
     synth::Options o;
     o.flight_s = 30;

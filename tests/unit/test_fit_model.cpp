@@ -2,8 +2,10 @@
 // Levenberg–Marquardt solver and its covariance are right, and a fit recovers known
 // parameters from a generated log.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <random>
 
 #include "host/fit/fit.h"
@@ -296,4 +298,143 @@ TEST_CASE("Fit options are checked", "[fit]") {
     CHECK_THROWS_WITH(fit_model(traces, {start}, fo), Catch::Contains("given twice"));
     CHECK_THROWS_AS(parse_initial_mode("guess"), std::invalid_argument);
     CHECK_THROWS_AS(parse_window("half"), std::invalid_argument);
+}
+
+TEST_CASE("Multi-start: a seeded Latin hypercube takes every stratum once", "[fit]") {
+    const Eigen::Vector2d lo(1, 0.1), hi(2, 10);
+    const std::vector<Eigen::VectorXd> xs = latin_hypercube(lo, hi, {false, true}, 5, 42);
+    REQUIRE(xs.size() == 5);
+    std::vector<double> a, b;
+    for (const Eigen::VectorXd& x : xs) {
+        a.push_back(x[0]);
+        b.push_back(std::log10(x[1]));
+    }
+    std::sort(a.begin(), a.end());
+    std::sort(b.begin(), b.end());
+    for (int k = 0; k < 5; ++k) {
+        CHECK(a[k] == Approx(1.1 + 0.2 * k));         // the middles of five equal strata of 1..2
+        CHECK(b[k] == Approx(-1 + 0.4 * (k + 0.5)));  // of 0.1..10 in decades
+    }
+    // The same seed gives the same points; the strata are paired differently per coordinate.
+    const std::vector<Eigen::VectorXd> again = latin_hypercube(lo, hi, {false, true}, 5, 42);
+    for (int k = 0; k < 5; ++k) CHECK(again[k] == xs[k]);
+    CHECK(latin_hypercube(lo, hi, {false, true}, 0, 42).empty());
+}
+
+TEST_CASE("Multi-start finds the minimum a single start misses, whatever the threads", "[fit]") {
+    // ½Σr² with r = ((x − 1)(x − 4), (x − 4)/2) = ½(x − 4)²((x − 1)² + ¼): the global minimum is
+    // 0 at x = 4; from x = 1 the solver stops in the local one where 2x² − 7x + 5.25 = 0,
+    // x = (7 − √7)/4 = 1.0886, cost ½·2.9114²·(0.0886² + ¼) = 1.0934.
+    LmProblem p;
+    p.n_params = 1;
+    p.group_sizes = {2};
+    p.lower = Eigen::VectorXd::Constant(1, 0.1);
+    p.upper = Eigen::VectorXd::Constant(1, 10);
+    p.typical = Eigen::VectorXd::Constant(1, 1);
+    p.residuals = [](const Eigen::VectorXd& x, int, double* r) {
+        r[0] = (x[0] - 1) * (x[0] - 4);
+        r[1] = 0.5 * (x[0] - 4);
+    };
+    const Eigen::VectorXd x0 = Eigen::VectorXd::Constant(1, 1.0);
+    const LmResult single = levenberg_marquardt(p, x0, LmOptions{});
+    CHECK(single.x[0] == Approx((7 - std::sqrt(7.0)) / 4).epsilon(1e-5));
+    CHECK(single.cost == Approx(1.0934).epsilon(1e-3));
+    // Seven more starts from 1/3 to 3 (the strata's middles reach 2.8, past the local
+    // maximum at (7 + √7)/4 = 2.41).
+    std::vector<Eigen::VectorXd> starts{x0};
+    for (const Eigen::VectorXd& x : latin_hypercube(x0 / 3, x0 * 3, {true}, 7, 1)) starts.push_back(x);
+    const MultiStartResult one = multi_start(p, starts, LmOptions{}, 1);
+    const MultiStartResult two = multi_start(p, starts, LmOptions{}, 2);
+    REQUIRE(one.runs.size() == 8);
+    CHECK(one.runs[0].x[0] == single.x[0]);  // start 0 is the single start
+    CHECK(one.runs[one.best].x[0] == Approx(4.0).epsilon(1e-6));
+    CHECK(one.runs[one.best].cost < 1e-12);
+    CHECK(two.best == one.best);
+    for (size_t k = 0; k < one.runs.size(); ++k) CHECK(two.runs[k].x == one.runs[k].x);
+}
+
+TEST_CASE("The fits the logs cannot tell apart: Beale's region with autocorrelated residuals", "[fit]") {
+    // χ²₀.₉₅ of 1, 10 and 17 degrees of freedom: 3.841, 18.307, 27.587 (tables); Wilson–Hilferty
+    // is 2.5 % low at 1 and within 1 % from about 3 on.
+    CHECK(near_best_cost(10, 1000, 0.0) == Approx(18.307 / 1000).epsilon(0.01));
+    CHECK(near_best_cost(17, 4663, 0.0) == Approx(27.587 / 4663).epsilon(0.01));
+    CHECK(near_best_cost(1, 100, 0.0) == Approx(3.841 / 100).epsilon(0.03));
+    // ρ = 0.9 leaves 4663·0.1/1.9 = 245.4 independent points.
+    CHECK(near_best_cost(17, 4663, 0.9) == Approx(27.587 / 245.42).epsilon(0.01));
+    CHECK(near_best_cost(17, 4663, -0.3) == near_best_cost(17, 4663, 0.0));  // no gain from alternation
+    CHECK(std::isfinite(near_best_cost(17, 3, 0.999)));
+}
+
+TEST_CASE("A multi-start fit reports every start and the range of the fits nearly as good", "[fit]") {
+    synth::Options o;
+    o.flight_s = 60;
+    o.seed = 9;
+    const std::string path = synth::write_log("fit-starts", o);
+    const LoadedConfig config = default_config();
+    const Trace t = load_trace(path, ReaderOptions{}, config);
+    std::remove(path.c_str());
+    FitOptions fo;
+    fo.params = default_parameters(spec_from_config(config));
+    const FitResult single = fit_model({t}, {spec_from_config(config)}, fo);
+    CHECK(single.starts.empty());
+    fo.starts = 6;
+    fo.jobs = 2;
+    const FitResult r = fit_model({t}, {spec_from_config(config)}, fo);
+    REQUIRE(r.starts.size() == 6);
+    CHECK(r.starts[0].rmse_v == Approx(single.rmse_v).epsilon(1e-9));  // start 0 is the one-start fit
+    CHECK(r.rmse_v <= single.rmse_v);
+    CHECK(r.starts[r.best_start].cost_ratio == 1.0);
+    CHECK(r.rmse_v == r.starts[r.best_start].rmse_v);
+    int near = 0;
+    for (const StartOutcome& s : r.starts) {
+        CHECK(s.cost_ratio >= 1.0);
+        near += s.cost_ratio <= 1 + r.near_best_cost ? 1 : 0;
+    }
+    CHECK(r.near_best == near);
+    for (const ParamEstimate& p : r.params) {
+        INFO(p.name);
+        CHECK(p.near_best_min <= p.value);
+        CHECK(p.value <= p.near_best_max);
+    }
+    CHECK(r.near_best_cost == near_best_cost(static_cast<int>(r.params.size()), r.points, r.residual_lag1));
+    fo.jobs = 1;
+    CHECK(fit_result_to_json(fit_model({t}, {spec_from_config(config)}, fo), fo).dump() == fit_result_to_json(r, fo).dump());
+    fo.starts = 0;
+    CHECK_THROWS_WITH(fit_model({t}, {spec_from_config(config)}, fo), Catch::Contains("starts must be at least 1"));
+}
+
+TEST_CASE("Multi-start: two RC branches that trade places are one solution", "[fit]") {
+    // One true branch (10 mOhm, 4 s) and two in the model: fits from other starts swap the
+    // two. Compared as they came, the second branch's range took in the first's (3.38–44.6 s
+    // against 3.69–4.03 s); ranked by time constant in every fit, the faster branch's least and
+    // largest values lie below the slower one's.
+    synth::Options o;
+    o.rc_resistance_ohm = 0.01;
+    o.rc_time_constant_s = 4;
+    o.noise_v = 0.003;
+    o.quantum_v = 0;
+    o.flight_s = 120;
+    o.seed = 31;
+    const std::string path = synth::write_log("fit-two-branches", o);
+    const LoadedConfig config = default_config();
+    const Trace t = load_trace(path, ReaderOptions{}, config);
+    std::remove(path.c_str());
+    ModelSpec start = spec_from_config(config);
+    enable_extension(start, "rc:1");
+    enable_extension(start, "rc:20");
+    FitOptions fo;
+    fo.params = default_parameters(start);
+    fo.starts = 12;
+    fo.jobs = 2;
+    const FitResult r = fit_model({t}, {start}, fo);
+    std::map<std::string, const ParamEstimate*> by;
+    for (const ParamEstimate& p : r.params) by[p.name] = &p;
+    INFO("near best " << r.near_best << "; rc1_tau " << by["rc1_tau"]->near_best_min << "–" << by["rc1_tau"]->near_best_max
+                      << " s, rc2_tau " << by["rc2_tau"]->near_best_min << "–" << by["rc2_tau"]->near_best_max << " s");
+    REQUIRE(r.near_best >= 2);
+    const bool rc1_faster = by["rc1_tau"]->value < by["rc2_tau"]->value;
+    const ParamEstimate& fast = *by[rc1_faster ? "rc1_tau" : "rc2_tau"];
+    const ParamEstimate& slow = *by[rc1_faster ? "rc2_tau" : "rc1_tau"];
+    CHECK(fast.near_best_min <= slow.near_best_min);
+    CHECK(fast.near_best_max <= slow.near_best_max);
 }

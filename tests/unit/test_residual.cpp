@@ -135,14 +135,25 @@ TEST_CASE("battsim residual names the undeclared effect on the command line", "[
     REQUIRE(std::system(cmd.c_str()) == 0);
     std::ifstream in(report);
     const nlohmann::json j = nlohmann::json::parse(in);
-    std::remove(path.c_str());
-    std::remove(report.c_str());
     REQUIRE_FALSE(j["effects"].empty());
     CHECK(j["effects"][0] == "rc_polarisation");
     const double before = j["per_log"][0]["before"]["all"]["rmse_v"];
     const double after = j["per_log"][0]["after"]["all"]["rmse_v"];
     CHECK(after < 0.5 * before);
     CHECK(j["schema"] == "battsim.residual");
+    CHECK(j["options"]["starts"] == 1);
+    // Every refit from three starts finds the same effect, and fits no worse.
+    const std::string many = std::string(BATTSIM_BINARY) + " residual " + path + " -c " + BATTSIM_SOURCE_DIR +
+                             "/configs/reference-modified.json --starts 3 -j 2 --report " + report + " > /dev/null 2>&1";
+    REQUIRE(std::system(many.c_str()) == 0);
+    std::ifstream in3(report);
+    const nlohmann::json j3 = nlohmann::json::parse(in3);
+    std::remove(path.c_str());
+    std::remove(report.c_str());
+    CHECK(j3["options"]["starts"] == 3);
+    REQUIRE_FALSE(j3["effects"].empty());
+    CHECK(j3["effects"][0] == "rc_polarisation");
+    CHECK(j3["per_log"][0]["after"]["all"]["rmse_v"].get<double>() <= after * 1.001);
 }
 
 TEST_CASE("battsim residual rejects bad input with the documented exit codes", "[residual][cli]") {

@@ -155,6 +155,38 @@ struct Slot {
     int log = -1;  // -1 = shared
 };
 
+// How far a multi-start's points reach from a parameter's start: times or over `factor`
+// (log-uniform) around a positive start of a parameter that cannot go negative, else ±
+// `width`; both clipped to the parameter's box. Wide where logs often leave a parameter
+// loose (time constants, the exponential zone, the activation energies), narrow where a
+// wrong start only costs iterations (E0, the capacity).
+struct StartSpread {
+    double factor = 1, width = 0;
+};
+
+StartSpread spread_of(const Def& d) {
+    const double box = d.hi - d.lo;
+    switch (d.kind) {
+        case Kind::E0: return {1.05, 0.05 * box};
+        case Kind::R: return {2, 0.01};
+        case Kind::Kappa: return {10, 0.1};
+        case Kind::A: case Kind::B: case Kind::Reaction: return {3, 3 * d.typical};
+        case Kind::Q: return {1.3, 0.3 * d.typical};
+        case Kind::RcR: return {3, box / 4};
+        case Kind::RcTau: return {5, box / 4};
+        case Kind::TempR: case Kind::TempK: return {2, 3000};
+        case Kind::TempQ: case Kind::TempE0: case Kind::HystM: return {3, box / 2};
+        case Kind::ThermalRth: return {3, 1};
+        case Kind::ThermalTau: case Kind::HystRate: return {3, 3 * d.typical};
+        case Kind::Ocv: return {1, box / 15};  // ± 1 % of the full voltage
+        case Kind::Gain: return {1.1, box / 2};
+        case Kind::Offset: return {1, 0.5};
+        case Kind::Lead: return {1, 0.5};
+        case Kind::Initial: return {3, 0.2 * box};
+    }
+    return {};
+}
+
 // The median interval between the logs' valid samples (0 when they have none).
 double median_interval_s(const std::vector<Trace>& traces) {
     std::vector<float> dt;
@@ -303,6 +335,51 @@ public:
             }
         }
         return x;
+    }
+
+    // x with each log's fitted RC branches reordered to rank by time constant as they do in
+    // `like`. Two branches that trade places fit the same: for comparing fits, one solution.
+    Eigen::VectorXd rc_branches_like(const Eigen::VectorXd& x, const Eigen::VectorXd& like) const {
+        Eigen::VectorXd y = x;
+        for (int log = -1; log < static_cast<int>(traces_.size()); ++log) {
+            int r_slot[core::kMaxRcBranches], tau_slot[core::kMaxRcBranches];
+            std::fill(r_slot, r_slot + core::kMaxRcBranches, -1);
+            std::fill(tau_slot, tau_slot + core::kMaxRcBranches, -1);
+            for (size_t j = 0; j < slots_.size(); ++j) {
+                if (slots_[j].log != log) continue;
+                if (slots_[j].def.kind == Kind::RcR) r_slot[slots_[j].def.index] = static_cast<int>(j);
+                if (slots_[j].def.kind == Kind::RcTau) tau_slot[slots_[j].def.index] = static_cast<int>(j);
+            }
+            std::vector<int> both;  // branches with resistance and time constant fitted: interchangeable
+            for (int b = 0; b < core::kMaxRcBranches; ++b) {
+                if (r_slot[b] >= 0 && tau_slot[b] >= 0) both.push_back(b);
+            }
+            const auto by_tau = [&](const Eigen::VectorXd& v) {
+                std::vector<int> order = both;
+                std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return v[tau_slot[a]] < v[tau_slot[b]]; });
+                return order;
+            };
+            const std::vector<int> mine = by_tau(x), theirs = by_tau(like);
+            for (size_t i = 0; i < both.size(); ++i) {
+                y[r_slot[theirs[i]]] = x[r_slot[mine[i]]];
+                y[tau_slot[theirs[i]]] = x[tau_slot[mine[i]]];
+            }
+        }
+        return y;
+    }
+
+    // `count` starting points around x0 (spread_of), a Latin hypercube.
+    std::vector<Eigen::VectorXd> spread_starts(const Eigen::VectorXd& x0, int count) const {
+        Eigen::VectorXd lo(x0.size()), hi(x0.size());
+        std::vector<bool> log_scale(x0.size());
+        for (size_t j = 0; j < slots_.size(); ++j) {
+            const Def& d = slots_[j].def;
+            const StartSpread sp = spread_of(d);
+            log_scale[j] = d.lo >= 0 && x0[j] > 0 && sp.factor > 1;
+            lo[j] = log_scale[j] ? std::max(d.lo, x0[j] / sp.factor) : std::max(d.lo, x0[j] - sp.width);
+            hi[j] = log_scale[j] ? std::min(d.hi, x0[j] * sp.factor) : std::min(d.hi, x0[j] + sp.width);
+        }
+        return latin_hypercube(lo, hi, log_scale, count, 0x6261747473696dULL);  // "battsim"
     }
 
     ModelSpec spec_for(const Eigen::VectorXd& x, int t, float* initial_ah = nullptr) const {
@@ -563,6 +640,38 @@ private:
     bool base_free_ = false;
 };
 
+// Unweighted residual statistics over the objective's points and the lag-1
+// autocorrelation in time order (the priors' residuals, after the logs', are left out).
+struct ObjectiveStats {
+    size_t n = 0;
+    double rmse_v = 0, mae_v = 0, lag1 = 0;
+};
+
+ObjectiveStats objective_stats(const Eigen::VectorXd& residuals, const std::vector<std::vector<size_t>>& points,
+                               const std::vector<double>& weights) {
+    double sq = 0, ab = 0, lag = 0, lag0 = 0;
+    size_t n = 0, offset = 0;
+    for (size_t t = 0; t < points.size(); ++t) {
+        const size_t m = points[t].size();
+        const double w = weights[t];
+        for (size_t i = 0; i < m; ++i) {
+            const double e = residuals[offset + i] / w;
+            sq += e * e;
+            ab += std::fabs(e);
+            lag0 += e * e;
+            if (i > 0) lag += e * (residuals[offset + i - 1] / w);
+            ++n;
+        }
+        offset += m;
+    }
+    ObjectiveStats s;
+    s.n = n;
+    s.rmse_v = n ? std::sqrt(sq / n) : 0;
+    s.mae_v = n ? ab / n : 0;
+    s.lag1 = lag0 > 0 ? lag / lag0 : 0;
+    return s;
+}
+
 }  // namespace
 
 std::vector<std::string> known_parameter_names() {
@@ -603,6 +712,16 @@ std::vector<FitOptions::Prior> default_priors(const ModelSpec& spec) {
     return p;
 }
 
+double near_best_cost(int params, size_t points, double lag1) {
+    const double rho = std::clamp(lag1, 0.0, 0.999);
+    const double n_eff = std::max(static_cast<double>(points) * (1 - rho) / (1 + rho), 1.0);
+    const double p = std::max(params, 1);
+    const double z95 = 1.6448536;
+    const double c = 2.0 / (9.0 * p);
+    const double chi2 = p * std::pow(1 - c + z95 * std::sqrt(c), 3);
+    return chi2 / n_eff;
+}
+
 LogFitStats evaluate(const Trace& trace, const ModelSpec& spec, InitialMode mode, float initial_ah) {
     LogFitStats s;
     s.label = trace.label;
@@ -636,39 +755,38 @@ FitResult fit_model(const std::vector<Trace>& traces, const std::vector<ModelSpe
                                 std::to_string(lm.n_params) + " parameters: too few",
                             "a longer log, or " + options.fewer_parameters_advice);
     const Eigen::VectorXd x0 = problem.start_vector();
-    LmResult res = levenberg_marquardt(lm, x0, options.lm);
+    if (options.starts < 1) throw std::invalid_argument("starts must be at least 1");
+    std::vector<Eigen::VectorXd> xs{x0};
+    for (Eigen::VectorXd& x : problem.spread_starts(x0, options.starts - 1)) xs.push_back(std::move(x));
+    // The linear start belongs to start 0: both begin from the config's values.
     Eigen::VectorXd x_linear;
-    if (options.linear_start && problem.linear_base_start(x0, x_linear)) {
-        LmResult alt = levenberg_marquardt(lm, x_linear, options.lm);
-        if (alt.cost < res.cost) res = std::move(alt);
+    const bool linear = options.linear_start && problem.linear_base_start(x0, x_linear);
+    if (linear) xs.push_back(x_linear);
+    MultiStartResult ms = multi_start(lm, xs, options.lm, options.jobs);
+    if (linear) {
+        if (ms.runs.back().cost < ms.runs[0].cost) ms.runs[0] = std::move(ms.runs.back());
+        ms.runs.pop_back();
+        ms.best = 0;
+        for (size_t k = 1; k < ms.runs.size(); ++k) {
+            if (ms.runs[k].cost < ms.runs[ms.best].cost) ms.best = k;
+        }
     }
+    const std::vector<LmResult>& runs = ms.runs;
+    const size_t best = ms.best;
+    const LmResult& res = runs[best];
     const Eigen::MatrixXd cov = covariance(res);
 
     FitResult out;
     out.iterations = res.iterations;
     out.evaluations = res.evaluations;
     out.stop_reason = res.stop_reason;
+    out.best_start = static_cast<int>(best);
 
-    // Unweighted residual statistics and the lag-1 autocorrelation in time order.
-    double sq = 0, ab = 0, lag = 0, lag0 = 0;
-    size_t n = 0, offset = 0;
-    for (size_t t = 0; t < traces.size(); ++t) {
-        const size_t m = problem.points()[t].size();
-        const double w = problem.weights()[t];
-        for (size_t i = 0; i < m; ++i) {
-            const double e = res.residuals[offset + i] / w;
-            sq += e * e;
-            ab += std::fabs(e);
-            lag0 += e * e;
-            if (i > 0) lag += e * (res.residuals[offset + i - 1] / w);
-            ++n;
-        }
-        offset += m;
-    }
-    out.points = n;
-    out.rmse_v = n ? std::sqrt(sq / n) : 0;
-    out.mae_v = n ? ab / n : 0;
-    out.residual_lag1 = lag0 > 0 ? lag / lag0 : 0;
+    const ObjectiveStats stats = objective_stats(res.residuals, problem.points(), problem.weights());
+    out.points = stats.n;
+    out.rmse_v = stats.rmse_v;
+    out.mae_v = stats.mae_v;
+    out.residual_lag1 = stats.lag1;
     const double rho = std::clamp(out.residual_lag1, 0.0, 0.999);
     const double inflation = std::sqrt((1 + rho) / (1 - rho));
 
@@ -685,6 +803,27 @@ FitResult fit_model(const std::vector<Trace>& traces, const std::vector<ModelSpe
         e.sigma = e.at_bound ? std::numeric_limits<double>::quiet_NaN() : std::sqrt(var);
         e.sigma_ar1 = e.sigma * inflation;
         out.params.push_back(e);
+    }
+    if (runs.size() > 1) {
+        out.near_best_cost = near_best_cost(lm.n_params, stats.n, stats.lag1);
+        for (size_t k = 0; k < runs.size(); ++k) {
+            StartOutcome o;
+            o.index = static_cast<int>(k);
+            o.rmse_v = objective_stats(runs[k].residuals, problem.points(), problem.weights()).rmse_v;
+            o.cost_ratio = res.cost > 0 ? runs[k].cost / res.cost : (runs[k].cost > 0 ? std::numeric_limits<double>::infinity() : 1.0);
+            o.iterations = runs[k].iterations;
+            o.stop_reason = runs[k].stop_reason;
+            out.starts.push_back(o);
+            if (!(runs[k].cost <= res.cost * (1 + out.near_best_cost))) continue;
+            ++out.near_best;
+            const Eigen::VectorXd x = problem.rc_branches_like(runs[k].x, res.x);
+            for (size_t j = 0; j < slots.size(); ++j) {
+                ParamEstimate& e = out.params[j];
+                const double v = x[j];
+                e.near_best_min = std::isnan(e.near_best_min) ? v : std::min(e.near_best_min, v);
+                e.near_best_max = std::isnan(e.near_best_max) ? v : std::max(e.near_best_max, v);
+            }
+        }
     }
     // Delta method for the derived quantities, per log when the base is per-log.
     bool per_log_base = false;
@@ -783,6 +922,7 @@ nlohmann::json estimate_json(const ParamEstimate& e) {
                         {"sigma", number_or_null(e.sigma, 3)}, {"sigma_ar1", number_or_null(e.sigma_ar1, 3)}};
     if (!e.log.empty()) j["log"] = e.log;
     if (e.at_bound) j["at_bound"] = true;
+    if (std::isfinite(e.near_best_min)) j["near_best_range"] = {number_or_null(e.near_best_min, 7), number_or_null(e.near_best_max, 7)};
     return j;
 }
 }  // namespace
@@ -800,7 +940,8 @@ nlohmann::json fit_result_to_json(const FitResult& r, const FitOptions& o) {
     j["options"] = {{"params", o.params}, {"per_log_params", o.per_log_params}, {"initial", to_string(o.initial)},
                     {"window", to_string(o.window)}, {"max_points_per_log", o.max_points_per_log},
                     {"equal_log_weights", o.equal_log_weights}, {"linear_start", o.linear_start},
-                    {"max_capacity_factor", o.max_capacity_factor}, {"prior_noise_v", o.prior_noise_v}};
+                    {"max_capacity_factor", o.max_capacity_factor}, {"prior_noise_v", o.prior_noise_v},
+                    {"starts", o.starts}};
     nlohmann::json priors = nlohmann::json::array();
     for (const FitOptions::Prior& p : o.priors) priors.push_back({{"name", p.name}, {"mean", p.mean}, {"sigma", p.sigma}});
     j["options"]["priors"] = priors;
@@ -809,6 +950,16 @@ nlohmann::json fit_result_to_json(const FitResult& r, const FitOptions& o) {
     j["points"] = r.points;
     j["residual_lag1_autocorrelation"] = round_sig(r.residual_lag1, 4);
     j["solver"] = {{"iterations", r.iterations}, {"evaluations", r.evaluations}, {"stop", r.stop_reason}};
+    if (!r.starts.empty()) {
+        nlohmann::json starts = nlohmann::json::array();
+        for (const StartOutcome& o : r.starts)
+            starts.push_back({{"start", o.index}, {"rmse_v", round_sig(o.rmse_v, 5)}, {"cost_ratio", number_or_null(o.cost_ratio, 5)},
+                              {"iterations", o.iterations}, {"stop", o.stop_reason}});
+        j["solver"]["best_start"] = r.best_start;
+        j["solver"]["near_best"] = r.near_best;
+        j["solver"]["near_best_cost"] = round_sig(r.near_best_cost, 4);
+        j["solver"]["starts"] = starts;
+    }
     nlohmann::json params = nlohmann::json::array();
     for (const ParamEstimate& e : r.params) params.push_back(estimate_json(e));
     j["parameters"] = params;

@@ -4,6 +4,7 @@
 // parameters minimise Σ (measured − model voltage)² with each log weighted equally.
 #pragma once
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,13 @@ struct FitOptions {
     std::vector<Prior> priors;
     double prior_noise_v = 0.01;
     LmOptions lm;
+    // Starting points: 1 = the config's values (and the linear start above). More adds
+    // starts - 1 points spread around them by a seeded Latin hypercube (the same points on
+    // every run and machine); the fit with the least error is kept, and those nearly as good
+    // show how far the logs leave each parameter free. `jobs` threads run them; the result
+    // does not depend on it.
+    int starts = 1;
+    int jobs = 1;
     // The remedy for more parameters than samples, in the caller's options (TooLittleData).
     std::string fewer_parameters_advice = "fewer parameters with --params";
 };
@@ -79,6 +87,18 @@ struct ParamEstimate {
     double sigma = 0;      // from s²(JᵀJ)⁻¹; infinite when not identifiable
     double sigma_ar1 = 0;  // inflated for the residuals' lag-1 autocorrelation
     bool at_bound = false;
+    // Multi-start: the range over the fits nearly as good as the best (NaN with one start).
+    double near_best_min = std::numeric_limits<double>::quiet_NaN();
+    double near_best_max = std::numeric_limits<double>::quiet_NaN();
+};
+
+// One starting point's fit (multi-start).
+struct StartOutcome {
+    int index = 0;       // 0 = the config's values; 1.. = the spread points
+    double rmse_v = 0;   // over the objective's points, unweighted
+    double cost_ratio = 1;  // its weighted sum of squares over the best one's
+    int iterations = 0;
+    std::string stop_reason;
 };
 
 struct LogFitStats {
@@ -102,7 +122,19 @@ struct FitResult {
     int iterations = 0;
     int evaluations = 0;
     std::string stop_reason;
+    std::vector<StartOutcome> starts;  // every start, in order (empty with one start)
+    int best_start = 0;
+    // Starts the logs cannot tell from the best, the best included: their sum of squares is
+    // within near_best_cost (a fraction) of the best's (near_best_cost()).
+    int near_best = 0;
+    double near_best_cost = 0;
 };
+
+// How much more than the best sum of squares S a fit may have and still lie in the
+// parameters' approximate 95 % joint confidence region (Beale): S·χ²₀.₉₅(p)/n_eff, with p
+// the fitted parameters and n_eff the points deflated by the residuals' lag-1
+// autocorrelation ρ as the σ are, n·(1 − ρ)/(1 + ρ). χ² by the Wilson–Hilferty formula.
+double near_best_cost(int params, size_t points, double lag1);
 
 // Throws std::invalid_argument for unknown parameter names or parameters of extensions that
 // are not enabled, and TooLittleData for a log with no sample in the objective (why: none

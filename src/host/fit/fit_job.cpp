@@ -251,6 +251,15 @@ void print_fit_brief(const nlohmann::json& r, std::ostream& out) {
     const auto sigma = [](const nlohmann::json& s) { return s.is_null() ? std::string("–") : s.dump(); };
     out << "fit: RMSE " << r["rmse_v"] << " V, MAE " << r["mae_v"] << " V over " << r["points"] << " points ("
         << r["solver"]["iterations"] << " iterations, " << r["solver"]["stop"].get<std::string>() << ")\n";
+    if (r["solver"].contains("starts")) {
+        const auto& starts = r["solver"]["starts"];
+        char pct[32];
+        std::snprintf(pct, sizeof pct, "%.2g", 100 * r["solver"]["near_best_cost"].get<double>());
+        out << "  " << starts.size() << " starts: the best from start " << r["solver"]["best_start"]
+            << " (0 = the config's values, which reached RMSE " << starts[0]["rmse_v"] << " V); " << r["solver"]["near_best"]
+            << " of them, the best included, the logs cannot tell apart (sum of squares within " << pct
+            << " % of the best's: the approximate 95 % confidence region)\n";
+    }
     for (const auto& p : r["parameters"]) {
         out << "  " << p["name"].get<std::string>();
         if (p.contains("log")) out << "[" << p["log"].get<std::string>() << "]";
@@ -319,6 +328,25 @@ void print_fit_brief(const nlohmann::json& r, std::ostream& out) {
         else if (p["sigma"].get<double>() > std::fabs(value) / 3.0)
             loose += (loose.empty() ? "" : ", ") + name;
     }
+    // Fits the logs cannot tell from the best that put a parameter elsewhere: the logs leave
+    // it freer than its standard error (the curvature at the best fit alone) says.
+    std::string spread;
+    for (const auto& p : r["parameters"]) {
+        if (!p.contains("near_best_range") || r["solver"]["near_best"].get<int>() < 2) continue;
+        const auto& range = p["near_best_range"];
+        if (range[0].is_null() || range[1].is_null()) continue;
+        const double lo = range[0].get<double>(), hi = range[1].get<double>();
+        const double value = p["value"].get<double>();
+        const bool wide = p["sigma"].is_null() ? hi - lo > 1e-3 * std::max(std::fabs(value), 1e-9) : hi - lo > 2 * p["sigma"].get<double>();
+        if (!wide) continue;
+        std::string name = p["name"].get<std::string>();
+        if (p.contains("log")) name += "[" + p["log"].get<std::string>() + "]";
+        char buf[96];
+        std::snprintf(buf, sizeof buf, " %.4g–%.4g", lo, hi);
+        spread += (spread.empty() ? "" : ", ") + name + buf + (p["unit"].get<std::string>().empty() ? "" : " " + p["unit"].get<std::string>());
+    }
+    if (!spread.empty())
+        out << "  left free by these logs (fits they cannot tell apart put them further apart than 2 standard errors): " << spread << "\n";
     if (!loose.empty()) out << "  barely determined by these logs (standard error over a third of the value): " << loose << "\n";
     if (!idle.empty()) out << "  not moved by these logs (no standard error: the error does not depend on them): " << idle << "\n";
 }

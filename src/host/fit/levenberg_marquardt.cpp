@@ -4,6 +4,9 @@
 #include <cmath>
 #include <limits>
 
+#include "host/parallel.h"
+#include "host/sim/rng.h"
+
 namespace battsim {
 namespace host {
 namespace fit {
@@ -171,6 +174,34 @@ LmResult levenberg_marquardt(const LmProblem& problem, const Eigen::VectorXd& x0
     for (int j = 0; j < n; ++j) {
         const double tol = 1e-9 * std::max(1.0, std::fabs(x[j]));
         out.at_bound[j] = (x[j] - problem.lower[j] <= tol && g[j] > 0) || (problem.upper[j] - x[j] <= tol && g[j] < 0);
+    }
+    return out;
+}
+
+std::vector<Eigen::VectorXd> latin_hypercube(const Eigen::VectorXd& lo, const Eigen::VectorXd& hi,
+                                             const std::vector<bool>& log_scale, int count, uint64_t seed) {
+    std::vector<Eigen::VectorXd> xs(std::max(count, 0), lo);
+    sim::Rng rng(seed);
+    std::vector<int> order(xs.size());
+    for (int j = 0; j < lo.size(); ++j) {
+        for (int k = 0; k < count; ++k) order[k] = k;
+        for (int k = count - 1; k > 0; --k) std::swap(order[k], order[rng.uniform_int(0, k)]);
+        const bool log_j = j < static_cast<int>(log_scale.size()) && log_scale[j] && lo[j] > 0;
+        for (int k = 0; k < count; ++k) {
+            const double u = (order[k] + 0.5) / count;
+            xs[k][j] = log_j ? lo[j] * std::pow(hi[j] / lo[j], u) : lo[j] + (hi[j] - lo[j]) * u;
+        }
+    }
+    return xs;
+}
+
+MultiStartResult multi_start(const LmProblem& problem, const std::vector<Eigen::VectorXd>& starts, const LmOptions& options,
+                             int jobs) {
+    MultiStartResult out;
+    out.runs.resize(starts.size());
+    parallel_for(starts.size(), jobs, [&](size_t k) { out.runs[k] = levenberg_marquardt(problem, starts[k], options); });
+    for (size_t k = 1; k < out.runs.size(); ++k) {
+        if (out.runs[k].cost < out.runs[out.best].cost) out.best = k;
     }
     return out;
 }

@@ -3,6 +3,7 @@
 // Jacobian column, not all of them. Central finite differences, Marquardt scaling,
 // Nielsen's damping update, bounds by projection. Single-threaded and deterministic.
 #pragma once
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -43,6 +44,22 @@ struct LmResult {
 };
 
 LmResult levenberg_marquardt(const LmProblem& problem, const Eigen::VectorXd& x0, const LmOptions& options);
+
+// `count` points of a Latin hypercube over the box lo..hi: each coordinate's range is cut
+// into `count` strata and every point takes the middle of a different one, the strata
+// shuffled per coordinate by a generator seeded with `seed` (the same points on every
+// platform). A coordinate with log_scale[j] is cut evenly in its logarithm (lo > 0).
+std::vector<Eigen::VectorXd> latin_hypercube(const Eigen::VectorXd& lo, const Eigen::VectorXd& hi,
+                                             const std::vector<bool>& log_scale, int count, uint64_t seed);
+
+// Runs the solver from every start, `jobs` threads at a time; `best` is the run with the
+// least cost, the lowest index among equals, so the result does not depend on `jobs`.
+struct MultiStartResult {
+    std::vector<LmResult> runs;  // in the order of the starts
+    size_t best = 0;
+};
+MultiStartResult multi_start(const LmProblem& problem, const std::vector<Eigen::VectorXd>& starts, const LmOptions& options,
+                             int jobs);
 
 // s²·(JᵀJ)⁻¹ over the parameters not at a bound (zero rows/columns for the others), with
 // s² = Σr²/(m − n_free). Singular directions (rank-deficient JᵀJ) get infinite variance.

@@ -205,6 +205,8 @@ State refit(const std::vector<Trace>& traces, const State& from, const std::vect
     fo.prior_noise_v = prior_noise_v(traces, from, mask, o);
     fo.max_points_per_log = o.max_points_per_log;
     fo.lm.max_iterations = o.max_iterations;
+    fo.starts = o.starts;
+    fo.jobs = o.jobs;
     fo.fewer_parameters_advice = "more parameters kept at the config's values with --fixed";
     const fit::FitResult r = fit::fit_model(traces, from.specs, fo);
     State s;
@@ -789,7 +791,8 @@ nlohmann::json report_to_json(const ResidualReport& r, const ResidualOptions& o)
     j["logs"] = r.logs;
     j["options"] = {{"window", fit::to_string(o.window)}, {"initial", fit::to_string(o.initial)}, {"blocks", o.blocks}, {"min_gain", o.min_gain},
                     {"max_p", o.max_p}, {"max_effects", o.max_effects}, {"fixed", o.fixed},
-                    {"max_capacity_factor", o.max_capacity_factor}, {"max_iterations", o.max_iterations}};
+                    {"max_capacity_factor", o.max_capacity_factor}, {"max_iterations", o.max_iterations},
+                    {"starts", o.starts}};
     nlohmann::json stages = nlohmann::json::array();
     for (const Stage& s : r.stages) {
         nlohmann::json st = {{"name", s.name}, {"description", s.description},

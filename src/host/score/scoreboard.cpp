@@ -1,18 +1,16 @@
 #include "host/score/scoreboard.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <fstream>
 #include <functional>
-#include <mutex>
 #include <sstream>
 #include <stdexcept>
-#include <thread>
 
+#include "host/parallel.h"
 #include "host/report/summary.h"
 #include "host/io/atomic_file.h"
 #include "host/io/sample_reader.h"
@@ -398,73 +396,55 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& suite, const std::
         result.descriptions.push_back(c.description);
     }
     result.flights.resize(scenarios.size());
-    std::vector<std::exception_ptr> errors(scenarios.size());
-
-    std::atomic<size_t> next{0};
-    const auto worker = [&]() {
-        for (;;) {
-            const size_t i = next.fetch_add(1);
-            if (i >= scenarios.size()) return;
-            try {
-                sim::SimulateOptions so;
-                so.keep_snapshots = true;
-                const sim::SimulationResult simr = sim::simulate(scenarios[i], so);
-                std::string path;
-                // The log goes through a file, as a user's would; a scratch file, so that a
-                // signal removes it too.
-                std::unique_ptr<ScratchFile> scratch;
-                if (options.logs_dir.empty()) {
-                    scratch = std::make_unique<ScratchFile>("battsim-score-");
-                    path = scratch->path();
-                    std::ofstream out(path, std::ios::binary);
-                    out << simr.log_text;
-                    if (!out) throw std::runtime_error(path + ": cannot write the temporary log");
-                } else {
-                    path = options.logs_dir + "/" + simr.scenario.name + sim::sim_log_extension(simr.format);
-                }
-                std::vector<core::Sample> samples;
-                try {
-                    samples = read_samples(path, simr);
-                } catch (const InputError& e) {
-                    // The temporary log is gone by the time this is read: name the scenario.
-                    // A simulated log is gone by now: its line is all there is to say. A log of
-                    // --logs is the user's file: its path, line and column.
-                    if (!options.logs_dir.empty())
-                        throw InputError(scenarios[i].source_path, 0, 0,
-                                         "scenario " + simr.scenario.name + ": its log in --logs cannot be read: " + e.what());
-                    throw InputError(scenarios[i].source_path, 0, 0,
-                                     "scenario " + simr.scenario.name + ": its simulated log cannot be read back" +
-                                         (e.line() > 0 ? " (line " + std::to_string(e.line()) + ")" : std::string()) +
-                                         ": " + e.message());
-                }
-                scratch.reset();
-                result.flights[i] = score_flight(simr, samples, columns);
-                result.flights[i].copy = copy_of[i];
-                if (simr.truth.sensor_stats.current_clipped > 0)
-                    result.flights[i].notes.push_back("the simulated current sensor clipped " +
-                                                      std::to_string(simr.truth.sensor_stats.current_clipped) + " of " +
-                                                      std::to_string(simr.truth.sensor_stats.reads) +
-                                                      " reads at its shunt range: the log's current is wrong there");
-                if (!options.logs_dir.empty()) {
-                    std::ifstream in(path, std::ios::binary);
-                    std::stringstream buf;
-                    buf << in.rdbuf();
-                    if (buf.str() != simr.log_text)
-                        result.flights[i].notes.push_back(path + " differs from what the scenario simulates now; the truth may not match it");
-                }
-            } catch (...) {
-                errors[i] = std::current_exception();
-            }
+    // The first failing scenario, in suite order, is the one reported.
+    parallel_for(scenarios.size(), options.jobs, [&](size_t i) {
+        sim::SimulateOptions so;
+        so.keep_snapshots = true;
+        const sim::SimulationResult simr = sim::simulate(scenarios[i], so);
+        std::string path;
+        // The log goes through a file, as a user's would; a scratch file, so that a
+        // signal removes it too.
+        std::unique_ptr<ScratchFile> scratch;
+        if (options.logs_dir.empty()) {
+            scratch = std::make_unique<ScratchFile>("battsim-score-");
+            path = scratch->path();
+            std::ofstream out(path, std::ios::binary);
+            out << simr.log_text;
+            if (!out) throw std::runtime_error(path + ": cannot write the temporary log");
+        } else {
+            path = options.logs_dir + "/" + simr.scenario.name + sim::sim_log_extension(simr.format);
         }
-    };
-    const int jobs = std::max(1, std::min<int>(options.jobs, static_cast<int>(scenarios.size())));
-    std::vector<std::thread> threads;
-    for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
-    worker();
-    for (std::thread& t : threads) t.join();
-    for (const std::exception_ptr& e : errors) {
-        if (e) std::rethrow_exception(e);  // the first failing scenario, in suite order
-    }
+        std::vector<core::Sample> samples;
+        try {
+            samples = read_samples(path, simr);
+        } catch (const InputError& e) {
+            // The temporary log is gone by the time this is read: name the scenario.
+            // A simulated log is gone by now: its line is all there is to say. A log of
+            // --logs is the user's file: its path, line and column.
+            if (!options.logs_dir.empty())
+                throw InputError(scenarios[i].source_path, 0, 0,
+                                 "scenario " + simr.scenario.name + ": its log in --logs cannot be read: " + e.what());
+            throw InputError(scenarios[i].source_path, 0, 0,
+                             "scenario " + simr.scenario.name + ": its simulated log cannot be read back" +
+                                 (e.line() > 0 ? " (line " + std::to_string(e.line()) + ")" : std::string()) +
+                                 ": " + e.message());
+        }
+        scratch.reset();
+        result.flights[i] = score_flight(simr, samples, columns);
+        result.flights[i].copy = copy_of[i];
+        if (simr.truth.sensor_stats.current_clipped > 0)
+            result.flights[i].notes.push_back("the simulated current sensor clipped " +
+                                              std::to_string(simr.truth.sensor_stats.current_clipped) + " of " +
+                                              std::to_string(simr.truth.sensor_stats.reads) +
+                                              " reads at its shunt range: the log's current is wrong there");
+        if (!options.logs_dir.empty()) {
+            std::ifstream in(path, std::ios::binary);
+            std::stringstream buf;
+            buf << in.rdbuf();
+            if (buf.str() != simr.log_text)
+                result.flights[i].notes.push_back(path + " differs from what the scenario simulates now; the truth may not match it");
+        }
+    });
     return result;
 }
 
