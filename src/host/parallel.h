@@ -28,9 +28,9 @@ void parallel_for(std::size_t n, int jobs, Fn&& fn) {
             }
         }
     };
-    const int threads_wanted = std::max(1, static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(std::max(jobs, 1)), std::max<std::size_t>(n, 1))));
+    const std::size_t wanted = std::min<std::size_t>(static_cast<std::size_t>(std::max(jobs, 1)), n);
     std::vector<std::thread> threads;
-    for (int j = 1; j < threads_wanted; ++j) threads.emplace_back(worker);
+    for (std::size_t j = 1; j < wanted; ++j) threads.emplace_back(worker);
     worker();
     for (std::thread& t : threads) t.join();
     for (const std::exception_ptr& e : errors) {

@@ -438,3 +438,58 @@ TEST_CASE("Multi-start: two RC branches that trade places are one solution", "[f
     CHECK(fast.near_best_min <= slow.near_best_min);
     CHECK(fast.near_best_max <= slow.near_best_max);
 }
+
+TEST_CASE("The extensions' bounds scale with the pack's charged voltage, not the curve encoding's", "[fit]") {
+    // The config's model is 2 V low; an OCV correction alone makes up for it, up to 15 % of
+    // the pack's charged voltage. With max_voltage_v at 8 V that is 1.2 V; the encoding's
+    // full_voltage_v (14.8 V) would have allowed 2.2 V.
+    synth::Options o;
+    o.flight_s = 60;
+    o.seed = 13;
+    const std::string path = synth::write_log("fit-bounds", o);
+    FitJob job;
+    job.logs = {path};
+    job.config = default_config();
+    job.config.monitor.battery.full_voltage_v -= 2.0f;
+    job.config.monitor.max_voltage_v = 8.0f;
+    job.config.monitor.min_voltage_v = 6.0f;
+    job.add = {"ocv:4"};
+    job.options.params = {"ocv"};
+    const nlohmann::json r = run_fit_job(job);
+    std::remove(path.c_str());
+    double largest = 0;
+    bool at_bound = false;
+    for (const auto& p : r["parameters"]) {
+        if (p["name"].get<std::string>().compare(0, 3, "ocv") != 0) continue;
+        largest = std::max(largest, p["value"].get<double>());
+        at_bound = at_bound || p.contains("at_bound");
+    }
+    CHECK(largest == Approx(0.15 * 8.0).epsilon(1e-6));
+    CHECK(at_bound);
+}
+
+TEST_CASE("A multi-start fit's ranges hold the value it reports, a capacity at its floor too", "[fit][data]") {
+    // Flight 29's fits hold the capacity at the charge the flight drew; the raw parameter below
+    // that floor had made the range miss the value reported (1.083 Ah against 1.178).
+    const LoadedConfig config = load_config_file(std::string(BATTSIM_SOURCE_DIR) + "/configs/fitted/pbms-flight29-dinogy1.json");
+    ReaderOptions reader;
+    reader.shunt = config.monitor.shunt;
+    const Trace t = load_trace(kFlights + "29.csv", reader, config);
+    const ModelSpec start = spec_from_config(config);
+    FitOptions fo;
+    fo.params = default_parameters(start);
+    fo.lm.max_iterations = 300;
+    fo.bounds_full_voltage_v = config.monitor.max_voltage_v;
+    fo.starts = 8;
+    fo.jobs = 2;
+    const FitResult r = fit_model({t}, {start}, fo);
+    REQUIRE(r.near_best >= 2);
+    bool q_seen = false;
+    for (const ParamEstimate& p : r.params) {
+        INFO(p.name << " " << p.value << " in " << p.near_best_min << "–" << p.near_best_max);
+        CHECK(p.near_best_min <= p.value);
+        CHECK(p.value <= p.near_best_max);
+        q_seen = q_seen || (p.name == "q" && p.at_bound);
+    }
+    CHECK(q_seen);
+}

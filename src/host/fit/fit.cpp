@@ -337,6 +337,13 @@ public:
         return x;
     }
 
+    // Capacity slot j as reported: the model's capacity where spec_for() holds it up at the
+    // charge the logs drew, else the fitted value itself.
+    double reported_capacity(const Eigen::VectorXd& x, size_t j) const {
+        const double effective = spec_for(x, slots_[j].log < 0 ? 0 : slots_[j].log).battery.capacity_ah;
+        return std::fabs(effective - x[j]) > 1e-6 * effective ? effective : x[j];
+    }
+
     // x with each log's fitted RC branches reordered to rank by time constant as they do in
     // `like`. Two branches that trade places fit the same: for comparing fits, one solution.
     Eigen::VectorXd rc_branches_like(const Eigen::VectorXd& x, const Eigen::VectorXd& like) const {
@@ -819,7 +826,7 @@ FitResult fit_model(const std::vector<Trace>& traces, const std::vector<ModelSpe
             const Eigen::VectorXd x = problem.rc_branches_like(runs[k].x, res.x);
             for (size_t j = 0; j < slots.size(); ++j) {
                 ParamEstimate& e = out.params[j];
-                const double v = x[j];
+                const double v = slots[j].def.kind == Kind::Q ? problem.reported_capacity(x, j) : x[j];
                 e.near_best_min = std::isnan(e.near_best_min) ? v : std::min(e.near_best_min, v);
                 e.near_best_max = std::isnan(e.near_best_max) ? v : std::max(e.near_best_max, v);
             }
@@ -879,8 +886,8 @@ FitResult fit_model(const std::vector<Trace>& traces, const std::vector<ModelSpe
     // A capacity held up by the charge the logs show was drawn is reported as that floor.
     for (size_t j = 0; j < slots.size(); ++j) {
         if (slots[j].def.kind != Kind::Q) continue;
-        const double effective = out.specs[slots[j].log < 0 ? 0 : slots[j].log].battery.capacity_ah;
-        if (std::fabs(effective - out.params[j].value) > 1e-6 * effective) {
+        const double effective = problem.reported_capacity(res.x, j);
+        if (effective != out.params[j].value) {
             out.params[j].value = effective;
             out.params[j].at_bound = true;
             out.params[j].sigma = out.params[j].sigma_ar1 = std::numeric_limits<double>::quiet_NaN();

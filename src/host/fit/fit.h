@@ -53,8 +53,9 @@ struct FitOptions {
     // imitate a straight line, which no longer is a discharge curve.
     double max_capacity_factor = 1.5;
     double max_capacity_ah = 0;  // > 0: this absolute cap instead of the factor
-    // The pack's full voltage and capacity that scale the plausibility bounds of the
-    // extensions' parameters (0 = the start spec's).
+    // The pack's charged voltage and capacity that scale the plausibility bounds of the
+    // extensions' parameters (0 = the start spec's full_voltage_v and capacity; the fit and
+    // residual jobs give the config's max_voltage_v).
     double bounds_full_voltage_v = 0;
     double bounds_capacity_ah = 0;
     // Gaussian priors (MAP): one extra residual noise_v·(x − mean)/sigma per prior. They pin
@@ -69,9 +70,9 @@ struct FitOptions {
     LmOptions lm;
     // Starting points: 1 = the config's values (and the linear start above). More adds
     // starts - 1 points spread around them by a seeded Latin hypercube (the same points on
-    // every run and machine); the fit with the least error is kept, and those nearly as good
-    // show how far the logs leave each parameter free. `jobs` threads run them; the result
-    // does not depend on it.
+    // every run and machine); the fit with the least error is kept, and those the logs
+    // cannot tell from it show how far the logs leave each parameter free. `jobs` threads
+    // run them; the result does not depend on it.
     int starts = 1;
     int jobs = 1;
     // The remedy for more parameters than samples, in the caller's options (TooLittleData).
@@ -87,7 +88,7 @@ struct ParamEstimate {
     double sigma = 0;      // from s²(JᵀJ)⁻¹; infinite when not identifiable
     double sigma_ar1 = 0;  // inflated for the residuals' lag-1 autocorrelation
     bool at_bound = false;
-    // Multi-start: the range over the fits nearly as good as the best (NaN with one start).
+    // Multi-start: the range over the fits the logs cannot tell from the best (NaN with one start).
     double near_best_min = std::numeric_limits<double>::quiet_NaN();
     double near_best_max = std::numeric_limits<double>::quiet_NaN();
 };

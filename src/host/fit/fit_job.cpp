@@ -129,6 +129,10 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
         }
     }
     if (options.priors.empty()) options.priors = default_priors(start);
+    // The extensions' plausibility bounds scale with the pack's charged voltage, not with the
+    // curve-point encoding's full_voltage_v, which a fitted config may hold at two to four
+    // times it (49 V for the 25.2 V Matrice 100 pack had let OCV corrections reach 7 V).
+    if (options.bounds_full_voltage_v <= 0) options.bounds_full_voltage_v = job.config.monitor.max_voltage_v;
     // A parameter listed per log is not also shared.
     for (const std::string& p : options.per_log_params) {
         options.params.erase(std::remove(options.params.begin(), options.params.end(), p), options.params.end());
@@ -253,12 +257,17 @@ void print_fit_brief(const nlohmann::json& r, std::ostream& out) {
         << r["solver"]["iterations"] << " iterations, " << r["solver"]["stop"].get<std::string>() << ")\n";
     if (r["solver"].contains("starts")) {
         const auto& starts = r["solver"]["starts"];
-        char pct[32];
+        // Start 0's excess as a share of the sum of squares the fit minimises (its RMSE alone
+        // can be the lower one when the logs weigh equally, not by their samples).
+        char pct[32], first[48];
         std::snprintf(pct, sizeof pct, "%.2g", 100 * r["solver"]["near_best_cost"].get<double>());
-        out << "  " << starts.size() << " starts: the best from start " << r["solver"]["best_start"]
-            << " (0 = the config's values, which reached RMSE " << starts[0]["rmse_v"] << " V); " << r["solver"]["near_best"]
-            << " of them, the best included, the logs cannot tell apart (sum of squares within " << pct
-            << " % of the best's: the approximate 95 % confidence region)\n";
+        std::snprintf(first, sizeof first, "%.2g", 100 * (starts[0]["cost_ratio"].get<double>() - 1));
+        const int best = r["solver"]["best_start"].get<int>();
+        out << "  " << starts.size() << " starts: the best from start " << best
+            << (best == 0 ? std::string(" (the config's values)")
+                          : " (start 0, the config's values, ended " + std::string(first) + " % above its sum of squares)")
+            << "; " << r["solver"]["near_best"] << " of them, the best included, the logs cannot tell apart (sum of squares within "
+            << pct << " % of the best's: the approximate 95 % confidence region)\n";
     }
     for (const auto& p : r["parameters"]) {
         out << "  " << p["name"].get<std::string>();

@@ -1,7 +1,8 @@
 // Bounded Levenberg–Marquardt for residuals that come in independent groups (one group per
 // log): a parameter that touches only one log's residuals costs one log's simulation per
 // Jacobian column, not all of them. Central finite differences, Marquardt scaling,
-// Nielsen's damping update, bounds by projection. Single-threaded and deterministic.
+// Nielsen's damping update, bounds by projection. One solve is single-threaded and
+// deterministic; multi_start() runs several side by side, with the same result.
 #pragma once
 #include <cstdint>
 #include <functional>

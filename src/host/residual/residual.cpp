@@ -531,7 +531,7 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
     if (traces.empty()) throw std::invalid_argument("no logs");
     ResidualOptions o = options;
     o.max_capacity_ah = o.max_capacity_factor * spec.battery.capacity_ah;
-    o.bounds_full_voltage_v = spec.battery.full_voltage_v;
+    if (o.bounds_full_voltage_v <= 0) o.bounds_full_voltage_v = spec.battery.full_voltage_v;
     o.bounds_capacity_ah = spec.battery.capacity_ah;
     if (o.blocks < 4 || o.blocks % 2 != 0) throw std::invalid_argument("--blocks must be even and at least 4");
     // A misspelt --fixed name had been ignored, and the parameter fitted after all.
@@ -1041,8 +1041,10 @@ nlohmann::json run_residual_job(const ResidualJob& job, ResidualReport* out, std
     }
     const ModelSpec spec = fit::spec_from_config(job.config);
     if (progress) *progress << "battsim residual: analysing\n";
-    ResidualReport rep = analyse(traces, spec, job.options, progress);
-    nlohmann::json j = report_to_json(rep, job.options);
+    ResidualOptions options = job.options;
+    if (options.bounds_full_voltage_v <= 0) options.bounds_full_voltage_v = job.config.monitor.max_voltage_v;  // as fit's
+    ResidualReport rep = analyse(traces, spec, options, progress);
+    nlohmann::json j = report_to_json(rep, options);
     j["config"] = job.config.name;
     if (!job.output_config.empty()) {
         LoadedConfig c = job.config;

@@ -43,7 +43,7 @@ struct ResidualOptions {
     size_t max_points_per_log = 20000;
     double max_capacity_factor = 1.5;  // of the config's capacity (see fit::FitOptions)
     double max_capacity_ah = 0;        // set by analyse() from the factor
-    double bounds_full_voltage_v = 0;  // set by analyse(): the config's (see fit::FitOptions)
+    double bounds_full_voltage_v = 0;  // 0: analyse() takes the spec's; the job, the config's max_voltage_v
     double bounds_capacity_ah = 0;
     std::vector<std::string> fixed;  // parameters never fitted (e.g. q measured by a slow discharge)
 };
