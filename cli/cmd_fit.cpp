@@ -45,7 +45,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iteration limit")
         ->check(CLI::Range(1, 100000))
         ->capture_default_str();
-    add_start_options(sub, a->starts, "the fit");
+    add_start_options(sub, a->starts, "the fit", "Starts fitted");
     sub.add_flag("--sample-weights", a->sample_weights, "Weight logs by their sample count instead of equally");
     add_model_job_options(sub, a->common, "fit report", "Plot measured and model voltage per log (.png or .svg)");
     return [a]() -> int {

@@ -40,7 +40,7 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--min-gain", a->min_gain, "Least share of the held-out error variance an effect must remove")->check(number_in(0.0, 1.0))->capture_default_str();
     sub.add_option("--max-p", a->max_p, "Significance level of the Wilcoxon signed-rank test over the held-out blocks")->check(number_in(0.0, 1.0, true))->capture_default_str();
     sub.add_option("--max-iterations", a->max_iterations, "Levenberg-Marquardt iterations per refit")->check(CLI::Range(1, 100000))->capture_default_str();
-    add_start_options(sub, a->starts, "every refit");
+    add_start_options(sub, a->starts, "every refit", "Candidate effects, and the starts of the refits between them, fitted");
     add_model_job_options(sub, a->common, "report", "Plot voltage, residual before/after, autocorrelation, histogram (.png or .svg)");
     return [a]() -> int {
         const char* me = "battsim residual";

@@ -49,7 +49,8 @@ struct StartArgs {
     int jobs = 0;  // 0 = the machine's cores
     int threads() const;
 };
-void add_start_options(CLI::App& sub, StartArgs& a, const std::string& each_fit);
+// `each_fit` names what the starts are of ("the fit"); `parallel` what -j runs side by side.
+void add_start_options(CLI::App& sub, StartArgs& a, const std::string& each_fit, const std::string& parallel);
 // Adds those options after the command's own; `report` names the report in the help
 // ("fit report"), `plot_help` says what the plot shows.
 void add_model_job_options(CLI::App& sub, ModelJobArgs& a, const std::string& report, const std::string& plot_help);

@@ -131,8 +131,12 @@ TEST_CASE("battsim residual names the undeclared effect on the command line", "[
     const std::string path = synth::write_log("cli", o);
     const std::string report = path + ".json";
     const std::string cmd = std::string(BATTSIM_BINARY) + " residual " + path + " -c " + BATTSIM_SOURCE_DIR +
-                            "/configs/reference-modified.json --report " + report + " > /dev/null 2>&1";
-    REQUIRE(std::system(cmd.c_str()) == 0);
+                            "/configs/reference-modified.json --report " + report + " -j ";
+    // The candidates judged one at a time or side by side: the same report.
+    REQUIRE(std::system((cmd + "2 > /dev/null 2>&1").c_str()) == 0);
+    const std::string side_by_side = testsupport::read_file(report);
+    REQUIRE(std::system((cmd + "1 > /dev/null 2>&1").c_str()) == 0);
+    CHECK(testsupport::read_file(report) == side_by_side);
     std::ifstream in(report);
     const nlohmann::json j = nlohmann::json::parse(in);
     REQUIRE_FALSE(j["effects"].empty());

@@ -8,6 +8,7 @@
 
 #include "host/fit/effect_names.h"
 #include "host/io/atomic_file.h"
+#include "host/parallel.h"
 #include "host/plot/plot.h"
 #include "host/report/summary.h"
 
@@ -526,6 +527,55 @@ Structure residual_structure(const std::vector<Trace>& traces, const std::vector
     return s;
 }
 
+namespace {
+
+// One candidate effect added to `current`, fitted on the fit blocks and scored on the
+// held-out ones; `fitted` gets the model with it.
+CandidateScore judge(const std::string& name, const std::vector<Trace>& traces, const State& current, const Eval& current_eval,
+                     const Split& split, const ResidualOptions& o, State& fitted) {
+    CandidateScore c;
+    c.name = name;
+    State trial = current;
+    std::vector<std::string> added;
+    if (!prepare(name, traces, trial, current_eval, split, o.initial, added, c.note, c.description)) {
+        c.applicable = false;
+        return c;
+    }
+    std::vector<std::string> params = current.params;
+    params.insert(params.end(), added.begin(), added.end());
+    Eval ev;
+    try {
+        // The new effect alone first (few, well-conditioned parameters), then everything.
+        fitted = refit(traces, refit(traces, trial, added, &split.fit, o), params, &split.fit, o);
+        ev = evaluate_state(traces, fitted, o.initial, split, o.window);
+        if (ev.fit_mse > current_eval.fit_mse) {
+            // The data-driven start led the fit astray; the effect switched (almost) off
+            // reproduces the current model, so a fit from there can only improve on it.
+            State neutral = trial;
+            neutralise(name, neutral);
+            fitted = refit(traces, refit(traces, neutral, added, &split.fit, o), params, &split.fit, o);
+            ev = evaluate_state(traces, fitted, o.initial, split, o.window);
+        }
+    } catch (const fit::TooLittleData& e) {
+        // More parameters than the log's fitting samples: this effect cannot be judged on it,
+        // which is a finding about the candidate, not a failure of the run (and the remedy
+        // for the run does not apply to it).
+        c.applicable = false;
+        c.note = e.finding();
+        return c;
+    } catch (const std::invalid_argument& e) {
+        c.applicable = false;
+        c.note = e.what();
+        return c;
+    }
+    compare(current_eval, ev, c);
+    c.values = effect_values(fitted.specs[0], added);
+    c.significant = c.gain >= o.min_gain && c.p_value <= o.max_p;
+    return c;
+}
+
+}  // namespace
+
 ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, const ResidualOptions& options,
                        std::ostream* progress) {
     if (traces.empty()) throw std::invalid_argument("no logs");
@@ -597,59 +647,30 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
 
     // Greedy forward selection, judged on the held-out blocks.
     for (int round = 0; round < o.max_effects; ++round) {
+        // The candidates are independent given the current model: judged side by side, each
+        // into its own slot, then taken in the order of `names` as one at a time would be.
+        // They take the threads, so each one's starts run in turn.
+        ResidualOptions one_thread = o;
+        one_thread.jobs = 1;
+        if (progress) {
+            for (const std::string& name : names)
+                *progress << "battsim residual: effect " << round + 1 << " of at most " << o.max_effects << ": trying " << name
+                          << "\n";
+        }
+        std::vector<CandidateScore> tried(names.size());
+        std::vector<State> fitted_states(names.size());
+        host::parallel_for(names.size(), o.jobs, [&](size_t i) {
+            tried[i] = judge(names[i], traces, current, current_eval, split, one_thread, fitted_states[i]);
+        });
         std::vector<CandidateScore> scores;
         State best_state;
         int best = -1;
-        for (const std::string& name : names) {
-            if (progress)
-                *progress << "battsim residual: effect " << round + 1 << " of at most " << o.max_effects << ": trying " << name
-                          << "\n";
-            CandidateScore c;
-            c.name = name;
-            State trial = current;
-            std::vector<std::string> added;
-            if (!prepare(name, traces, trial, current_eval, split, o.initial, added, c.note, c.description)) {
-                c.applicable = false;
-                scores.push_back(c);
-                continue;
-            }
-            std::vector<std::string> params = current.params;
-            params.insert(params.end(), added.begin(), added.end());
-            State fitted;
-            Eval ev;
-            try {
-                // The new effect alone first (few, well-conditioned parameters), then everything.
-                fitted = refit(traces, refit(traces, trial, added, &split.fit, o), params, &split.fit, o);
-                ev = evaluate_state(traces, fitted, o.initial, split, o.window);
-                if (ev.fit_mse > current_eval.fit_mse) {
-                    // The data-driven start led the fit astray; the effect switched (almost) off
-                    // reproduces the current model, so a fit from there can only improve on it.
-                    State neutral = trial;
-                    neutralise(name, neutral);
-                    fitted = refit(traces, refit(traces, neutral, added, &split.fit, o), params, &split.fit, o);
-                    ev = evaluate_state(traces, fitted, o.initial, split, o.window);
-                }
-            } catch (const fit::TooLittleData& e) {
-                // More parameters than the log's fitting samples: this effect cannot be judged
-                // on it, which is a finding about the candidate, not a failure of the run (and
-                // the remedy for the run does not apply to it).
-                c.applicable = false;
-                c.note = e.finding();
-                scores.push_back(c);
-                continue;
-            } catch (const std::invalid_argument& e) {
-                c.applicable = false;
-                c.note = e.what();
-                scores.push_back(c);
-                continue;
-            }
-            compare(current_eval, ev, c);
-            c.values = effect_values(fitted.specs[0], added);
-            c.significant = c.gain >= o.min_gain && c.p_value <= o.max_p;
-            scores.push_back(c);
+        for (size_t i = 0; i < names.size(); ++i) {
+            scores.push_back(tried[i]);
+            const CandidateScore& c = scores.back();
             if (c.significant && (best < 0 || c.gain > scores[best].gain)) {
                 best = static_cast<int>(scores.size()) - 1;
-                best_state = fitted;
+                best_state = fitted_states[i];
             }
         }
         std::stable_sort(scores.begin(), scores.end(), [](const CandidateScore& a, const CandidateScore& b) {

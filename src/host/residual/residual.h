@@ -39,7 +39,7 @@ struct ResidualOptions {
     std::vector<std::string> candidates;  // empty = all that apply
     int max_iterations = 100;
     int starts = 1;  // starting points per refit (fit::FitOptions::starts)
-    int jobs = 1;    // threads for them; the result does not depend on it
+    int jobs = 1;    // threads for a step's candidates and the other refits' starts; the result does not depend on it
     size_t max_points_per_log = 20000;
     double max_capacity_factor = 1.5;  // of the config's capacity (see fit::FitOptions)
     double max_capacity_ah = 0;        // set by analyse() from the factor
