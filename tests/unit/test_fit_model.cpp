@@ -401,6 +401,11 @@ TEST_CASE("A multi-start fit reports every start and the range of the fits nearl
     CHECK(fit_result_to_json(fit_model({t}, {spec_from_config(config)}, fo), fo).dump() == fit_result_to_json(r, fo).dump());
     fo.starts = 0;
     CHECK_THROWS_WITH(fit_model({t}, {spec_from_config(config)}, fo), Catch::Contains("starts must be at least 1"));
+    // Nothing to fit: one start, the others would be the same run.
+    fo.starts = 6;
+    fo.params.clear();
+    fo.initial = InitialMode::Monitor;
+    CHECK(fit_model({t}, {spec_from_config(config)}, fo).starts.empty());
 }
 
 TEST_CASE("Multi-start: two RC branches that trade places are one solution", "[fit]") {

@@ -764,7 +764,9 @@ FitResult fit_model(const std::vector<Trace>& traces, const std::vector<ModelSpe
     const Eigen::VectorXd x0 = problem.start_vector();
     if (options.starts < 1) throw std::invalid_argument("starts must be at least 1");
     std::vector<Eigen::VectorXd> xs{x0};
-    for (Eigen::VectorXd& x : problem.spread_starts(x0, options.starts - 1)) xs.push_back(std::move(x));
+    // Nothing to fit (an evaluation): one start; the others would be the same run.
+    const int starts = lm.n_params > 0 ? options.starts : 1;
+    for (Eigen::VectorXd& x : problem.spread_starts(x0, starts - 1)) xs.push_back(std::move(x));
     // The linear start belongs to start 0: both begin from the config's values.
     Eigen::VectorXd x_linear;
     const bool linear = options.linear_start && problem.linear_base_start(x0, x_linear);

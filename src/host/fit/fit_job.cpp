@@ -259,15 +259,19 @@ void print_fit_brief(const nlohmann::json& r, std::ostream& out) {
         const auto& starts = r["solver"]["starts"];
         // Start 0's excess as a share of the sum of squares the fit minimises (its RMSE alone
         // can be the lower one when the logs weigh equally, not by their samples).
-        char pct[32], first[48];
-        std::snprintf(pct, sizeof pct, "%.2g", 100 * r["solver"]["near_best_cost"].get<double>());
-        std::snprintf(first, sizeof first, "%.2g", 100 * (starts[0]["cost_ratio"].get<double>() - 1));
+        const auto percent = [](double fraction) {
+            char buf[32];
+            std::snprintf(buf, sizeof buf, 100 * fraction >= 100 ? "%.0f" : "%.2g", 100 * fraction);
+            return std::string(buf);
+        };
+        const double first = starts[0]["cost_ratio"].get<double>() - 1;
         const int best = r["solver"]["best_start"].get<int>();
         out << "  " << starts.size() << " starts: the best from start " << best
-            << (best == 0 ? std::string(" (the config's values)")
-                          : " (start 0, the config's values, ended " + std::string(first) + " % above its sum of squares)")
+            << (best == 0       ? std::string(" (the config's values)")
+                : first < 1e-5 ? std::string(" (start 0, the config's values, ended within 0.001 % of its sum of squares)")
+                               : " (start 0, the config's values, ended " + percent(first) + " % above its sum of squares)")
             << "; " << r["solver"]["near_best"] << " of them, the best included, the logs cannot tell apart (sum of squares within "
-            << pct << " % of the best's: the approximate 95 % confidence region)\n";
+            << percent(r["solver"]["near_best_cost"].get<double>()) << " % of the best's: the approximate 95 % confidence region)\n";
     }
     for (const auto& p : r["parameters"]) {
         out << "  " << p["name"].get<std::string>();
