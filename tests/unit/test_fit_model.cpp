@@ -442,6 +442,28 @@ TEST_CASE("Multi-start: two RC branches that trade places are one solution", "[f
     const ParamEstimate& slow = *by[rc1_faster ? "rc2_tau" : "rc1_tau"];
     CHECK(fast.near_best_min <= slow.near_best_min);
     CHECK(fast.near_best_max <= slow.near_best_max);
+
+    // Shared time constants with each log's own resistances (the joint fit's layout): the
+    // branches trade places in every log at once.
+    o.seed = 32;
+    const std::string other = synth::write_log("fit-two-branches-b", o);
+    const Trace t2 = load_trace(other, ReaderOptions{}, config);
+    std::remove(other.c_str());
+    fo.params = {"e0", "kappa", "a", "b", "q", "rc1_tau", "rc2_tau"};
+    fo.per_log_params = {"r", "rc1_r", "rc2_r"};
+    const FitResult joint = fit_model({t, t2}, {start}, fo);
+    std::map<std::string, const ParamEstimate*> shared;
+    for (const ParamEstimate& p : joint.params)
+        if (p.log.empty()) shared[p.name] = &p;
+    INFO("near best " << joint.near_best << "; rc1_tau " << shared["rc1_tau"]->near_best_min << "–"
+                      << shared["rc1_tau"]->near_best_max << " s, rc2_tau " << shared["rc2_tau"]->near_best_min << "–"
+                      << shared["rc2_tau"]->near_best_max << " s");
+    REQUIRE(joint.near_best >= 2);
+    const bool first_faster = shared["rc1_tau"]->value < shared["rc2_tau"]->value;
+    const ParamEstimate& quick = *shared[first_faster ? "rc1_tau" : "rc2_tau"];
+    const ParamEstimate& slower = *shared[first_faster ? "rc2_tau" : "rc1_tau"];
+    CHECK(quick.near_best_min <= slower.near_best_min);
+    CHECK(quick.near_best_max <= slower.near_best_max);
 }
 
 TEST_CASE("The extensions' bounds scale with the pack's charged voltage, not the curve encoding's", "[fit]") {

@@ -344,22 +344,33 @@ public:
         return std::fabs(effective - x[j]) > 1e-6 * effective ? effective : x[j];
     }
 
-    // x with each log's fitted RC branches reordered to rank by time constant as they do in
-    // `like`. Two branches that trade places fit the same: for comparing fits, one solution.
+    // x with the fitted RC branches reordered to rank by time constant as they do in `like`.
+    // Two branches that trade places fit the same: for comparing fits, one solution. A
+    // shared time constant carries its branch's resistances in every log along; a log's own
+    // time constant, that log's resistance.
     Eigen::VectorXd rc_branches_like(const Eigen::VectorXd& x, const Eigen::VectorXd& like) const {
         Eigen::VectorXd y = x;
-        for (int log = -1; log < static_cast<int>(traces_.size()); ++log) {
-            int r_slot[core::kMaxRcBranches], tau_slot[core::kMaxRcBranches];
-            std::fill(r_slot, r_slot + core::kMaxRcBranches, -1);
+        for (int group = -1; group < static_cast<int>(traces_.size()); ++group) {
+            int tau_slot[core::kMaxRcBranches];
+            std::map<int, int> r_slots[core::kMaxRcBranches];  // log (−1 shared) → slot
             std::fill(tau_slot, tau_slot + core::kMaxRcBranches, -1);
             for (size_t j = 0; j < slots_.size(); ++j) {
-                if (slots_[j].log != log) continue;
-                if (slots_[j].def.kind == Kind::RcR) r_slot[slots_[j].def.index] = static_cast<int>(j);
-                if (slots_[j].def.kind == Kind::RcTau) tau_slot[slots_[j].def.index] = static_cast<int>(j);
+                const Slot& sl = slots_[j];
+                if (sl.def.kind == Kind::RcTau && sl.log == group) tau_slot[sl.def.index] = static_cast<int>(j);
+                if (sl.def.kind == Kind::RcR && (sl.log == group || (group < 0 && sl.log >= 0)))
+                    r_slots[sl.def.index][sl.log] = static_cast<int>(j);
             }
-            std::vector<int> both;  // branches with resistance and time constant fitted: interchangeable
+            std::vector<int> both;  // branches with time constant and resistances fitted: interchangeable
             for (int b = 0; b < core::kMaxRcBranches; ++b) {
-                if (r_slot[b] >= 0 && tau_slot[b] >= 0) both.push_back(b);
+                if (tau_slot[b] >= 0 && !r_slots[b].empty()) both.push_back(b);
+            }
+            // Only branches whose resistances are fitted in the same logs can trade places.
+            for (int b : both) {
+                if (r_slots[b].size() != r_slots[both[0]].size() ||
+                    !std::equal(r_slots[b].begin(), r_slots[b].end(), r_slots[both[0]].begin(),
+                                [](const auto& u, const auto& v) { return u.first == v.first; }))
+                    both.clear();
+                if (both.empty()) break;
             }
             const auto by_tau = [&](const Eigen::VectorXd& v) {
                 std::vector<int> order = both;
@@ -368,8 +379,8 @@ public:
             };
             const std::vector<int> mine = by_tau(x), theirs = by_tau(like);
             for (size_t i = 0; i < both.size(); ++i) {
-                y[r_slot[theirs[i]]] = x[r_slot[mine[i]]];
                 y[tau_slot[theirs[i]]] = x[tau_slot[mine[i]]];
+                for (const auto& r : r_slots[theirs[i]]) y[r.second] = x[r_slots[mine[i]].at(r.first)];
             }
         }
         return y;
