@@ -178,7 +178,7 @@ StartSpread spread_of(const Def& d) {
         case Kind::TempQ: case Kind::TempE0: case Kind::HystM: return {3, box / 2};
         case Kind::ThermalRth: return {3, 1};
         case Kind::ThermalTau: case Kind::HystRate: return {3, 3 * d.typical};
-        case Kind::Ocv: return {1, box / 15};  // ± 1 % of the full voltage
+        case Kind::Ocv: return {1, box / 15};  // ± 2 % of the full voltage
         case Kind::Gain: return {1.1, box / 2};
         case Kind::Offset: return {1, 0.5};
         case Kind::Lead: return {1, 0.5};

@@ -131,7 +131,7 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
     if (options.priors.empty()) options.priors = default_priors(start);
     // The extensions' plausibility bounds scale with the pack's charged voltage, not with the
     // curve-point encoding's full_voltage_v, which a fitted config may hold at two to four
-    // times it (49 V for the 25.2 V Matrice 100 pack had let OCV corrections reach 7 V).
+    // times it (49 V for the 25.2 V Matrice 100 pack had let OCV corrections reach 7.4 V).
     if (options.bounds_full_voltage_v <= 0) options.bounds_full_voltage_v = job.config.monitor.max_voltage_v;
     // A parameter listed per log is not also shared.
     for (const std::string& p : options.per_log_params) {
