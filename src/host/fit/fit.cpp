@@ -778,22 +778,21 @@ FitResult fit_model(const std::vector<Trace>& traces, const std::vector<ModelSpe
     // Nothing to fit (an evaluation): one start; the others would be the same run.
     const int starts = lm.n_params > 0 ? options.starts : 1;
     for (Eigen::VectorXd& x : problem.spread_starts(x0, starts - 1)) xs.push_back(std::move(x));
-    // The linear start belongs to start 0: both begin from the config's values.
+    // The linear start belongs to start 0: both begin from the config's values. Second in
+    // the list, so that it loses a tie to start 0 and wins one against the spread points.
     Eigen::VectorXd x_linear;
     const bool linear = options.linear_start && problem.linear_base_start(x0, x_linear);
-    if (linear) xs.push_back(x_linear);
-    MultiStartResult ms = multi_start(lm, xs, options.lm, options.jobs);
+    if (linear) xs.insert(xs.begin() + 1, x_linear);
+    const auto rmse_of = [&](const LmResult& r) { return objective_stats(r.residuals, problem.points(), problem.weights()).rmse_v; };
+    MultiStartResult ms = multi_start(lm, xs, options.lm, options.jobs, rmse_of);
     if (linear) {
-        if (ms.runs.back().cost < ms.runs[0].cost) ms.runs[0] = std::move(ms.runs.back());
-        ms.runs.pop_back();
-        ms.best = 0;
-        for (size_t k = 1; k < ms.runs.size(); ++k) {
-            if (ms.runs[k].cost < ms.runs[ms.best].cost) ms.best = k;
-        }
+        if (ms.runs[1].cost < ms.runs[0].cost) ms.runs[0] = ms.runs[1];
+        ms.runs.erase(ms.runs.begin() + 1);
+        if (ms.best > 0) --ms.best;
     }
-    const std::vector<LmResult>& runs = ms.runs;
+    const std::vector<StartSummary>& runs = ms.runs;
     const size_t best = ms.best;
-    const LmResult& res = runs[best];
+    const LmResult& res = ms.best_run;
     const Eigen::MatrixXd cov = covariance(res);
 
     FitResult out;
@@ -829,7 +828,7 @@ FitResult fit_model(const std::vector<Trace>& traces, const std::vector<ModelSpe
         for (size_t k = 0; k < runs.size(); ++k) {
             StartOutcome o;
             o.index = static_cast<int>(k);
-            o.rmse_v = objective_stats(runs[k].residuals, problem.points(), problem.weights()).rmse_v;
+            o.rmse_v = runs[k].score;
             o.cost_ratio = res.cost > 0 ? runs[k].cost / res.cost : (runs[k].cost > 0 ? std::numeric_limits<double>::infinity() : 1.0);
             o.iterations = runs[k].iterations;
             o.stop_reason = runs[k].stop_reason;

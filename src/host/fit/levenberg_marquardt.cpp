@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 
 #include "host/parallel.h"
 #include "host/sim/rng.h"
@@ -196,13 +197,22 @@ std::vector<Eigen::VectorXd> latin_hypercube(const Eigen::VectorXd& lo, const Ei
 }
 
 MultiStartResult multi_start(const LmProblem& problem, const std::vector<Eigen::VectorXd>& starts, const LmOptions& options,
-                             int jobs) {
+                             int jobs, const std::function<double(const LmResult&)>& summarise) {
     MultiStartResult out;
     out.runs.resize(starts.size());
-    parallel_for(starts.size(), jobs, [&](size_t k) { out.runs[k] = levenberg_marquardt(problem, starts[k], options); });
-    for (size_t k = 1; k < out.runs.size(); ++k) {
-        if (out.runs[k].cost < out.runs[out.best].cost) out.best = k;
-    }
+    std::mutex lock;
+    bool any = false;
+    parallel_for(starts.size(), jobs, [&](size_t k) {
+        LmResult r = levenberg_marquardt(problem, starts[k], options);
+        out.runs[k] = StartSummary{r.x, r.cost, summarise ? summarise(r) : 0.0, r.iterations, r.stop_reason};
+        // The least (cost, index) wins whichever run finishes first.
+        const std::lock_guard<std::mutex> hold(lock);
+        if (!any || r.cost < out.best_run.cost || (r.cost == out.best_run.cost && k < out.best)) {
+            out.best_run = std::move(r);
+            out.best = k;
+            any = true;
+        }
+    });
     return out;
 }
 

@@ -54,13 +54,23 @@ std::vector<Eigen::VectorXd> latin_hypercube(const Eigen::VectorXd& lo, const Ei
                                              const std::vector<bool>& log_scale, int count, uint64_t seed);
 
 // Runs the solver from every start, `jobs` threads at a time; `best` is the run with the
-// least cost, the lowest index among equals, so the result does not depend on `jobs`.
+// least cost, the lowest index among equals, so the result does not depend on `jobs`. Only
+// that run is kept whole: a Jacobian per start (27,000 points × 27 parameters of the Samsung
+// curves: 6 MB) would have made 1,000 starts take gigabytes.
+struct StartSummary {
+    Eigen::VectorXd x;
+    double cost = 0;
+    double score = 0;  // what `summarise` made of the run (0 without it)
+    int iterations = 0;
+    std::string stop_reason;
+};
 struct MultiStartResult {
-    std::vector<LmResult> runs;  // in the order of the starts
+    std::vector<StartSummary> runs;  // in the order of the starts
     size_t best = 0;
+    LmResult best_run;
 };
 MultiStartResult multi_start(const LmProblem& problem, const std::vector<Eigen::VectorXd>& starts, const LmOptions& options,
-                             int jobs);
+                             int jobs, const std::function<double(const LmResult&)>& summarise = nullptr);
 
 // s²·(JᵀJ)⁻¹ over the parameters not at a bound (zero rows/columns for the others), with
 // s² = Σr²/(m − n_free). Singular directions (rank-deficient JᵀJ) get infinite variance.
