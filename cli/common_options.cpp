@@ -76,7 +76,7 @@ int StartArgs::threads() const { return jobs > 0 ? jobs : static_cast<int>(std::
 void add_start_options(CLI::App& sub, StartArgs& a, const std::string& each_fit, const std::string& parallel) {
     sub.add_option("--starts", a.starts,
                    "Starting points of " + each_fit + ": 1 = the config's values; more adds seeded points spread around them, keeps "
-                   "the best fit and reports how far fits nearly as good put each parameter")
+                   "the best fit and reports how far the fits the logs cannot tell from it put each parameter")
         ->check(CLI::Range(1, 1000))
         ->capture_default_str();
     sub.add_option("-j,--jobs", a.jobs, parallel + " in parallel (default or 0: the machine's cores); the result does not depend on it")
