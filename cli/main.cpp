@@ -1,7 +1,10 @@
 // battsim: replay, evaluate and fit drone battery logs through the same core the
 // firmware runs.
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <iostream>
@@ -43,9 +46,30 @@ int main(int argc, char** argv) {
     const CLI::Validator non_empty(
         [](std::string& v) { return v.empty() ? std::string("expected a value, found an empty string") : std::string(); },
         "", "NON_EMPTY");
+    // A whole number written as a float ("1e5", "300.0") reads as that number: CLI11's own
+    // integer parsing had answered `--max-points 1e5` with "not in range 20 to 100000000".
+    // A fraction is refused as one. transform() runs before the option's own range check.
+    const CLI::Validator whole_number(
+        [](std::string& v) {
+            const size_t first = v[0] == '-' || v[0] == '+' ? 1 : 0;
+            if (first >= v.size() || !(std::isdigit(static_cast<unsigned char>(v[first])) || v[first] == '.'))
+                return "expected a whole number, found " + v;  // CLI11 had said "not in range" of "abc"
+            if (v.find_first_of(".eE") == std::string::npos) return std::string();  // digits: CLI11 reads them
+            char* end = nullptr;
+            const double d = std::strtod(v.c_str(), &end);
+            if (end == v.c_str() || *end != '\0' || !std::isfinite(d)) return std::string();  // not a number: CLI11 says so
+            if (d != std::floor(d)) return "expected a whole number, found " + v;
+            if (std::fabs(d) < 9e15) v = std::to_string(static_cast<long long>(d));
+            return std::string();
+        },
+        "", "WHOLE_NUMBER");
     const std::function<void(CLI::App*)> refuse_empty = [&](CLI::App* a) {
-        for (CLI::Option* o : a->get_options())
-            if (o->get_type_size_max() > 0) o->check(non_empty);
+        for (CLI::Option* o : a->get_options()) {
+            if (o->get_type_size_max() <= 0) continue;
+            o->check(non_empty);
+            const std::string type = o->get_type_name();
+            if (type.rfind("INT", 0) == 0 || type.rfind("UINT", 0) == 0) o->transform(whole_number);
+        }
         for (CLI::App* s : a->get_subcommands([](CLI::App*) { return true; })) refuse_empty(s);
     };
     refuse_empty(&app);

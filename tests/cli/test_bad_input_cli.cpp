@@ -114,6 +114,17 @@ TEST_CASE("option values found by a sweep of every command's options: refused be
         CHECK(r.exit_code == 2);
         CHECK_THAT(r.err, Catch::Contains("expected a value, found an empty string"));
     }
+    // A whole number written as a float reads as that number (`--max-points 1e5` had been "not
+    // in range 20 to 100000000"); a fraction or a word is said to be no whole number (a word
+    // had been "not in range" too).
+    auto whole = run("fit " + q(kExample) + " -c " + q(kConfig) + " --params none --max-points 1e5 -j 2.0");
+    CHECK(whole.exit_code == 0);
+    for (const std::string& bad : {std::string("--starts 2.5"), std::string("--max-iterations abc")}) {
+        INFO(bad);
+        whole = run("fit " + q(kExample) + " -c " + q(kConfig) + " " + bad);
+        CHECK(whole.exit_code == 2);
+        CHECK_THAT(whole.err, Catch::Contains(": expected a whole number, found " + bad.substr(bad.find(' ') + 1)));
+    }
     // -o over a config a scenario names (score, simulate) replaced it with a table or a log.
     const std::string suite = dir + "/suite";
     std::filesystem::create_directories(suite);
