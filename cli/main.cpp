@@ -51,7 +51,8 @@ int main(int argc, char** argv) {
     // A fraction is refused as one. transform() runs before the option's own range check.
     const CLI::Validator whole_number(
         [](std::string& v) {
-            const size_t first = v[0] == '-' || v[0] == '+' ? 1 : 0;
+            size_t first = v.find_first_not_of(" \t");
+            if (first != std::string::npos && (v[first] == '-' || v[first] == '+')) ++first;
             if (first >= v.size() || !(std::isdigit(static_cast<unsigned char>(v[first])) || v[first] == '.'))
                 return "expected a whole number, found " + v;  // CLI11 had said "not in range" of "abc"
             if (v.find_first_of(".eE") == std::string::npos) return std::string();  // digits: CLI11 reads them
@@ -66,9 +67,9 @@ int main(int argc, char** argv) {
     const std::function<void(CLI::App*)> refuse_empty = [&](CLI::App* a) {
         for (CLI::Option* o : a->get_options()) {
             if (o->get_type_size_max() <= 0) continue;
-            o->check(non_empty);
             const std::string type = o->get_type_name();
             if (type.rfind("INT", 0) == 0 || type.rfind("UINT", 0) == 0) o->transform(whole_number);
+            o->transform(non_empty);  // transform() goes first: before any range check says "not in range"
         }
         for (CLI::App* s : a->get_subcommands([](CLI::App*) { return true; })) refuse_empty(s);
     };

@@ -119,6 +119,8 @@ TEST_CASE("option values found by a sweep of every command's options: refused be
     // had been "not in range" too).
     auto whole = run("fit " + q(kExample) + " -c " + q(kConfig) + " --params none --max-points 1e5 -j 2.0");
     CHECK(whole.exit_code == 0);
+    whole = run("fit " + q(kExample) + " -c " + q(kConfig) + " --starts ''");  // still said to be empty
+    CHECK_THAT(whole.err, Catch::Contains("--starts: expected a value, found an empty string"));
     for (const std::string& bad : {std::string("--starts 2.5"), std::string("--max-iterations abc")}) {
         INFO(bad);
         whole = run("fit " + q(kExample) + " -c " + q(kConfig) + " " + bad);

@@ -365,7 +365,7 @@ TEST_CASE("The fits the logs cannot tell apart: Beale's region with autocorrelat
     CHECK(std::isfinite(near_best_cost(17, 3, 0.999)));
 }
 
-TEST_CASE("A multi-start fit reports every start and the range of the fits nearly as good", "[fit]") {
+TEST_CASE("A multi-start fit reports every start and the range of the fits the logs cannot tell from the best", "[fit]") {
     synth::Options o;
     o.flight_s = 60;
     o.seed = 9;
