@@ -2,11 +2,13 @@
 // for a pack, from its own flights (the in-flight capacity against the rests').
 #include <iomanip>
 #include <iostream>
+#include <sstream>
 
 #include "command.h"
 #include "common_options.h"
 #include "host/fit/shape_calibration.h"
 #include "host/io/atomic_file.h"
+#include "host/io/number_text.h"
 
 namespace battsim {
 namespace cli {
@@ -17,6 +19,7 @@ struct CalibrateArgs {
     std::string output;
     bool json = false;
     host::ShapeCalibrationOptions options;
+    std::vector<std::string> shares;  // as typed; empty = the options' own
     InputArgs input;
 };
 
@@ -40,10 +43,14 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("LOG", a->logs, "Logs of one pack (each with a rest after its flight)")->required();
     sub.add_option("-o,--output", a->output, "Write the config with the calibrated share here (JSON)");
     sub.add_flag("--json", a->json, "Print the calibration JSON on standard output");
-    sub.add_option("--shares", a->options.slow_shares, "Candidate slow shares (0..1), comma-separated")
-        ->delimiter(',')
-        ->check(number_in(0.0, 1.0))
-        ->capture_default_str();
+    std::ostringstream defaults;
+    for (size_t i = 0; i < a->options.slow_shares.size(); ++i) defaults << (i ? "," : "") << a->options.slow_shares[i];
+    const CLI::Validator share = number_in(0.0, 1.0);
+    add_list_option(sub, "--shares", a->shares, "Candidate slow shares (0..1), comma-separated [" + defaults.str() + "]",
+                    [share](const std::string& item) {
+                        std::string text = item;
+                        return share(text);
+                    });
     sub.add_option("--tolerance", a->options.tolerance,
                    "Keep the configured share while its mean |final/rest - 1| is within this")
         ->check(number_in(0.0, 1.0))
@@ -55,6 +62,14 @@ std::function<int()> setup(CLI::App& sub) {
             return kExitUsage;
         }
         const char* const command = "battsim calibrate";
+        if (!a->shares.empty()) {
+            a->options.slow_shares.clear();
+            for (const std::string& text : a->shares) {
+                double v = 0.0;
+                host::parse_finite_number(text, &v);  // checked by --shares' own validator
+                a->options.slow_shares.push_back(v);
+            }
+        }
         host::ReplayOptions opt;
         if (int rc = resolve_input(a->input, opt.reader, opt.config, command)) return rc;
         host::ShapeCalibration c;

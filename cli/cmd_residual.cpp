@@ -25,12 +25,10 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("LOG", a->logs, "Logs to analyse (one model for all of them)")->required();
     sub.add_option("-o,--output", a->output, "Write the config with the effects found, refitted, here");
     sub.add_option("--name", a->name, "Name of the written config");
-    sub.add_option("--candidates", a->candidates,
+    add_list_option(sub, "--candidates", a->candidates,
                    "Effects to try (default all): rc_polarisation, temperature, self_heating, soc_shape, current_sensor, "
-                   "hysteresis, sample_timing (fit --add's rc, thermal, ocv, sensor, timing also)")
-        ->delimiter(',');
-    sub.add_option("--fixed", a->fixed, "Parameters kept at the config's values (e.g. q when a slow discharge measured it)")
-        ->delimiter(',');
+                   "hysteresis, sample_timing (fit --add's rc, thermal, ocv, sensor, timing also)");
+    add_list_option(sub, "--fixed", a->fixed, "Parameters kept at the config's values (e.g. q when a slow discharge measured it)");
     sub.add_option("--window", a->window, "Samples analysed: all (initialised) or flight")->capture_default_str();
     sub.add_option("--initial", a->initial, "Initial charge: free (fitted per log; flights) or zero (logs start full: constant-current discharges)")
         ->check(CLI::IsMember({"free", "zero"}))

@@ -38,6 +38,49 @@ CLI::Validator number_in(double lo, double hi, bool above_lo) {
         "NUMBER in " + range);
 }
 
+namespace {
+std::vector<std::string> split_list(const std::string& text) {
+    std::vector<std::string> items;
+    size_t from = 0;
+    while (true) {
+        const size_t comma = text.find(',', from);
+        std::string item = text.substr(from, comma == std::string::npos ? std::string::npos : comma - from);
+        const size_t first = item.find_first_not_of(" \t");
+        item = first == std::string::npos ? std::string() : item.substr(first, item.find_last_not_of(" \t") - first + 1);
+        items.push_back(item);
+        if (comma == std::string::npos) return items;
+        from = comma + 1;
+    }
+}
+}  // namespace
+
+CLI::Option* add_list_option(CLI::App& sub, const std::string& flags, std::vector<std::string>& items,
+                             const std::string& help, const std::function<std::string(const std::string&)>& check_item) {
+    CLI::Option* o = sub.add_option_function<std::vector<std::string>>(
+        flags,
+        [&items](const std::vector<std::string>& values) {
+            items.clear();
+            for (const std::string& v : values)
+                for (std::string& item : split_list(v)) items.push_back(std::move(item));
+        },
+        help);
+    o->type_size(1)->allow_extra_args(false);
+    o->check(CLI::Validator(
+        [check_item](std::string& v) -> std::string {
+            if (v.empty()) return std::string();  // main's empty-value check says so
+            for (const std::string& item : split_list(v)) {
+                if (item.empty()) return "expected a comma-separated list, found an empty item in \"" + v + "\"";
+                if (check_item) {
+                    const std::string why = check_item(item);
+                    if (!why.empty()) return why;
+                }
+            }
+            return std::string();
+        },
+        "LIST"));
+    return o;
+}
+
 void add_input_options(CLI::App& sub, InputArgs& a) {
     sub.add_option("-c,--config", a.config, "Battery and monitor config JSON (default: built in, the same as configs/reference-modified.json: the dissertation's 1.55 Ah 4S pack and logger)");
     sub.add_option("--format", a.format, host::log_format_help())
@@ -49,7 +92,7 @@ void add_input_options(CLI::App& sub, InputArgs& a) {
     sub.add_option("--voltage-col", a.voltage_col, "CSV: name of the pack voltage column (V)");
     sub.add_option("--current-col", a.current_col, "CSV: name of the current column");
     sub.add_option("--current-unit", a.current_unit, "CSV: unit of the current column (A, mA); overrides the unit its name implies (current_ma)");
-    sub.add_option("--cell-cols", a.cell_cols, "CSV: names of the cell voltage columns, cell 1 first")->delimiter(',');
+    add_list_option(sub, "--cell-cols", a.cell_cols, "CSV: names of the cell voltage columns, cell 1 first, comma-separated");
     sub.add_option("--temperature-col", a.temperature_col, "CSV: name of the temperature column (degC)");
     sub.add_option("--estimator", a.estimator, "Estimator: reference (the dissertation's) or joint (the newer one); default from the config");
     sub.add_flag("--negative-discharge", a.negative_discharge, "CSV: the log's current is negative while discharging");

@@ -36,6 +36,14 @@ void add_input_options(CLI::App& sub, InputArgs& a);
 // print a 300-digit double's limit).
 CLI::Validator number_in(double lo, double hi, bool above_lo = false);
 
+// A comma-separated list (`--params e0,r`; repeatable, the lists joined). Each occurrence
+// takes one argument, split here: CLI11 2.1's own delimiter read `--params ,` as no value
+// and went on to take the next argument, even `-c`. An empty item is refused, and so is an
+// item `check_item` answers with a message.
+CLI::Option* add_list_option(CLI::App& sub, const std::string& flags, std::vector<std::string>& items,
+                             const std::string& help,
+                             const std::function<std::string(const std::string&)>& check_item = nullptr);
+
 // What fit and residual share: the capacity bound, the report, the plot and the input.
 struct ModelJobArgs {
     double max_capacity_factor = 1.5;

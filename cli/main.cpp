@@ -8,6 +8,7 @@
 #include <cstring>
 #include <functional>
 #include <iostream>
+#include <set>
 #include <string>
 
 #include "command.h"
@@ -85,8 +86,30 @@ int main(int argc, char** argv) {
             return kExitUsage;
         }
     }
+    // `--summary=$OUT` with OUT unset reads in CLI11 as the option without a value, which then
+    // took the next argument (a log's name) as its own; split off the empty value so that the
+    // empty-value check above refuses it.
+    std::set<std::string> value_options;  // the command's options that take a value ("--output")
+    if (argc > 1 && argv[1][0] != '-')
+        for (const CLI::Option* o : app.get_subcommand(argv[1])->get_options())
+            if (o->get_type_size_max() > 0)
+                for (const std::string& name : o->get_lnames()) value_options.insert("--" + name);
+    std::vector<std::string> args;
+    for (int i = 0; i < argc; ++i) {
+        const std::string token = argv[i];
+        const bool empty_long_value = i > 0 && token.find('=') == token.size() - 1 &&
+                                      value_options.count(token.substr(0, token.size() - 1)) != 0;
+        if (empty_long_value && std::find(args.begin(), args.end(), "--") == args.end()) {
+            args.push_back(token.substr(0, token.size() - 1));
+            args.emplace_back();
+        } else {
+            args.push_back(token);
+        }
+    }
+    std::vector<const char*> arg_ptrs;
+    for (const std::string& s : args) arg_ptrs.push_back(s.c_str());
     try {
-        app.parse(argc, argv);
+        app.parse(static_cast<int>(arg_ptrs.size()), arg_ptrs.data());
     } catch (const CLI::ParseError& e) {
         int code = app.exit(e);
         return code == 0 ? kExitOk : kExitUsage;

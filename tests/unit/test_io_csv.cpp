@@ -897,9 +897,53 @@ TEST_CASE("a clock step the pack could not have flown through is moved back; a g
     // So is a jump the smaller current either side could have flown: 100 s at 10 A then 0.5 A.
     const std::string landed = t.write("landed.csv", "time_s,voltage_v,current_a\n0,16,10\n0.1,16,10\n100.1,16,0.5\n");
     CHECK(read_all(landed, opt)[2].time_us == 100100000u);
-    // And one within half again the capacity (a label's rating can be low): 10 Ah over the hour on an 8 Ah pack.
+    // And one within half again the capacity (a label's rating can be low): 10 Ah over the
+    // hour on an 8 Ah pack, which sagged the pack 16 -> 14 V.
     opt.clock_step_capacity_ah = 8.0;
-    CHECK(read_all(stepped, opt)[3].time_us == 3600200000u);
+    const std::string sagged = t.write("sagged.csv",
+                                       "time_s,voltage_v,current_a\n0,16,10\n0.1,16,10\n0.2,16,10\n3600.2,14,10\n");
+    CHECK(read_all(sagged, opt)[3].time_us == 3600200000u);
+    // The same hour with the voltage where it was: the pack did not deliver 10 Ah over it.
+    info = SourceInfo();
+    v = read_all(stepped, opt, &info);
+    CHECK(v[3].time_us == 300000u);
+    REQUIRE(info.notes.size() == 1);
+    CHECK(info.notes[0] ==
+          "the log's clock steps 3600 s ahead at 0.2 s into the log, with 10 A before and 10 A after and the pack at 16 V "
+          "before and 16 V after: a gap that long at that load would have drawn at least 10 Ah of the config's 8 Ah and "
+          "lowered the voltage, so no charge was drawn over it (the clock stepped, or the logger paused); the samples "
+          "after it are read 3599.9 s earlier, to follow on");
+}
+
+TEST_CASE("a gap at a steady load that left the voltage where it was drew no charge", "[io]") {
+    TempDir t;
+    ReaderOptions opt;
+    opt.clock_step_capacity_ah = 1.55;
+    // A hover log paused for 600 s at 8.4 A: 1.4 Ah, within half again 1.55 Ah, but the
+    // pack reads 15.9 V on both sides. (Counted, it had read a 3.1 Ah pack.)
+    const std::string paused = t.write("paused.csv", "time_s,voltage_v,current_a\n0,15.92,8.4\n0.1,15.91,8.4\n"
+                                                     "0.2,15.91,8.4\n600.2,15.90,8.3\n600.3,15.9,8.4\n");
+    SourceInfo info;
+    std::vector<core::Sample> v = read_all(paused, opt, &info);
+    CHECK(v[3].time_us == 300000u);
+    CHECK(v[4].time_us == 400000u);
+    CHECK(info.notes.size() == 1);
+    // Kept as a gap: the voltage 0.5 % lower after it (15.91 -> 15.83 V) ...
+    const std::string flown = t.write("flown.csv", "time_s,voltage_v,current_a\n0,15.92,8.4\n0.1,15.91,8.4\n"
+                                                   "0.2,15.91,8.4\n600.2,15.83,8.4\n");
+    CHECK(read_all(flown, opt)[3].time_us == 600200000u);
+    // ... another load after it (8.4 -> 6 A: the drone may have landed and rested) ...
+    const std::string other = t.write("other.csv", "time_s,voltage_v,current_a\n0,15.92,8.4\n0.1,15.91,8.4\n"
+                                                   "0.2,15.91,8.4\n600.2,15.95,6\n");
+    CHECK(read_all(other, opt)[3].time_us == 600200000u);
+    // ... a ground load (an hour at 1 A, under 1 C) ...
+    const std::string ground = t.write("ground.csv", "time_s,voltage_v,current_a\n0,15.92,1\n0.1,15.91,1\n"
+                                                     "0.2,15.91,1\n3600.2,15.91,1\n");
+    CHECK(read_all(ground, opt)[3].time_us == 3600200000u);
+    // ... or a quarter of the capacity or less (40 s at 8.4 A is 0.093 Ah).
+    const std::string short_gap = t.write("short.csv", "time_s,voltage_v,current_a\n0,15.92,8.4\n0.1,15.91,8.4\n"
+                                                       "0.2,15.91,8.4\n40.2,15.91,8.4\n");
+    CHECK(read_all(short_gap, opt)[3].time_us == 40200000u);
 }
 
 TEST_CASE("bad input: a compressed log and standard input say so", "[io]") {

@@ -348,6 +348,10 @@ public:
     static constexpr std::uint64_t kMinStepUs = 30000000;
     // A config's capacity may be the label's, and a pack gives a little more; none gives half again.
     static constexpr double kCapacities = 1.5;
+    // Or more than a quarter of it at the same flight load (currents within 20 %, at least
+    // 1 C: at a ground load a resting pack's recovery can hide the drop) with the voltage not
+    // 0.5 % lower after the gap.
+    static constexpr double kUnsaggedCapacities = 0.25, kSameLoad = 0.2, kUnsaggedVoltage = 0.005, kFlightLoadPerHour = 1.0;
 
     ClockStepReader(std::unique_ptr<SampleReader> inner, double capacity_ah)
         : inner_(std::move(inner)), capacity_ah_(capacity_ah) {}
@@ -361,25 +365,46 @@ public:
             const std::uint64_t jump_us = out.time_us - last_us_;
             const double before_a = std::fabs(static_cast<double>(last_a_)), after_a = std::fabs(static_cast<double>(out.current_a));
             const double least_ah = std::min(before_a, after_a) * static_cast<double>(jump_us) * 1e-6 / 3600.0;
-            if (std::isfinite(least_ah) && least_ah > kCapacities * capacity_ah_) {
+            // A gap flown at a steady load drops the pack's voltage: a quarter of the capacity
+            // is 0.05-0.2 V per cell. Where the load is the same on both sides and the voltage
+            // has not dropped, no charge was drawn over it (a hover log paused for ten minutes
+            // had been charged 1.4 Ah of 1.5 and read a 3.1 Ah pack).
+            const double before_v = static_cast<double>(last_v_), after_v = static_cast<double>(out.voltage_v);
+            const bool same_load = std::fabs(after_a - before_a) <= kSameLoad * std::max(before_a, after_a);
+            const bool flight_load = std::min(before_a, after_a) >= kFlightLoadPerHour * capacity_ah_;
+            const bool unsagged = same_load && flight_load && least_ah > kUnsaggedCapacities * capacity_ah_ && before_v > 0.0 &&
+                                  after_v >= before_v * (1.0 - kUnsaggedVoltage);
+            if (std::isfinite(least_ah) && (least_ah > kCapacities * capacity_ah_ || unsagged)) {
                 // The step becomes one usual interval (the last one before it).
                 const std::uint64_t step_us = jump_us - interval_us_;
                 shift_us_ += step_us;
                 out.time_us -= step_us;
-                char buf[400];
-                std::snprintf(buf, sizeof buf,
-                              "the log's clock steps %.6g s ahead at %.6g s into the log, with %.3g A before and %.3g A "
-                              "after: over a logging gap that long the pack would have delivered at least %.4g Ah, more "
-                              "than one and a half times the config's %.4g Ah, so the clock stepped (a radio's clock "
-                              "set by GPS, two files joined); the samples after it are read %.6g s earlier, to follow on",
-                              static_cast<double>(jump_us) * 1e-6, static_cast<double>(last_us_ - first_us_) * 1e-6,
-                              before_a, after_a, least_ah, capacity_ah_, static_cast<double>(step_us) * 1e-6);
+                char buf[480];
+                if (least_ah > kCapacities * capacity_ah_)
+                    std::snprintf(buf, sizeof buf,
+                                  "the log's clock steps %.6g s ahead at %.6g s into the log, with %.3g A before and %.3g A "
+                                  "after: over a logging gap that long the pack would have delivered at least %.4g Ah, more "
+                                  "than one and a half times the config's %.4g Ah, so the clock stepped (a radio's clock "
+                                  "set by GPS, two files joined); the samples after it are read %.6g s earlier, to follow on",
+                                  static_cast<double>(jump_us) * 1e-6, static_cast<double>(last_us_ - first_us_) * 1e-6,
+                                  before_a, after_a, least_ah, capacity_ah_, static_cast<double>(step_us) * 1e-6);
+                else
+                    std::snprintf(buf, sizeof buf,
+                                  "the log's clock steps %.6g s ahead at %.6g s into the log, with %.3g A before and %.3g A "
+                                  "after and the pack at %.4g V before and %.4g V after: a gap that long at that load would "
+                                  "have drawn at least %.4g Ah of the config's %.4g Ah and lowered the voltage, so no charge "
+                                  "was drawn over it (the clock stepped, or the logger paused); the samples after it are read "
+                                  "%.6g s earlier, to follow on",
+                                  static_cast<double>(jump_us) * 1e-6, static_cast<double>(last_us_ - first_us_) * 1e-6,
+                                  before_a, after_a, before_v, after_v, least_ah, capacity_ah_,
+                                  static_cast<double>(step_us) * 1e-6);
                 notes_.push_back(buf);
             }
         }
         if (have_ && out.time_us > last_us_ && out.time_us - last_us_ <= kMinStepUs) interval_us_ = out.time_us - last_us_;
         last_us_ = std::max(last_us_, out.time_us);
         last_a_ = out.current_a;
+        last_v_ = out.voltage_v;
         have_ = true;
         return true;
     }
@@ -395,7 +420,7 @@ private:
     double capacity_ah_;
     bool have_ = false;
     std::uint64_t first_us_ = 0, last_us_ = 0, shift_us_ = 0, interval_us_ = 0;
-    float last_a_ = 0.0f;
+    float last_a_ = 0.0f, last_v_ = 0.0f;
     std::vector<std::string> notes_;
     mutable SourceInfo info_;
 };
