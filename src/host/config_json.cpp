@@ -133,6 +133,8 @@ LoadedConfig builtin_config() {
     c.monitor.flying.takeoff_confirm_s = 0.5f;
     c.monitor.power_average.initial_value = 316.0f;
     c.monitor.cell_analysis.first_cell_includes_lead = true;
+    // A file without sensor.min_pack_voltage_v reads the per-cell floor (config_from_json).
+    c.monitor.sensor.min_pack_voltage_v = kGlitchFloorCellV * static_cast<float>(c.monitor.cells_in_series);
     return c;
 }
 
@@ -296,8 +298,14 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
                 r.fail(r.child("ocv_cell_voltage_v"), "expected the full end above the empty end; a flat table reads no charge");
         }
     }
+    // Unset, the glitch floor is 2.0 V per cell (make-config's), below what a loaded lithium
+    // pack shows: the core's 1.0 V of any pack had let one 2.2 V row on a 6S Matrice 100
+    // flight through to the estimators. Where that would not be below the ceiling, 1.0 V stays.
+    const float per_cell_floor_v = kGlitchFloorCellV * static_cast<float>(m.cells_in_series);
+    bool floor_set = false;
     if (const json* s = root.member("sensor")) {
         ObjectReader r(*s, root.child("sensor"), origin);
+        floor_set = s->is_object() && s->contains("min_pack_voltage_v");
         r.number("shunt_offset_ma", m.shunt.offset_ma, -kBig, kBig);
         r.number("shunt_scale_mv_per_10a", m.shunt.scale_mv_per_10a, 1e-9, kBig);
         r.number("max_pack_voltage_v", m.sensor.max_pack_voltage_v, 0, 10000);
@@ -316,6 +324,7 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         if (!(m.sensor.min_cell_voltage_v < m.sensor.max_cell_voltage_v))
             r.fail(r.child("min_cell_voltage_v"), "must be below max_cell_voltage_v");
     }
+    if (!floor_set && per_cell_floor_v < m.sensor.max_pack_voltage_v) m.sensor.min_pack_voltage_v = per_cell_floor_v;
     if (const json* s = root.member("telemetry")) {
         ObjectReader r(*s, root.child("telemetry"), origin);
         telemetry::TelemetryConfig& t = out.telemetry;

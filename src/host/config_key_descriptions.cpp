@@ -169,7 +169,7 @@ const std::map<std::string, std::string>& config_key_descriptions() {
     {"sensor.shunt_offset_ma", "Shunt calibration offset (mA): current mA = shunt mV / `shunt_scale_mv_per_10a` × 10000 + this, for the firmware and for logs read with `--current-source shunt`."},
     {"sensor.shunt_scale_mv_per_10a", "Shunt calibration scale: shunt mV per 10 A (formula at `shunt_offset_ma`); calibrate against a clamp meter at two currents."},
     {"sensor.max_pack_voltage_v", "A pack voltage above this (V) is a sensor fault and the sample is kept out of the estimators; set it above the full pack."},
-    {"sensor.min_pack_voltage_v", "A pack voltage below this (V) is a sensor fault and the sample is kept out of the estimators; below `max_pack_voltage_v`; battsim make-config sets it to 2.0 V per cell, below what a loaded lithium pack shows."},
+    {"sensor.min_pack_voltage_v", "A pack voltage below this (V) is a sensor fault and the sample is kept out of the estimators; below `max_pack_voltage_v`; unset, it is 2.0 V per cell (what battsim make-config writes), below what a loaded lithium pack shows."},
     {"sensor.max_current_a", "A current above this (A, positive = discharge) is a sensor fault and the sample is kept out of the estimators."},
     {"sensor.min_current_a", "A current below this (A, negative = charging) is a sensor fault and the sample is kept out of the estimators; below `max_current_a`."},
     {"sensor.min_cell_voltage_v", "A cell reading below this (V), as from a loose balance lead, is a sensor fault: the sample's cells are kept out of the cell checks, the pack reading still counts; below `max_cell_voltage_v`."},

@@ -25,11 +25,6 @@ constexpr double kExponentialAh = 0.3, kNominalZoneAh = 1.5;  // at the referenc
 constexpr double kCellResistanceOhm = 0.005;                   // at the reference capacity
 constexpr double kCurveCurrentA = 7.0;                          // the curve's C-rate is kept
 constexpr double kVarianceV = 0.05, kAveragePowerW = 79.0, kMaxPackV = 5.25;
-// The lowest pack voltage per cell a reading can be true at: Li-ion is flown to 2.5 V per
-// cell, and sag under a punch goes briefly below (the dissertation's sad 4S pack reached
-// 2.65 V per cell under load). Below this a sample is a glitch, kept out of the estimators;
-// the core's fixed 1.0 V default had let a 2.2 V row on a 6S pack through.
-constexpr double kMinPackCellV = 2.0;
 constexpr double kCutoffDelayS = 5.0;
 constexpr double kGroundPowerW = 3.0;  // a small craft's electronics on the ground, at most
 // The estimators' current thresholds (their defaults are the core's, set for the reference
@@ -190,7 +185,7 @@ json pack_config_json(const PackRating& r) {
         // The reference logger's shunt calibration (a raw log's shunt column only).
         {"sensor", {{"shunt_offset_ma", -982.8158579}, {"shunt_scale_mv_per_10a", 3.7834625},
                     {"max_pack_voltage_v", round_to(kMaxPackV * n, 1e-4)},
-                    {"min_pack_voltage_v", round_to(kMinPackCellV * n, 1e-4)}}},
+                    {"min_pack_voltage_v", round_to(kGlitchFloorCellV * n, 1e-4)}}},
         {"joint",
          {{"first_cell_includes_lead", true},
           {"cutoff_delay_s", std::isfinite(r.cutoff_delay_s) ? r.cutoff_delay_s : kCutoffDelayS},

@@ -127,6 +127,34 @@ TEST_CASE("option values found by a sweep of every command's options: refused be
         CHECK(whole.exit_code == 2);
         CHECK_THAT(whole.err, Catch::Contains(": expected a whole number, found " + bad.substr(bad.find(' ') + 1)));
     }
+    // `--summary=` with nothing after it (`--summary=$OUT`, OUT unset) had taken the next
+    // argument, the log, as the summary's path.
+    const std::string kept = clitest::read_file(kExample);
+    auto eq = run("replay --summary= " + q(kExample) + " -c " + q(kConfig));
+    CHECK(eq.exit_code == 2);
+    CHECK_THAT(eq.err, Catch::Contains("--summary: expected a value, found an empty string"));
+    CHECK(clitest::read_file(kExample) == kept);
+    // A comma-separated list: `--params ,` had read as no value and taken the next argument, -c.
+    for (const std::string& bad : {std::string("--params ,"), std::string("--params e0,,r"), std::string("--params= "),
+                                   std::string("--cell-cols ,")}) {
+        INFO(bad);
+        const auto r = run("fit " + q(kExample) + " " + bad + " -c " + q(kConfig));
+        CHECK(r.exit_code == 2);
+        CHECK_THAT(r.err, Catch::Contains(bad.find('=') != std::string::npos
+                                              ? "--params: expected a value, found an empty string"
+                                              : "expected a comma-separated list, found an empty item in"));
+    }
+    // Each occurrence takes one list; repeated, the lists join ("e0, r" read as e0 and r).
+    auto list = run("fit " + q(kExample) + " --params 'e0, r' --params kappa --max-iterations 1 --json -c " + q(kConfig));
+    CHECK(list.exit_code == 0);
+    nlohmann::json fitted = nlohmann::json::parse(list.out);
+    std::vector<std::string> names;
+    for (const auto& p : fitted.at("parameters")) names.push_back(p.at("name").get<std::string>());
+    CHECK(names == std::vector<std::string>{"e0", "r", "kappa", "initial"});  // and the per-log initial charge
+    // A share that is no number is said per item.
+    list = run("calibrate " + q(kExample) + " --shares 0.2,x -c " + q(kConfig));
+    CHECK(list.exit_code == 2);
+    CHECK_THAT(list.err, Catch::Contains("--shares: expected a number in [0, 1], found x"));
     // -o over a config a scenario names (score, simulate) replaced it with a table or a log.
     const std::string suite = dir + "/suite";
     std::filesystem::create_directories(suite);

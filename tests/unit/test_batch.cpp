@@ -120,6 +120,14 @@ TEST_CASE("manifest paths expand ${VAR} and ${VAR:-default}", "[batch]") {
     CHECK(expand_variables("plain") == "plain");
     CHECK_THROWS_WITH(expand_variables("${BATTSIM_TEST_UNSET}/a"), Catch::Contains("BATTSIM_TEST_UNSET is not set"));
     CHECK_THROWS_WITH(expand_variables("${OPEN"), Catch::Contains("expected '}'"));
+    // A relative value leading a path is the working directory's, as for the shell that set
+    // it; within a path it is left as it is.
+    ::setenv("BATTSIM_TEST_VAR", "../data", 1);
+    CHECK(expand_variables("${BATTSIM_TEST_VAR}/a.csv") ==
+          (std::filesystem::current_path() / "../data").lexically_normal().string() + "/a.csv");
+    CHECK(expand_variables("x/${BATTSIM_TEST_VAR}") == "x/../data");
+    CHECK(expand_variables("${BATTSIM_TEST_UNSET:-../x}/a.csv") == "../x/a.csv");  // the manifest's, as before
+    ::unsetenv("BATTSIM_TEST_VAR");
 }
 
 // ---------------------------------------------------------------------------------------

@@ -759,6 +759,27 @@ TEST_CASE("blackbox_decode log and units in parentheses", "[io]") {
               "axisP[0], vbatLatest (V), amperageLatest (A)");
 }
 
+TEST_CASE("a recognised log's layout short of one column names that column", "[io]") {
+    TempDir t;
+    // A quad without a current sensor: "missing time column" had been said of this header.
+    const std::string bb = t.write("bb.csv", "loopIteration, time (us), vbatLatest (V)\n0, 1000000, 16.42\n");
+    CHECK(read_error(bb) ==
+          bb + ":1: the columns look like a blackbox_decode log (time \"time (us)\", voltage \"vbatLatest (V)\") but "
+               "have no current column (amperageLatest; a craft without a current sensor logs none, and no monitor can "
+               "weigh a pack without its current); battsim needs the pack's time, voltage and current, or name them with "
+               "--time-col, --voltage-col and --current-col; columns found: loopIteration, time (us), vbatLatest (V)");
+    const std::string m100 = t.write("m100.csv", "time,batt_volt,battery_current\n0,24.1,2\n");
+    CHECK_THAT(read_error(m100), Catch::Contains("m100.csv:1: the columns look like a DJI Matrice 100 log (CMU) (time "
+                                                 "\"time\", current \"battery_current\") but have no voltage column "
+                                                 "(battery_voltage); "));
+    const std::string radio = t.write("radio.csv", "Date,Time,RxBt(V),RSSI(dB)\n2024-05-01,10:00:00.000,16.4,-60\n");
+    CHECK_THAT(read_error(radio), Catch::Contains("like an EdgeTX/OpenTX radio log (time \"Time\", voltage \"RxBt(V)\") "
+                                                  "but have no current column (Curr); "));
+    // A header like none of them is still told which names battsim reads.
+    const std::string other = t.write("other.csv", "time,volts\n0,16\n");
+    CHECK_THAT(read_error(other), Catch::Contains("missing time column (expected time_s, time_ms or time_us)"));
+}
+
 TEST_CASE("line reader streams across block boundaries", "[io]") {
     TempDir t;
     // ~6 MB, so lines straddle many 256 KiB blocks; the last line has no newline.

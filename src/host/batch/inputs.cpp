@@ -206,7 +206,11 @@ std::string expand_variables(const std::string& text) {
             throw std::invalid_argument("\"" + text + "\": expected a variable name inside ${...}, found \"" + name + "\"");
         const char* value = std::getenv(name.c_str());
         if (value && *value) {
-            out += value;
+            // A relative directory in the environment means what it means to the shell that set
+            // it, the working directory (BATTSIM_DATA_DIR=../shared/data had been read against
+            // the manifest's directory, and every log was missing).
+            const bool leads = i == 0 && fs::path(value).is_relative();
+            out += leads ? fs::absolute(value).lexically_normal().string() : std::string(value);
         } else if (dflt != std::string::npos) {
             out += inner.substr(dflt + 2);
         } else {

@@ -57,8 +57,9 @@ std::string to_string(const ShardSpec& s);  // "K/N", or "" when inactive
 std::string path_stem(const std::string& path);
 
 // Replaces ${NAME} and ${NAME:-default} with the environment's value (the default when
-// NAME is unset or empty). Throws std::invalid_argument for an unset variable without a
-// default or an unclosed ${.
+// NAME is unset or empty). A relative value leading the text is made absolute against the
+// working directory. Throws std::invalid_argument for an unset variable without a default
+// or an unclosed ${.
 std::string expand_variables(const std::string& text);
 
 }  // namespace host

@@ -736,6 +736,19 @@ private:
         const int clock = find("time");
         const int volts = find_prefixed({"vfas(", "rxbt("});
         const int amps = find_prefixed({"curr("});
+        // A layout that is all there but one column is said as such: the time column had been
+        // called missing when a blackbox log had no current (a craft without a current sensor).
+        const auto partly = [&](const char* layout, std::initializer_list<std::pair<const char*, int>> found,
+                                const char* lacking) {
+            std::string have;
+            for (const auto& f : found) {
+                if (f.second < 0) continue;
+                have += (have.empty() ? "" : ", ") + std::string(f.first) + " \"" + name(f.second) + "\"";
+            }
+            partial_ = std::string("the columns look like ") + layout + " (" + have + ") but have no " + lacking +
+                       "; battsim needs the pack's time, voltage and current, or name them with --time-col, "
+                       "--voltage-col and --current-col";
+        };
         if (date >= 0 && clock >= 0 && volts >= 0 && amps >= 0) {
             date_col_ = date;
             radio_log_ = true;
@@ -747,6 +760,9 @@ private:
                                   "\"; rows without battery telemetry (empty or 0 V) are skipped");
             return m;
         }
+        if (partial_.empty() && date >= 0 && clock >= 0 && (volts >= 0) != (amps >= 0))
+            partly("an EdgeTX/OpenTX radio log", {{"time", clock}, {"voltage", volts}, {"current", amps}},
+                   volts < 0 ? "voltage column (VFAS or RxBt)" : "current column (Curr)");
         // Betaflight / INAV blackbox logs decoded by blackbox_decode.
         const int bb_time = find("time (us)");
         const int bb_volts = find_prefixed({"vbatlatest"});
@@ -759,6 +775,11 @@ private:
                                   m.voltage + "\", current \"" + m.current + "\"");
             return m;
         }
+        if (partial_.empty() && bb_time >= 0 && (bb_volts >= 0) != (bb_amps >= 0))
+            partly("a blackbox_decode log", {{"time", bb_time}, {"voltage", bb_volts}, {"current", bb_amps}},
+                   bb_volts < 0 ? "voltage column (vbatLatest)"
+                                 : "current column (amperageLatest; a craft without a current sensor logs none, and "
+                                   "no monitor can weigh a pack without its current)");
         // The CMU Matrice 100 delivery flights (seconds, volts, amps).
         const int m100_time = find("time");
         const int m100_volts = find("battery_voltage");
@@ -771,6 +792,9 @@ private:
             m.current_scale_to_a = 1.0;
             info_.notes.push_back("columns read as a DJI Matrice 100 log (CMU): time \"" + m.time + "\" in s, voltage \"" +
                                   m.voltage + "\" in V, current \"" + m.current + "\" in A");
+        } else if (partial_.empty() && m100_time >= 0 && (m100_volts >= 0) != (m100_amps >= 0)) {
+            partly("a DJI Matrice 100 log (CMU)", {{"time", m100_time}, {"voltage", m100_volts}, {"current", m100_amps}},
+                   m100_volts < 0 ? "voltage column (battery_voltage)" : "current column (battery_current)");
         }
         return m;
     }
@@ -785,6 +809,8 @@ private:
             time_name = lower_names_[static_cast<std::size_t>(time_col_)];
         } else {
             time_col_ = find_one_of({"time_s", "time_ms", "time_us"}, "time", "--time-col", "columns.time or time_col");
+            if (time_col_ < 0 && !partial_.empty())
+                throw InputError(info_.path, header_line_, 0, partial_ + "; columns found: " + columns_found());
             if (time_col_ < 0) missing("time", "(expected time_s, time_ms or time_us)");
             time_name = lower_names_[static_cast<std::size_t>(time_col_)];
         }
@@ -1057,6 +1083,7 @@ private:
 
     long header_line_ = 0;
     int date_col_ = -1;      // wall-clock logs: the Date column beside the Time column
+    std::string partial_;    // a recognised layout lacking one column, said instead of "missing time column"
     bool radio_log_ = false;
     long long first_day_ = 0;
     bool have_first_day_ = false;
