@@ -142,7 +142,7 @@ TEST_CASE("batch: a log's notes are the table's notes column and said on stderr,
     CHECK(row["status"] == "ok");
     REQUIRE(row["notes"].is_array());
     REQUIRE(row["notes"].size() == 1);
-    CHECK_THAT(row["notes"][0].get<std::string>(), Catch::Contains("file ends inside a BCL message"));
+    CHECK_THAT(row["notes"][0].get<std::string>(), Catch::Contains("file ends inside a message of type BCL"));
     // What replay says of the log, batch says too, each line naming the log.
     const auto replay = run("replay " + q(cut) + config);
     REQUIRE(replay.exit_code == 0);

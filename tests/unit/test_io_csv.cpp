@@ -4,6 +4,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -126,12 +127,43 @@ TEST_CASE("unknown binary content is rejected", "[io]") {
 
 TEST_CASE("a NUL in a text log is refused where it is: line, field and byte offset", "[io]") {
     TempDir t;
-    // A logger that lost power pads its file with zeros; after a UTF-8 byte-order mark the
-    // offset still counts from the file's start.
-    const std::string p = t.write("padded.csv", std::string("\xEF\xBB\xBF" "time_s,voltage_v,current_a\n0,12.5,1\n1,\"1,2\",")
-                                                    + std::string(8, '\0'));
+    // NULs with text after them are damage; after a UTF-8 byte-order mark the offset still
+    // counts from the file's start.
+    const std::string p = t.write("damaged.csv", std::string("\xEF\xBB\xBF" "time_s,voltage_v,current_a\n0,12.5,1\n1,\"1,2\",")
+                                                    + std::string(8, '\0') + "\n2,12.4,1\n");
     CHECK(read_error(p) == p + ":3:3: a NUL byte at byte offset 47: expected text (a CSV log holds no NUL bytes; a "
                                "logger that lost power may have padded its file with them: cut the file before this line)");
+    // Past the bytes format detection peeks at, the reader says the same place.
+    std::string big = "time_s,voltage_v,current_a\n";
+    for (int k = 0; k < 8000; ++k) big += std::to_string(k) + ",12.5,1\n";
+    const std::string q = t.write("damaged-late.csv", big + "8000," + std::string(5, '\0') + "\n8001,12.5,1\n");
+    CHECK(read_error(q) == q + ":8002:2: a NUL byte: expected text (a CSV log holds no NUL bytes; text follows these, so "
+                               "they are not the NUL padding a logger that lost power leaves at the end of its file)");
+}
+
+TEST_CASE("a log padded with NULs to its end (power lost) keeps the rows before them, said", "[io]") {
+    // A helper's sweep: a crash's log had been refused whole when the padding fell in the
+    // bytes format detection peeks at, and read as "last line is cut off (1 of 3 fields)" past them.
+    TempDir t;
+    std::string big = "time_s,voltage_v,current_a\n";
+    for (int k = 0; k < 8000; ++k) big += std::to_string(k) + ",12.5,1\n";
+    for (const std::string& head : {std::string("time_s,voltage_v,current_a\n0,12.5,1\n1,12.4,1\n"), big}) {
+        for (const std::string& tail : {std::string(), std::string("2,12.")}) {
+            const std::string p = t.write("padded.csv", head + tail + std::string(4000, '\0'));
+            SourceInfo info;
+            const auto rows = read_all(p, ReaderOptions{}, &info);
+            CHECK(rows.size() == (head == big ? 8000u : 2u));
+            const std::string ln = std::to_string(head == big ? 8002 : 4);
+            const std::string want = "line " + ln + ": the file ends in NUL bytes (about 4000), the padding a logger that "
+                                     "lost power leaves; the rows before are kept" +
+                                     (tail.empty() ? std::string() : ", the part of line " + ln + " before them skipped");
+            CHECK(std::count(info.notes.begin(), info.notes.end(), want) == 1);
+        }
+    }
+    // A raw predictive-bms log (the dissertation logger's own) the same.
+    const std::string r = t.write("raw.txt", "627,16.57,4.14,4.14,4.14,4.16,47.99,0.39,\n695,16.57,4.14,4.14,4.14,4.16,47.99,0.39,\n" +
+                                                 std::string(512, '\0'));
+    CHECK(read_all(r, ReaderOptions{}).size() == 2);
 }
 
 TEST_CASE("UTF-16 and UTF-32 text is refused as such, with what to save it as", "[io]") {

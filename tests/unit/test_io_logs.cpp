@@ -466,7 +466,7 @@ TEST_CASE("DataFlash binary malformed: file truncated mid-message keeps what cam
     bytes.resize(bytes.size() - 9);
     const auto r = read_all(Kind::DfBinary, d.write("trunc.bin", bytes));
     CHECK(r.samples.size() == 3);
-    CHECK(any_note(r, "file ends inside a CURR message"));
+    CHECK(any_note(r, "file ends inside a message of type CURR"));
 }
 
 namespace {
@@ -757,6 +757,22 @@ TEST_CASE("DataFlash text malformed: time going backwards and wrong field count"
     CHECK(r.samples[0].voltage_v == Approx(16.4));  // float Volt: already volts
     CHECK(any_note(r, "line 4: BAT time 1.500000 s goes back"));
     CHECK(any_note(r, "line 5: BAT has 2 values"));
+}
+
+TEST_CASE("DataFlash text malformed: a garbled row mid-log is located, not only the preamble", "[io-logs]") {
+    // A helper's sweep: the note had named only line 1 (the logger's banner), not the row it
+    // had dropped among the battery rows.
+    LogTempDir d;
+    const std::string t =
+        "ArduCopter V3.2\n"
+        "FMT, 147, 23, BAT, Qfff, TimeUS,Volt,Curr,CurrTot\n"
+        "BAT, 1000000, 16.4, 3.0, 1\n"
+        "B\x01T, 2000000, 16.3, 3.0, 2\n"
+        "BAT, 3000000, 16.2, 3.0, 3\n";
+    const auto r = read_all(Kind::DfText, d.write("garbled.log", t));
+    CHECK(r.samples.size() == 2);
+    CHECK(any_note(r, "2 line(s) are not messages of a type defined by an FMT line (first: line 1 'ArduCopter V3.2'; "
+                      "last: line 4 "));
 }
 
 TEST_CASE("DataFlash text malformed: overlong line", "[io-logs]") {

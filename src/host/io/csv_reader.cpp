@@ -425,10 +425,48 @@ protected:
     }
 
 private:
+    // A NUL at byte `z` of `line`: a logger that lost power leaves its file padded with NULs
+    // to the end, and the rows before them are the flight up to the loss, kept (a crash's log
+    // had been refused whole, or read with the NUL run as one cut-off field). NULs with text
+    // after them are damage inside the log: refused where they start.
+    void end_at_nul_padding(std::string_view line, std::size_t z) {
+        const long ln = lines_.line_number();
+        long field = 1;
+        bool quoted = false;
+        for (std::size_t i = 0; i < z; ++i) {
+            if (line[i] == '"') quoted = !quoted;
+            if (line[i] == ',' && !quoted) ++field;
+        }
+        std::uint64_t nuls = 0;
+        bool padding = true;
+        for (std::string_view rest = line.substr(z);;) {
+            if (rest.find_first_not_of('\0') != std::string_view::npos) {
+                padding = false;
+                break;
+            }
+            nuls += rest.size();
+            if (!lines_.next(rest)) break;
+            ++nuls;  // the line end between two runs (a '\n' byte, or the NUL run broke a line)
+        }
+        if (!padding)
+            throw InputError(info_.path, ln, field,
+                             "a NUL byte: expected text (a CSV log holds no NUL bytes; text follows these, so they "
+                             "are not the NUL padding a logger that lost power leaves at the end of its file)");
+        const bool partial = line.substr(0, z).find_first_not_of(" \t") != std::string_view::npos;
+        info_.notes.push_back("line " + std::to_string(ln) + ": the file ends in NUL bytes (about " + std::to_string(nuls) +
+                              "), the padding a logger that lost power leaves; the rows before are kept" +
+                              (partial ? ", the part of line " + std::to_string(ln) + " before them skipped" : ""));
+        if (partial) cut_line_ = ln;
+    }
+
     bool read_row(core::Sample& out) {
         std::string_view line;
         while (next_nonblank(line)) {
             const long ln = lines_.line_number();
+            if (const std::size_t z = line.find('\0'); z != std::string_view::npos) {
+                end_at_nul_padding(line, z);
+                return false;
+            }
             const bool at_eof_no_newline = !lines_.line_had_newline();
             long bad = 0;
             if (!text::split_fields(line, fields_, bad)) {

@@ -393,8 +393,8 @@ public:
             avail = in_.ensure(len + 2);
             p = in_.data();
             if (avail < len) {
-                notes_.add("truncated", "byte " + std::to_string(off) + ": file ends inside a " + f.name +
-                                            " message (" + std::to_string(avail) + " of " + std::to_string(len) +
+                notes_.add("truncated", "byte " + std::to_string(off) + ": file ends inside a message of type " +
+                                            f.name + " (" + std::to_string(avail) + " of " + std::to_string(len) +
                                             " bytes); the partial message is ignored");
                 in_.consume(avail);
                 return false;
@@ -580,6 +580,9 @@ public:
                 if (!(fields_.v.size() == 1 && name.empty())) {
                     if (other_lines_++ == 0) first_other_ = lineno_;
                     if (other_example_.empty()) other_example_ = escaped_quoted(text, 30);
+                    // The last one too: a garbled row mid-log hides behind a preamble line 1.
+                    last_other_ = lineno_;
+                    last_example_ = escaped_quoted(text, 30);
                 }
                 continue;
             }
@@ -699,7 +702,10 @@ private:
         if (other_lines_ > 0)
             notes_.add("other-lines", std::to_string(other_lines_) +
                                           " line(s) are not messages of a type defined by an FMT line (first: line " +
-                                          std::to_string(first_other_) + " " + other_example_ + "); ignored");
+                                          std::to_string(first_other_) + " " + other_example_ +
+                                          (other_lines_ > 1 ? "; last: line " + std::to_string(last_other_) + " " + last_example_
+                                                            : std::string()) +
+                                          "); ignored");
     }
 
     std::string path_;
@@ -712,7 +718,9 @@ private:
     long lineno_ = 0;
     long other_lines_ = 0;
     long first_other_ = 0;
+    long last_other_ = 0;
     std::string other_example_;
+    std::string last_example_;
     bool finished_ = false;
 };
 

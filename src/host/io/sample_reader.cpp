@@ -192,6 +192,14 @@ LogFormat detect(const std::string& path, const std::vector<unsigned char>& head
 
     std::string_view txt(reinterpret_cast<const char*>(head.data()), head.size());
     if (txt.size() >= 3 && txt.compare(0, 3, "\xEF\xBB\xBF") == 0) txt.remove_prefix(3);
+    const size_t begin = head.size() - txt.size();  // after a UTF-8 byte-order mark
+    // Text up to a NUL run that lasts to the end of what was peeked is a log a logger cut
+    // there when it lost power (it pads its file with NULs): the CSV reader checks the rest.
+    if (const size_t z = txt.find('\0');
+        z != std::string_view::npos && z > 0 && txt.find_first_not_of('\0', z) == std::string_view::npos &&
+        std::none_of(txt.begin(), txt.begin() + static_cast<std::ptrdiff_t>(z),
+                     [](char c) { return odd_byte(static_cast<unsigned char>(c)); }))
+        txt = txt.substr(0, z);
 
     // Split the peeked text into lines (the last one may be incomplete).
     std::vector<std::string_view> lines;
@@ -213,7 +221,6 @@ LogFormat detect(const std::string& path, const std::vector<unsigned char>& head
     if (const size_t nul_in_txt = txt.find('\0'); nul_in_txt != std::string_view::npos) {
         // Said where: text up to a NUL is a text log with a damaged stretch; otherwise the
         // first byte that is no text's is where it stops looking like a log.
-        const size_t begin = head.size() - txt.size();  // after a UTF-8 byte-order mark
         const size_t nul = begin + nul_in_txt;
         size_t odd = begin;
         while (odd < nul && !odd_byte(head[odd])) ++odd;
