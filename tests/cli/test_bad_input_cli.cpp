@@ -216,7 +216,7 @@ TEST_CASE("a charger count far from the monitor's suggests no gain and writes no
     clitest::write_file(pack, clitest::read_file(kConfig));
     const auto r = run("replay " + q(kExample) + " -c " + q(pack) + " --charged-mah 2000000 --config-out " + q(pack));
     CHECK(r.exit_code == 1);
-    CHECK_THAT(r.err, Catch::Contains("check --charged-mah (in mAh)"));
+    CHECK_THAT(r.err, Catch::Contains("check that count (--charged-mah, or a manifest's charged_mah: in mAh)"));
     CHECK(clitest::read_file(pack) == clitest::read_file(kConfig));
     const auto j = clitest::run_json("replay " + q(kExample) + " -c " + q(pack) + " --charged-mah 2000000 --json");
     CHECK(j["charger_check"]["suggested_current_gain"].is_null());
@@ -225,7 +225,7 @@ TEST_CASE("a charger count far from the monitor's suggests no gain and writes no
     // count, had been said first: "the pack was not charged full").
     const auto typo = clitest::run_json("replay " + q(kExample) + " -c " + q(pack) + " --charged-mah 1.5 --json");
     REQUIRE(typo["charger_check"]["notes"].size() == 1);
-    CHECK_THAT(typo["charger_check"]["notes"][0].get<std::string>(), Catch::Contains("check --charged-mah (in mAh)"));
+    CHECK_THAT(typo["charger_check"]["notes"][0].get<std::string>(), Catch::Contains("check that count (--charged-mah, or a manifest's charged_mah: in mAh)"));
     // Within tolerance the brief says no change is needed, not "suggested gain".
     const double counted_mah = j["charger_check"]["counted_ah"].get<double>() * 1000.0;
     const auto fine = run("replay " + q(kExample) + " -c " + q(pack) + " --charged-mah " + std::to_string(counted_mah));

@@ -560,6 +560,24 @@ TEST_CASE("batch: a manifest's charged_mah checks each log's current sensor as r
     CHECK(read_file(dir + "/replay.json") == read_file(dir + "/out/4s-racing-fault-current-gain.json"));
 }
 
+TEST_CASE("batch: a charger check's note (a charged_mah typed in Ah) is in the row's notes and on stderr", "[cli][batch]") {
+    // A helper's sweep: charged_mah 1.5 for 1500 had been said only inside --out's summary.
+    const std::string dir = temp_dir();
+    const std::string log = dir + "/healthy.csv";
+    REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/4s-racing-healthy-b.json") + " -o " + q(log)).exit_code == 0);
+    clitest::write_file(dir + "/fleet.csv", "path,config,charged_mah\n" + log + "," + kSource + "/configs/sim-4s.json,1.5\n");
+    auto r = run("batch -m " + q(dir + "/fleet.csv") + " --estimator joint --format json");
+    INFO(r.err);
+    CHECK(r.exit_code == 0);
+    const auto t = nlohmann::json::parse(r.out);
+    REQUIRE(t["rows"].size() == 1);
+    const std::string want = "charger check: the monitor counted ";
+    bool in_row = false;
+    for (const auto& n : t["rows"][0]["notes"]) in_row = in_row || n.get<std::string>().rfind(want, 0) == 0;
+    CHECK(in_row);
+    CHECK_THAT(r.err, Catch::Contains(log + ": " + want) && Catch::Contains("check that count (--charged-mah, or a manifest's charged_mah: in mAh)"));
+}
+
 TEST_CASE("batch: the monitor table pools a drone's charger checks into one gain, and compares it with the fleet", "[cli][batch]") {
     // Three monitors fly the same four packs (of several kinds): quad-A's current sensor
     // reads 8 % high (the suite's gain fault, on every flight), quad-B's and quad-C's are

@@ -349,11 +349,14 @@ json make_row(const BatchItem& item, const json& summary) {
     // The notes themselves, the reader's then the config's: a count had told a truncated log
     // from a config without an OCV table only through --out's summaries.
     json notes = json::array();
-    for (const char* pointer : {"/input/notes", "/config_notes"}) {
+    // Then the charger check's: a typo'd charged_mah (1.5 for 1500) had been said only in --out's summary.
+    for (const char* pointer : {"/input/notes", "/config_notes", "/charger_check/notes"}) {
         const json list = pick(pointer);
         if (list.is_array())
             for (const json& note : list)
-                if (note.is_string()) notes.push_back(note);
+                if (note.is_string())
+                    notes.push_back(std::string(pointer) == "/charger_check/notes" ? "charger check: " + note.get<std::string>()
+                                                                                 : note.get<std::string>());
     }
     row["notes"] = notes;
     return row;
@@ -437,6 +440,9 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
                     for (const json& note : summary.value("config_notes", json::array()))
                         if (std::find(config_wide.begin(), config_wide.end(), note.get<std::string>()) == config_wide.end())
                             log_notes[k].push_back(item.path + ": " + note.get<std::string>());
+                    if (summary.contains("charger_check"))
+                        for (const json& note : summary["charger_check"].value("notes", json::array()))
+                            log_notes[k].push_back(item.path + ": charger check: " + note.get<std::string>());
                 } catch (const std::bad_alloc&) {
                     // This log alone; the others may still fit (its what() says only "std::bad_alloc").
                     row = make_error_row(item, "out of memory replaying this log");

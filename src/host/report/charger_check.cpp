@@ -48,7 +48,7 @@ json charger_check(const json& summary, const ChargerCheckOptions& o) {
         else
             std::snprintf(pct, sizeof pct, "%.3g", ratio * 100.0);
         notes.push_back("the monitor counted " + std::string(pct) +
-                        " % of the charger's count: check --charged-mah (in mAh) and that the log is of this charge; "
+                        " % of the charger's count: check that count (--charged-mah, or a manifest's charged_mah: in mAh) and that the log is of this charge; "
                         "no gain suggested");
     }
     const bool started_full = initial_ah <= 0.05 * o.charged_ah;
