@@ -5,6 +5,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -60,6 +61,23 @@ TEST_CASE("a value nested 100,000 deep is refused in a few words, not a crash", 
     CHECK(r.exit_code == 3);
     CHECK_THAT(r.err, Catch::Contains("$.logs[0].test: expected a string or a whole number, found an array of 1 value"));
     CHECK(r.err.size() < 400);
+}
+
+TEST_CASE("a JSON document with a NUL byte is refused where it is (the parser had read it as the end)", "[cli]") {
+    // A helper's sweep: a config padded with NULs after its object read as whole, and one of
+    // NULs alone said "unexpected end of input" at 1:1.
+    const std::string dir = clitest::temp_dir();
+    const std::string text = clitest::read_file(kConfig);
+    clitest::write_file(dir + "/padded.json", text + std::string(64, '\0'));
+    auto r = run("replay " + q(kExample) + " -c " + q(dir + "/padded.json"));
+    CHECK(r.exit_code == 4);
+    const long lines = static_cast<long>(std::count(text.begin(), text.end(), '\n'));
+    CHECK_THAT(r.err, Catch::Contains("padded.json:" + std::to_string(lines + 1) + ":1: not valid JSON: a NUL byte at byte offset " +
+                                      std::to_string(text.size()) + ": a JSON document is text and holds none"));
+    clitest::write_file(dir + "/m.json", std::string(16, '\0'));
+    r = run("batch -m " + q(dir + "/m.json"));
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("m.json:1:1: not valid JSON: a NUL byte at byte offset 0"));
 }
 
 TEST_CASE("a config's duplicate key, fractional count or crossed voltages are refused by name", "[cli]") {

@@ -420,6 +420,8 @@ TEST_CASE("batch: manifest and option errors are clear and exit non-zero", "[cli
     CHECK(r.exit_code == 1);
     CHECK(r.err.find("battsim batch: failed: " + dir + "/g1.csv: config: " + dir + "/nope.json: cannot open config file") !=
           std::string::npos);
+    // ... and says which manifest row named it (a helper's sweep: the fleet's file had to be searched).
+    CHECK_THAT(r.err, Catch::Contains("cannot open config file: no such file (named on " + dir + "/c.json:1:41)"));
     // The command line's is one mistake for the whole run.
     r = run("batch " + q(dir + "/g1.csv") + " -c " + q(dir + "/nope.json"));
     CHECK(r.exit_code == 4);

@@ -357,7 +357,8 @@ TEST_CASE("plan: manifest order, settings per file, paths matched to entries", "
     // A manifest's config that cannot be read fails its logs' rows, not the fleet's run.
     const auto bad_items = plan_batch(req);
     REQUIRE(bad_items.size() == 1);
-    CHECK(bad_items[0].error == "config: " + t.path("missing.json") + ": cannot open config file: no such file");
+    CHECK(bad_items[0].error == "config: " + t.path("missing.json") + ": cannot open config file: no such file (named on " +
+                                    badcfg + ":2:16)");
     // The command line's config is one mistake for the whole run.
     req.command_line.config = t.path("missing.json");
     CHECK_THROWS_AS(plan_batch(req), ConfigError);

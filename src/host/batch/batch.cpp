@@ -36,6 +36,7 @@ std::string file_key(const std::string& path) {
 struct Planned {
     ExpandedPath input;
     LogSettings settings;
+    std::string config_named_at;  // "m.csv:2" where the manifest row names its config; "" otherwise
 };
 
 }  // namespace
@@ -79,7 +80,11 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
             }
             LogSettings s = manifest->defaults;
             s.overlay(e.settings);
-            for (const ExpandedPath& f : files) from_manifest.push_back({f, s});
+            // A config that cannot be read fails its rows: each says which manifest row named it.
+            const std::string named_at = e.settings.config ? manifest->path + ":" + std::to_string(e.line) +
+                                                                  (e.column > 0 ? ":" + std::to_string(e.column) : std::string())
+                                                : std::string();
+            for (const ExpandedPath& f : files) from_manifest.push_back({f, s, named_at});
         }
     }
 
@@ -87,15 +92,18 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
     if (manifest && request.paths.empty()) {
         planned = from_manifest;
     } else {
-        std::map<std::string, const LogSettings*> by_file;
+        std::map<std::string, const Planned*> by_file;
         for (const Planned& p : from_manifest) {
-            if (p.input.error.empty()) by_file.emplace(file_key(p.input.path), &p.settings);
+            if (p.input.error.empty()) by_file.emplace(file_key(p.input.path), &p);
         }
         for (const ExpandedPath& f : expand_inputs(request.paths)) {
-            LogSettings s = manifest ? manifest->defaults : LogSettings();
+            Planned p{f, manifest ? manifest->defaults : LogSettings(), std::string()};
             auto it = by_file.find(file_key(f.path));
-            if (it != by_file.end()) s = *it->second;
-            planned.push_back({f, s});
+            if (it != by_file.end()) {
+                p.settings = it->second->settings;
+                p.config_named_at = it->second->config_named_at;
+            }
+            planned.push_back(p);
         }
     }
 
@@ -134,7 +142,10 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
             } else {
                 item.replay.config = default_config();
                 item.replay.config.name = path;  // the row names the config it could not read
-                if (item.error.empty()) item.error = bad_configs[path];
+                if (item.error.empty())
+                    item.error = bad_configs[path] + (p.config_named_at.empty() || request.command_line.config
+                                                          ? std::string()
+                                                          : " (named on " + p.config_named_at + ")");
             }
         } else {
             item.replay.config = builtin_config();  // as replay with no -c

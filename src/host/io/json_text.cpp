@@ -168,6 +168,16 @@ std::string json_brief(const nlohmann::json& j) {
 }
 
 bool parse_json_text(const std::string& text, nlohmann::json& out, JsonSyntaxError& error) {
+    // The parser reads a NUL as the end of the input: a document followed by a NUL run had
+    // read as whole, and one of NULs alone as "unexpected end of input" at 1:1.
+    if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
+        const auto lc = line_column(text, nul);
+        error.line = lc.first;
+        error.column = lc.second;
+        error.what = "a NUL byte at byte offset " + std::to_string(nul) +
+                     ": a JSON document is text and holds none (a copy cut short by a power loss, or not a text file)";
+        return false;
+    }
     try {
         out = nlohmann::json::parse(text);
         const JsonLocator where(text);
