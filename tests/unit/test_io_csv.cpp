@@ -489,6 +489,18 @@ TEST_CASE("bad input: truncated last line is skipped with a note", "[io]") {
         const std::string r = t.write("e.csv", std::string(kRawRow1) + "694,16.57,4.14,4.14,4.14,4.16,173.53,0.44,");
         CHECK(read_all(r, opt).size() == 2);
     }
+    SECTION("a fixed format's decimals lost: the last number cut") {
+        // A helper's sweep: "1.3" for a cut "1.35" had been read as whole.
+        const std::string p = t.write("h.csv", "time_s,voltage_v,current_a\n0,16.50,1.25\n1,16.40,1.30\n2,16.30,1.3");
+        SourceInfo info;
+        CHECK(read_all(p, opt, &info).size() == 2);
+        REQUIRE(info.notes.size() == 1);
+        CHECK(info.notes[0] == "line 4: last line is cut off (no newline at the end, its last number has 1 decimals "
+                               "where every earlier row's has 2); skipped");
+        // Decimals that vary row to row (a writer that drops trailing zeros) prove nothing: kept.
+        const std::string v = t.write("i.csv", "time_s,voltage_v,current_a\n0,16.50,1.25\n1,16.40,1.3\n2,16.30,1.3");
+        CHECK(read_all(v, opt).size() == 3);
+    }
     SECTION("the same short line WITH a newline is an error") {
         const std::string p = t.write("f.csv", std::string(kRawRow1) + kRawRow2 + "760,16.57,4.1\n");
         CHECK(read_error(p) == p + ":3:4: expected 8 fields (9 with a trailing comma): time_ms, bus_voltage_v, "

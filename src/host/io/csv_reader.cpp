@@ -425,6 +425,16 @@ protected:
     }
 
 private:
+    // Digits after the decimal point of a plain number ("2.350" 3, "12" 0); -1 for anything
+    // else (an exponent, a word): a cut number is told by a fixed format's lost decimals.
+    static int decimals_of(std::string_view t) {
+        const std::size_t dot = t.find('.');
+        if (t.find_first_of("eEnN") != std::string_view::npos) return -1;
+        if (dot == std::string_view::npos) return 0;
+        std::size_t end = t.find_last_not_of(" \t\r");
+        return end == std::string_view::npos || end < dot ? 0 : static_cast<int>(end - dot);
+    }
+
     // A NUL at byte `z` of `line`: a logger that lost power leaves its file padded with NULs
     // to the end, and the rows before them are the flight up to the loss, kept (a crash's log
     // had been refused whole, or read with the NUL run as one cut-off field). NULs with text
@@ -496,11 +506,19 @@ private:
                 add_cut_note("it lacks the trailing comma every earlier row has, so its last number may be cut off");
                 return false;
             }
+            const int decimals = decimals_of(fields_[n - 1]);
+            if (at_eof_no_newline && !trailing && rows_ > 1 && last_decimals_ > 0 && decimals < last_decimals_) {
+                add_cut_note("its last number has " + std::to_string(std::max(decimals, 0)) + " decimals where every earlier row's has " +
+                             std::to_string(last_decimals_));
+                return false;
+            }
             cut_field_ = at_eof_no_newline && !trailing ? n : 0;
             const Row row = parse_row(out);
             if (row == Row::CutOff) return false;
             if (row == Row::Skipped) continue;
             if (!trailing) all_trailing_ = false;
+            // Kept while every row writes its last number with the same decimals (a fixed format).
+            last_decimals_ = rows_ == 0 || decimals == last_decimals_ ? decimals : -1;
             if (rows_ > 0) {
                 if (out.time_us < last_time_us_) {
                     throw InputError(info_.path, ln, static_cast<long>(time_field_) + 1,
@@ -560,6 +578,7 @@ private:
     bool has_pending_ = false;
     bool finished_ = false;
     bool all_trailing_ = true;
+    int last_decimals_ = -1;  // decimals of every row's last number so far; -1 when they differ
     long rows_ = 0;
     std::uint64_t last_time_us_ = 0;
     core::Sample last_sample_;
