@@ -495,6 +495,15 @@ TEST_CASE("median and robust spread; the pack table's agreement of final capacit
     CHECK(packs[1]["capacity_scatter_ratio"].is_null());
     const std::string md = render_packs(make_table(rows, rows.size(), "0123456789abcdef", ShardSpec()), TableFormat::Markdown);
     CHECK(md.find("| P | 6 | 1 | 1.200 | 0 | 1.200 | 3.2 |") != std::string::npos);
+    // A trend keeps its three significant figures' zeros: R 0.0200, 0.0201, 0.0202 Ω over three
+    // flights is +0.000100 Ω/flight (a helper read "-0.0001" on the Matrice 100 fleet as rounded).
+    std::vector<json> aging;
+    for (int k = 0; k < 3; ++k)
+        aging.push_back(json{{"pack", "R"}, {"status", "ok"}, {"capacity_mean_ah", 1.2 - 0.01 * k},
+                             {"resistance_mean_ohm", 0.02 + 0.0001 * k}, {"capacity_final_ah", 1.2},
+                             {"capacity_final_sigma_ah", nullptr}});
+    const std::string trend = render_packs(make_table(aging, aging.size(), "0123456789abcdef", ShardSpec()), TableFormat::Markdown);
+    CHECK(trend.find("| R | 3 | 0 | 1.190 | -0.0100 | 1.200 | – | 0.0201 | +0.000100 |") != std::string::npos);
 }
 
 TEST_CASE("the monitor table pools each monitor's charger checks as the median suggested gain", "[batch]") {

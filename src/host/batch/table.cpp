@@ -90,7 +90,7 @@ std::string fixed(const json& v, int decimals) { return fixed_text(v, decimals);
 std::string significant(const json& v, int digits) {
     if (!v.is_number()) return "–";
     char buf[64];
-    std::snprintf(buf, sizeof buf, "%+.*g", digits, v.get<double>());
+    std::snprintf(buf, sizeof buf, "%+#.*g", digits, v.get<double>());  // "#": -0.000100, not -0.0001 (read as rounded to 4 places)
     std::string s = buf;
     if (v.get<double>() == 0.0) s = "0";
     return s;
