@@ -33,7 +33,7 @@ struct WarningConfig {
 // estimators (a collapsing balance lead must not be blamed on a cell).
 struct SensorLimits {
     float max_pack_voltage_v = 21.0f;
-    float min_pack_voltage_v = 1.0f;
+    float min_pack_voltage_v = 1.0f;  // any pack's; the host reads 2.0 V per cell where a config is silent
     float max_current_a = 400.0f;
     float min_current_a = -50.0f;
     float min_cell_voltage_v = 0.5f;
