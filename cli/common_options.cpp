@@ -96,6 +96,9 @@ void add_input_options(CLI::App& sub, InputArgs& a) {
     sub.add_option("--temperature-col", a.temperature_col, "CSV: name of the temperature column (degC)");
     sub.add_option("--estimator", a.estimator, "Estimator: reference (the dissertation's) or joint (the newer one); default from the config");
     sub.add_flag("--negative-discharge", a.negative_discharge, "CSV: the log's current is negative while discharging");
+    sub.add_flag("--no-temperature", a.no_temperature,
+                 "Leave the log's temperature out (any format): for a config whose temperature terms its self-heating "
+                 "state drives (battery.extensions.thermal), fitted on logs without one");
     sub.add_option("--average-ms", a.average_ms,
                    "Average the samples over windows this long (ms) before the monitor sees them: for logs sampled "
                    "faster than the joint estimator's resistance lags reach (blackbox logs)")
@@ -172,6 +175,7 @@ host::LogSettingStrings setting_strings(const InputArgs& a) {
     s.temperature_col = a.temperature_col;
     s.cell_cols = a.cell_cols;
     s.negative_discharge = a.negative_discharge;
+    s.no_temperature = a.no_temperature;
     s.average_ms = a.average_ms;
     s.estimator = a.estimator;
     return s;

@@ -25,6 +25,7 @@ struct InputArgs {
     std::string time_unit, current_unit;
     std::vector<std::string> cell_cols;
     bool negative_discharge = false;
+    bool no_temperature = false;
     double average_ms = 0.0;  // 0 = off
     std::string estimator;  // empty = as the config says
 };

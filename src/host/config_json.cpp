@@ -528,8 +528,30 @@ std::string missing_temperature_note(const core::MonitorConfig& config, bool log
            "(--temperature-col NAME), or a config without the temperature terms";
 }
 
+namespace {
+const char* const kSelfHeatingStart = "the config's temperature terms are driven by its self-heating state";
+bool temperature_terms(const core::TemperatureDependence& t) {
+    return t.enabled && (t.resistance_activation_k != 0.0f || t.polarisation_activation_k != 0.0f ||
+                         t.capacity_ah_per_c != 0.0f || t.e0_v_per_c != 0.0f);
+}
+}  // namespace
+
+std::string measured_temperature_note(const core::MonitorConfig& config, bool log_has_temperature) {
+    const core::LumpedThermal& th = config.extensions.thermal;
+    if (!log_has_temperature || !th.enabled || !temperature_terms(config.extensions.temperature)) return std::string();
+    char buf[96];
+    std::snprintf(buf, sizeof buf, " (battery.extensions.thermal, from %.3g degC)", static_cast<double>(th.ambient_c));
+    return std::string(kSelfHeatingStart) + buf +
+           ", as a fit on logs without a temperature makes them, but this log's measured temperature replaces that "
+           "state, and terms fitted to the state's rise read the measurement's distance from its ambient as a change "
+           "of temperature (flight 30's fitted config, given the flight's 7 degC, ran 9.85 V off the measurement "
+           "instead of 0.009 V): read the log with --no-temperature (a manifest's \"no_temperature\"), or use a "
+           "config fitted on logs with a temperature";
+}
+
 bool is_log_note(const std::string& note) {
-    return is_other_pack_note(note) || note.compare(0, std::strlen(kNoTemperatureStart), kNoTemperatureStart) == 0;
+    return is_other_pack_note(note) || note.compare(0, std::strlen(kNoTemperatureStart), kNoTemperatureStart) == 0 ||
+           note.compare(0, std::strlen(kSelfHeatingStart), kSelfHeatingStart) == 0;
 }
 
 std::vector<std::string> config_notes(const core::MonitorConfig& config, const LogFacts& log) {
@@ -595,7 +617,10 @@ std::vector<std::string> config_notes(const core::MonitorConfig& config, const L
     // Short of the capacity the same term runs away already: Matrice 100 flight 41, read as
     // 3.93 Ah drawn of 4.65 before take-off, ran 1 V per cell off at 98 % and 105 V off after
     // the landing, 6.3 V on average, with no note (57 likewise).
-    if (!std::isfinite(log.capacity_passed_s) && std::isfinite(log.pole_runaway_s)) {
+    // A measured temperature driving terms fitted to a self-heating state runs the model off
+    // too, and that note (below) names the cause: this one would point at the capacity.
+    const bool self_heating_misread = log.temperature_samples > 0 && !measured_temperature_note(config, true).empty();
+    if (!std::isfinite(log.capacity_passed_s) && std::isfinite(log.pole_runaway_s) && !self_heating_misread) {
         char buf[240];
         std::snprintf(buf, sizeof buf,
                       "the config's model ran over 1 V per cell off the measurement %.1f s into the log, with the charge "
@@ -607,6 +632,10 @@ std::vector<std::string> config_notes(const core::MonitorConfig& config, const L
     }
     if (log.temperature_samples == 0) {
         const std::string note = missing_temperature_note(config, false);
+        if (!note.empty()) notes.push_back(note);
+    }
+    if (log.temperature_samples > 0) {
+        const std::string note = measured_temperature_note(config, true);
         if (!note.empty()) notes.push_back(note);
     }
     // Without a table the joint estimator reads the state of charge off the Tremblay curve,

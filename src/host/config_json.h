@@ -72,8 +72,14 @@ bool is_other_pack_note(const std::string& note);
 // carries none: the model then runs at its reference temperature throughout, and a cold
 // pack reads as a warm one. Empty when that is not so.
 std::string missing_temperature_note(const core::MonitorConfig& config, bool log_has_temperature);
+// The note config_notes makes when the config's temperature terms are driven by its lumped
+// thermal state (battery.extensions.thermal: a fit on logs without a temperature) and the log
+// carries one, which replaces that state: terms fitted to the state's rise from its ambient
+// read the measurement's distance from that ambient as a change of temperature. Empty when
+// that is not so.
+std::string measured_temperature_note(const core::MonitorConfig& config, bool log_has_temperature);
 // Whether a note of config_notes is about the log read with the config, not the config alone:
-// is_other_pack_note, or missing_temperature_note's.
+// is_other_pack_note, missing_temperature_note's or measured_temperature_note's.
 bool is_log_note(const std::string& note);
 
 }  // namespace host

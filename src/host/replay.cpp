@@ -255,8 +255,11 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
     }
     // Said only when no note above explains it already (a config for another pack, a count
     // past the capacity: both put the model volts off).
-    const bool explained = std::isfinite(facts.capacity_passed_s) || std::isfinite(facts.pole_runaway_s) ||
-                           std::any_of(notes.begin(), notes.end(), [](const std::string& n) { return is_other_pack_note(n); });
+    // (... or a measured temperature driving terms fitted to a self-heating state.)
+    const bool explained =
+        std::isfinite(facts.capacity_passed_s) || std::isfinite(facts.pole_runaway_s) ||
+        std::any_of(notes.begin(), notes.end(), [](const std::string& n) { return is_other_pack_note(n); }) ||
+        (facts.temperature_samples > 0 && !measured_temperature_note(options.config.monitor, true).empty());
     if (body["flight"].is_object() && !explained) {
         // A config whose model is volts off every reading (a typed extension setting an order of
         // magnitude out: resistance_activation_k −1e5 put flight 29's model 78 V off) had

@@ -409,7 +409,7 @@ TEST_CASE("batch: manifest and option errors are clear and exit non-zero", "[cli
     auto r = run("batch --manifest " + q(dir + "/m.json"));
     CHECK(r.exit_code == 3);
     CHECK(r.err == "battsim batch: " + dir + "/m.json:4:24: $.logs[0].pakc: unknown key; expected one of average_ms, charged_mah, columns, config, "
-                                               "current_source, estimator, format, monitor, pack, path, test\n");
+                                               "current_source, estimator, format, monitor, no_temperature, pack, path, test\n");
     clitest::write_file(dir + "/m.csv", "path,pack\ng1.csv,A,extra\n");
     r = run("batch --manifest " + q(dir + "/m.csv"));
     CHECK(r.exit_code == 3);

@@ -433,6 +433,54 @@ TEST_CASE("replay reads through a temperature sensor's dropouts and says how man
     CHECK_THAT(r.err, Catch::Contains(dir + "/bad.csv:3:2: expected a finite number, found \"nan\""));
 }
 
+TEST_CASE("a config fitted with self-heating, given a log's measured temperature, says so; --no-temperature reads it as fitted", "[cli]") {
+    // A helper's walkthrough: flight 30's fitted config (self-heating from 25 degC: its
+    // activations carry the scale of a thermal state, not of kelvin) on the flight with its
+    // 7 degC ambient as a column ran 9.85 V off with only a note about the capacity.
+    const std::string dir = clitest::temp_dir();
+    std::string log = "time_ms,voltage_v,current_ma,temperature_c\n";
+    std::istringstream raw(clitest::read_file(kSource + "/logs/example-4s.csv"));
+    std::string line;
+    while (std::getline(raw, line)) {
+        std::vector<std::string> f;
+        std::stringstream fields(line);
+        for (std::string x; std::getline(fields, x, ',');) f.push_back(x);
+        if (f.size() >= 7) log += f[0] + "," + f[1] + "," + f[6] + ",7.0\n";
+    }
+    clitest::write_file(dir + "/t.csv", log);
+    const std::string fitted = q(kSource + "/configs/fitted/pbms-flight30-cnhl5.json");
+    auto r = run("replay " + q(dir + "/t.csv") + " -c " + fitted + " --json");
+    REQUIRE(r.exit_code == 0);
+    auto s = nlohmann::json::parse(r.out);
+    CHECK(s["input"]["has_temperature"] == true);
+    const double measured_off_v = s["flight"]["voltage_error_v"]["model"]["mean_abs"].get<double>();
+    CHECK(measured_off_v > 5.0);
+    // One note, naming the cause: neither the capacity nor "a model that describes no pack".
+    REQUIRE(s["config_notes"].size() == 1);
+    CHECK_THAT(s["config_notes"][0].get<std::string>(),
+               Catch::StartsWith("the config's temperature terms are driven by its self-heating state "
+                                 "(battery.extensions.thermal, from 25 degC)") &&
+                   Catch::Contains("read the log with --no-temperature"));
+    CHECK_THAT(r.err, Catch::Contains("note: the config's temperature terms are driven by its self-heating state"));
+    r = run("replay " + q(dir + "/t.csv") + " -c " + fitted + " --json --no-temperature");
+    REQUIRE(r.exit_code == 0);
+    s = nlohmann::json::parse(r.out);
+    CHECK(s["input"]["has_temperature"] == false);
+    CHECK(s["input"]["notes"] == nlohmann::json::array({"the log's temperature is left out (--no-temperature; a manifest's \"no_temperature\")"}));
+    CHECK(s["config_notes"].is_null());
+    CHECK(s["flight"]["voltage_error_v"]["model"]["mean_abs"].get<double>() < 0.5);
+    // The same flight without the column: the same numbers as with it left out.
+    std::string bare;
+    std::istringstream with(log);
+    while (std::getline(with, line)) bare += line.substr(0, line.rfind(',')) + "\n";
+    clitest::write_file(dir + "/bare.csv", bare);
+    const auto b = nlohmann::json::parse(run("replay " + q(dir + "/bare.csv") + " -c " + fitted + " --json").out);
+    CHECK(b["flight"] == s["flight"]);
+    // fit says it too, as replay does.
+    r = run("fit " + q(dir + "/t.csv") + " -c " + fitted + " --params none --initial monitor -o " + q(dir + "/f.json"));
+    CHECK_THAT(r.err, Catch::Contains("note: " + dir + "/t.csv: the config's temperature terms are driven by its self-heating state"));
+}
+
 TEST_CASE("replay reads a radio's telemetry log and says what its 0.1 V steps and a fast log cost", "[cli]") {
     const std::string dir = clitest::temp_dir();
     const std::string radio = dir + "/radio.csv";

@@ -141,7 +141,7 @@ TEST_CASE("JSON manifest: defaults, entries and relative paths", "[batch]") {
   "defaults": {"config": "cfg.json", "pack": "A", "monitor": "quad-1", "format": "csv",
                "columns": {"time": "t", "time_unit": "ms", "voltage": "v", "current": "i", "current_unit": "mA"}},
   "logs": [
-    {"path": "1.csv", "test": 7},
+    {"path": "1.csv", "test": 7, "no_temperature": true},
     {"path": "/abs/2.csv", "pack": "B", "monitor": 2, "columns": {"current": "amps", "current_unit": "A", "cells": ["c1", "c2"],
                                                     "negative_is_discharge": true}}
   ]
@@ -166,6 +166,10 @@ TEST_CASE("JSON manifest: defaults, entries and relative paths", "[batch]") {
     CHECK(r.columns.current_scale_to_a == 1.0);
     CHECK(r.columns.cells == std::vector<std::string>{"c1", "c2"});
     CHECK(r.columns.current_negative_is_discharge);
+    CHECK_FALSE(r.ignore_temperature);
+    LogSettings first = man.defaults;
+    first.overlay(man.logs[0].settings);
+    CHECK(first.reader_options().ignore_temperature);
 }
 
 TEST_CASE("JSON manifest errors name the line, column and what was expected", "[batch]") {
@@ -176,7 +180,7 @@ TEST_CASE("JSON manifest errors name the line, column and what was expected", "[
     };
     const std::string p = t.path("bad.json");
     CHECK(err("{\n  \"schema\": \"battsim.manifest\",\n  \"logs\": [\n    {\"path\": \"a.csv\", \"pak\": \"A\"}\n  ]\n}") ==
-          p + ":4:23: $.logs[0].pak: unknown key; expected one of average_ms, charged_mah, columns, config, current_source, estimator, format, monitor, pack, path, test");
+          p + ":4:23: $.logs[0].pak: unknown key; expected one of average_ms, charged_mah, columns, config, current_source, estimator, format, monitor, no_temperature, pack, path, test");
     CHECK(err("{\"schema\": \"battsim.manifest\",\n \"logs\": [{\"path\": 3}]}") ==
           p + ":2:20: $.logs[0].path: expected a string, found 3");
     CHECK(err("{\"schema\": \"battsim.manifest\", \"logs\": [{\"test\": \"x\"}]}") ==
@@ -250,13 +254,16 @@ TEST_CASE("CSV manifest: header, comments, quoting and errors with line and fiel
     const std::string p = t.path("bad.csv");
     CHECK(err("path,pak\n") == p + ":1:2: unknown column \"pak\" in the header; expected some of path, test, pack, config, "
                                    "estimator, format, current_source, time_col, time_unit, voltage_col, current_col, current_unit, "
-                                   "cell_cols, temperature_col, negative_discharge, charged_mah, monitor, average_ms");
+                                   "cell_cols, temperature_col, negative_discharge, charged_mah, monitor, average_ms, "
+                                   "no_temperature");
     CHECK(err("pack,test\nA,1\n") == p + ":1: expected a header row with a \"path\" column (the first non-comment line)");
     CHECK(err("path,charged_mah\na.csv,900mAh\n") == p + ":2:2: charged_mah: expected a positive number of mAh, found \"900mAh\"");
     CHECK(err("path,charged_mah\na.csv,0\n") == p + ":2:2: charged_mah: expected a positive number of mAh, found \"0\"");
     CHECK(*load_manifest(t.write("c.csv", "path,charged_mah\na.csv,1043.5\n")).logs[0].settings.charged_mah == 1043.5);
     CHECK(*load_manifest(t.write("d.csv", "path,monitor\na.csv,quad 7\n")).logs[0].settings.monitor == "quad 7");
     CHECK(*load_manifest(t.write("e.csv", "path,average_ms\na.csv,8\n")).logs[0].settings.average_ms == 8.0);
+    CHECK(load_manifest(t.write("g.csv", "path,no_temperature\na.csv,true\n")).logs[0].settings.reader_options().ignore_temperature);
+    CHECK(err("path,no_temperature\na.csv,7\n") == p + ":2:2: no_temperature: expected true or false, found \"7\"");
     // A JSON manifest named neither .json nor .csv, with an editor's byte-order mark: still JSON.
     CHECK(load_manifest(t.write("f.txt", "\xEF\xBB\xBF{\"schema\": \"battsim.manifest\", \"logs\": [{\"path\": \"a.csv\"}]}"))
               .logs.size() == 1);

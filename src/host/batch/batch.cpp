@@ -231,6 +231,7 @@ std::string inputs_digest(const std::vector<BatchItem>& items) {
         mix(c.temperature);
         mix(std::to_string(c.cells.size()));
         for (const std::string& cell : c.cells) mix(cell);
+        if (r.ignore_temperature) mix("no temperature");  // lists without it keep their digest
     }
     char buf[17];
     std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));

@@ -40,6 +40,7 @@ void LogSettings::overlay(const LogSettings& t) {
     take(current_scale_to_a, t.current_scale_to_a);
     take(cell_cols, t.cell_cols);
     take(negative_discharge, t.negative_discharge);
+    take(no_temperature, t.no_temperature);
     take(average_ms, t.average_ms);
     take(charged_mah, t.charged_mah);
 }
@@ -55,6 +56,7 @@ ReaderOptions LogSettings::reader_options(ReaderOptions r) const {
     if (current_scale_to_a) r.columns.current_scale_to_a = *current_scale_to_a;
     if (cell_cols) r.columns.cells = *cell_cols;
     if (negative_discharge) r.columns.current_negative_is_discharge = *negative_discharge;
+    if (no_temperature) r.ignore_temperature = *no_temperature;
     if (average_ms) r.average_us = static_cast<std::uint64_t>(std::llround(*average_ms * 1000.0));
     return r;
 }
@@ -115,6 +117,7 @@ LogSettings settings_from_strings(const LogSettingStrings& a) {
         s.current_scale_to_a = with("--current-unit", [&] { return current_unit_scale(a.current_unit); });
     if (!a.cell_cols.empty()) s.cell_cols = a.cell_cols;
     if (a.negative_discharge) s.negative_discharge = true;
+    if (a.no_temperature) s.no_temperature = true;
     if (a.average_ms != 0.0) s.average_ms = with("--average-ms", [&] { return average_window_ms(a.average_ms); });
     return s;
 }
@@ -197,7 +200,7 @@ public:
     LogSettings settings(const json& obj, const std::string& where, bool entry, const std::string& log_base,
                          std::string* log_path) const {
         std::set<std::string> allowed = {"pack",   "monitor",        "config",  "estimator",
-                                         "format", "current_source", "columns", "average_ms"};
+                                         "format", "current_source", "columns", "average_ms", "no_temperature"};
         // A test label and a charger's count belong to one log: in the defaults they would
         // label every log alike.
         if (entry) allowed.insert({"path", "test", "charged_mah"});
@@ -235,6 +238,11 @@ public:
             } catch (const std::invalid_argument& e) {
                 fail(where + ".average_ms", e.what());
             }
+        }
+        if (obj.contains("no_temperature")) {
+            if (!obj["no_temperature"].is_boolean())
+                fail(where + ".no_temperature", "expected true or false, found " + json_brief(obj["no_temperature"]));
+            s.no_temperature = obj["no_temperature"].get<bool>();
         }
         if (obj.contains("estimator")) {
             try {
@@ -398,7 +406,7 @@ Manifest parse_manifest_csv(const std::string& text, const std::string& path) {
     static const std::vector<std::string> kColumns = {
         "path",     "test",        "pack",         "config",    "estimator",   "format",          "current_source", "time_col",
         "time_unit", "voltage_col", "current_col", "current_unit", "cell_cols", "temperature_col", "negative_discharge",
-        "charged_mah", "monitor", "average_ms"};
+        "charged_mah", "monitor", "average_ms", "no_temperature"};
     Manifest m;
     m.path = path;
     const std::string dir = manifest_dir(path);
@@ -484,6 +492,10 @@ Manifest parse_manifest_csv(const std::string& text, const std::string& path) {
                     bool b = false;
                     if (!parse_bool(v, b)) throw std::invalid_argument("expected true or false, found \"" + v + "\"");
                     s.negative_discharge = b;
+                } else if (name == "no_temperature") {
+                    bool b = false;
+                    if (!parse_bool(v, b)) throw std::invalid_argument("expected true or false, found \"" + v + "\"");
+                    s.no_temperature = b;
                 } else if (name == "average_ms") {
                     double ms = 0.0;
                     if (!parse_finite_number(v, &ms)) throw std::invalid_argument("expected a number of ms, found \"" + v + "\"");

@@ -33,6 +33,7 @@ struct LogSettings {
     std::optional<double> time_scale_to_s, current_scale_to_a;
     std::optional<std::vector<std::string>> cell_cols;
     std::optional<bool> negative_discharge;
+    std::optional<bool> no_temperature;  // ReaderOptions::ignore_temperature
     std::optional<double> average_ms;  // ReaderOptions::average_us, in ms
     // What the charger put back after this log (a single log's entry only): the current
     // sensor is checked against it (`charger_check` in the summary).
@@ -64,6 +65,7 @@ struct LogSettingStrings {
     std::string time_col, time_unit, voltage_col, current_col, current_unit, temperature_col;
     std::vector<std::string> cell_cols;
     bool negative_discharge = false;  // a flag: only "given" when set
+    bool no_temperature = false;      // a flag: only "given" when set
     double average_ms = 0.0;          // 0 = not given
 };
 // Validated like manifest fields; throws std::invalid_argument naming the option.

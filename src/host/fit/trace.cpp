@@ -60,8 +60,9 @@ Trace load_trace(const std::string& path, const ReaderOptions& reader, const Loa
     t.notes = log_notes(summary);
     // Replayed without the extensions (above), so the config's own temperature terms are
     // judged here.
-    const std::string temperature = missing_temperature_note(config.monitor, t.has_temperature);
-    if (!temperature.empty()) t.notes.push_back(temperature);
+    for (const std::string& temperature : {missing_temperature_note(config.monitor, t.has_temperature),
+                                           measured_temperature_note(config.monitor, t.has_temperature)})
+        if (!temperature.empty()) t.notes.push_back(temperature);
     // The summary's flight window: initialised valid samples from the first flying sample
     // to the last flying one.
     long first_flying = -1, last_flying = -1;

@@ -449,6 +449,32 @@ private:
     mutable SourceInfo info_;
 };
 
+// The log's temperature left out (ReaderOptions::ignore_temperature), said when it had one.
+class NoTemperatureReader final : public SampleReader {
+public:
+    explicit NoTemperatureReader(std::unique_ptr<SampleReader> inner) : inner_(std::move(inner)) {}
+
+    bool next(core::Sample& out) override {
+        if (!inner_->next(out)) return false;
+        if (out.has_temperature) ++dropped_;
+        out.has_temperature = false;
+        out.temperature_c = 0.0f;
+        return true;
+    }
+    const SourceInfo& info() const override {
+        info_ = inner_->info();
+        if (info_.has_temperature || dropped_ > 0)
+            info_.notes.push_back("the log's temperature is left out (--no-temperature; a manifest's \"no_temperature\")");
+        info_.has_temperature = false;
+        return info_;
+    }
+
+private:
+    std::unique_ptr<SampleReader> inner_;
+    long dropped_ = 0;
+    mutable SourceInfo info_;
+};
+
 std::unique_ptr<SampleReader> open_format(const std::string& path, const ReaderOptions& options) {
     const std::vector<unsigned char> head = peek(path);
     LogFormat format = options.format;
@@ -495,6 +521,7 @@ std::unique_ptr<SampleReader> open_format(const std::string& path, const ReaderO
 
 std::unique_ptr<SampleReader> open_reader(const std::string& path, const ReaderOptions& options) {
     std::unique_ptr<SampleReader> reader = open_format(path, options);
+    if (options.ignore_temperature) reader = std::unique_ptr<SampleReader>(new NoTemperatureReader(std::move(reader)));
     if (options.clock_step_capacity_ah > 0.0)
         reader = std::unique_ptr<SampleReader>(new ClockStepReader(std::move(reader), options.clock_step_capacity_ah));
     if (options.average_us == 0) return reader;

@@ -92,6 +92,9 @@ struct ReaderOptions {
     // more than this is a step of the clock (a radio's RTC set by GPS, two files joined), not
     // time that passed: the samples after it are moved back to follow on (a note says so).
     double clock_step_capacity_ah = 0.0;
+    // The log's temperature left out (every format): a config whose temperature terms its
+    // self-heating state drives was fitted to that state's rise, not to a measurement.
+    bool ignore_temperature = false;
 };
 
 // What the reader found out about the log, for summaries and the README tables.
