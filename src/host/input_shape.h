@@ -38,6 +38,10 @@ public:
     InputShape(bool negated, double ground_a, const ShapePack& pack = ShapePack())
         : negated_(negated), ground_a_(ground_a), pack_(pack) {}
     void add(const core::Sample& s);
+    // A flight (or a discharge) shorter than this is no load a pack was flown on: a clock read
+    // in too fine a unit (a CMU flight's 200 s as milliseconds "flew" 0.2 s with a config
+    // that confirms a take-off at once). The callers pass such a one as not flown.
+    static constexpr double kShortestFlightS = 1.0;
     // Whether the joint estimator's resistance can pair this log's samples:
     struct Lags {
         double fastest_s = 0.0;  // the shortest median interval at which its lags are reached (0: no limit)

@@ -183,7 +183,8 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
         lags.hover_min_step_a = jc.hover_resistance.min_step_a;
     }
     const bool merged = info.averaged_in > info.averaged_out + info.averaged_out / 5;  // over 1.2 a window
-    for (const std::string& n : shape.notes(flew, options.config.monitor.flying.min_flying_current_a, lags,
+    const bool flew_at_all = flew && body["flight"].value("duration_s", 0.0) >= InputShape::kShortestFlightS;
+    for (const std::string& n : shape.notes(flew_at_all, options.config.monitor.flying.min_flying_current_a, lags,
                                               static_cast<double>(options.reader.average_us) * 1e-6,
                                               info.format == LogFormat::Csv, merged,
                                               info.format == LogFormat::Csv && info.current_scale_to_a > 0.0 &&

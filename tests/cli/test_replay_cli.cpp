@@ -407,6 +407,30 @@ TEST_CASE("replay notes a current of the other sign and a time column in millise
                    "(nanoseconds), convert it to microseconds; if it is not the log's clock, give --time-col NAME");
 }
 
+TEST_CASE("a flight in seconds read as milliseconds is said by fit and discharge too, whatever the config's take-off confirm", "[cli][data]") {
+    // A helper's walkthrough: the CMU flight's 200 s read as 0.2 s "flew" with its fitted
+    // config (take-off confirmed at once), and fit said nothing of the unit (MAE 9.16 V);
+    // discharge never did.
+    const std::string log = q(kData + "/cmu-m100/flights/1.csv");
+    const std::string columns =
+        " --time-col time --time-unit ms --voltage-col battery_voltage --current-col battery_current --current-unit A";
+    const std::string advice = "the samples are 0.15 ms apart (median) and the log spans 0.201 s: if the time column "
+                               "counts seconds, give --time-unit s";
+    const std::string dir = clitest::temp_dir();
+    auto r = run("fit " + log + " -c " + q(kSource + "/configs/fitted/cmu-m100-flight1.json") + columns +
+                 " --params none -o " + q(dir + "/f.json"));
+    CHECK_THAT(r.err, Catch::Contains(advice));
+    r = run("replay " + log + " -c " + q(kSource + "/configs/fitted/cmu-m100-flight1.json") + columns);
+    CHECK_THAT(r.err, Catch::Contains(advice));
+    r = run("discharge " + log + " -c " + q(kSource + "/configs/dji-tb47d-6s.json") + columns);
+    CHECK_THAT(r.err, Catch::Contains(advice));
+    // Read in its own unit, no such note.
+    r = run("replay " + log + " -c " + q(kSource + "/configs/fitted/cmu-m100-flight1.json") +
+            " --time-col time --time-unit s --voltage-col battery_voltage --current-col battery_current --current-unit A");
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, !Catch::Contains("--time-unit"));
+}
+
 TEST_CASE("replay reads through a temperature sensor's dropouts and says how many rows had none", "[cli]") {
     // The flight of the test above with a temperature column that reads "nan" or nothing on
     // some rows: replayed, not refused; the other rows' temperatures are counted.

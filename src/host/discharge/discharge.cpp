@@ -255,7 +255,8 @@ DischargeResult process_discharge(const std::string& path, const DischargeOption
     }
     const bool merged = r.info.averaged_in > r.info.averaged_out + r.info.averaged_out / 5;  // as replay_log
     for (const std::string& note :
-         shape.notes(r.mean_current_a >= o.loaded_current_a, o.loaded_current_a, InputShape::Lags{},
+         shape.notes(r.mean_current_a >= o.loaded_current_a && r.duration_s >= InputShape::kShortestFlightS,
+                     o.loaded_current_a, InputShape::Lags{},
                      static_cast<double>(o.reader.average_us) * 1e-6, r.info.format == LogFormat::Csv, merged, false,
                      ColumnUnits{r.info.time_scale_to_s, r.info.time_column, r.info.current_scale_to_a}))
         r.info.notes.push_back(note);
