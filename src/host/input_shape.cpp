@@ -235,7 +235,8 @@ std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const La
                       min_temperature_c_, max_temperature_c_, kKelvinMinC);
         out.push_back(buf);
     }
-    if (coarse_ && varied_ && voltages_ >= kCoarseMinSamples) {
+    // Not of a pack read a thousand times high: whole millivolts are tenths too.
+    if (coarse_ && varied_ && voltages_ >= kCoarseMinSamples && first_v_ < kHighestPackV) {
         out.push_back("the pack voltage moves in 0.1 V steps, as a radio's telemetry carries it: the capacity, "
                       "resistance and short-flight warnings read from it are rougher than from the monitor's own "
                       "sensors (README, \"Radio telemetry logs\")");

@@ -67,6 +67,7 @@ private:
     static constexpr double kFastestIntervalS = 1e-3;  // a flight controller's blackbox at most
     static constexpr double kShortestSpanS = 10.0;
     static constexpr long kCoarseMinSamples = 20;
+    static constexpr float kHighestPackV = 200.0f;  // no drone pack's (a 48S pack rests under 202 V)
     static constexpr size_t kMaxIntervals = 65536;
     static constexpr double kLongestGapS = 60.0;  // and kGapMedians of the usual interval
     static constexpr double kGapMedians = 100.0;

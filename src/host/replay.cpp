@@ -62,6 +62,11 @@ std::string kept_out_text(const nlohmann::json& summary) {
         out += "; " + fixed_text(span_s, 1) + " s between valid samples, its charge counted at the current after it";
     // A current column in mA read as A reads a thousand times high: the unit before the pack.
     if (rejected.contains("current_high")) out += "; a current in mA read as amperes (give --current-unit mA)?";
+    // Likewise a voltage in mV, every reading of it (a CSV column named plainly "voltage").
+    const nlohmann::json high_v = rejected.value("pack_voltage_high", nlohmann::json());
+    if (high_v.is_number_unsigned() && high_v == summary["samples"].value("total", nlohmann::json()) &&
+        summary["input"].value("format", std::string()) == "csv")
+        out += "; a voltage in mV read as volts (name the column voltage_mv, or \"voltage (mV)\")?";
     out += pack_kept_out ? "; does the config match this pack?" : "; a loose balance lead, or a config for another cell count?";
     return out;
 }

@@ -63,6 +63,27 @@ TEST_CASE("a value nested 100,000 deep is refused in a few words, not a crash", 
     CHECK(r.err.size() < 400);
 }
 
+TEST_CASE("a voltage column in millivolts with a plain name is asked about, not read as a radio's 0.1 V steps", "[cli]") {
+    // A helper's walkthrough: "voltage" holding mV read as 16,500 V "in 0.1 V steps, as a
+    // radio's telemetry", with nothing said of the unit.
+    const std::string dir = clitest::temp_dir();
+    std::string log = "time_s,voltage,current_a\n";
+    for (int k = 0; k < 100; ++k) log += std::to_string(0.1 * k) + "," + std::to_string(16500 - k) + ",0.3\n";
+    clitest::write_file(dir + "/mv.csv", log);
+    auto r = run("replay " + q(dir + "/mv.csv") + " --voltage-col voltage");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("100 pack_voltage_high (sensor.max_pack_voltage_v); a voltage in mV read as volts "
+                                      "(name the column voltage_mv, or \"voltage (mV)\")?"));
+    CHECK_THAT(r.err, !Catch::Contains("0.1 V steps"));
+    // Named so, it reads.
+    std::string named = log;
+    named.replace(0, named.find('\n'), "time_s,voltage_mv,current_a");
+    clitest::write_file(dir + "/named.csv", named);
+    r = run("replay " + q(dir + "/named.csv"));
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, !Catch::Contains("pack_voltage_high"));
+}
+
 TEST_CASE("a JSON document with a NUL byte is refused where it is (the parser had read it as the end)", "[cli]") {
     // A helper's sweep: a config padded with NULs after its object read as whole, and one of
     // NULs alone said "unexpected end of input" at 1:1.
