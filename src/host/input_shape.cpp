@@ -84,6 +84,11 @@ void InputShape::add(const core::Sample& s) {
         if (std::isfinite(s.current_a) && std::fabs(s.current_a) >= ground_a_)
             loaded_mah_ += static_cast<double>(s.current_a) * step_s / 3.6;
         if (std::isfinite(s.current_a)) counted_mah_ += static_cast<double>(s.current_a) * step_s / 3.6;
+        if (step_s > kLongestGapS) {
+            ++gaps_;
+            gaps_s_ += step_s;
+            if (std::isfinite(s.current_a)) gaps_mah_ += static_cast<double>(s.current_a) * step_s / 3.6;
+        }
         if (step_s > longest_s_) {
             longest_s_ = step_s;
             longest_at_s_ = static_cast<double>(last_us_ - first_us_) * 1e-6;
@@ -272,7 +277,15 @@ std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const La
                       "file): the monitor counts the charge over the gap at the currents either side (%.4g mAh at the "
                       "current after it) and a flight's time spans it; replay two sessions apart",
                       longest_s_, longest_at_s_, std::isfinite(longest_mah_) ? longest_mah_ + 0.0 : 0.0);  // + 0.0: no "-0 mAh"
-        out.push_back(buf);
+        std::string note = buf;
+        // The longest of several: a lab file's pulse sets, hours apart, had read as one jump.
+        if (gaps_ > 1) {
+            std::snprintf(buf, sizeof buf,
+                          "; it is the longest of %ld jumps over %.0f s, %.4g s in all, %.4g mAh counted over them", gaps_,
+                          kLongestGapS, gaps_s_, gaps_mah_ + 0.0);
+            note += buf;
+        }
+        out.push_back(note);
     }
     // A log written once a second (ArduCopter 3.0's CURR rows): no pair is close enough,
     // so R0 is never measured and a resistive pack hides (underpowered.log, README).

@@ -90,6 +90,8 @@ private:
     // Above this every reading: kelvin (a cell at 200 degC has long burnt).
     static constexpr double kKelvinMinC = 200.0;
     double longest_s_ = 0.0, longest_at_s_ = 0.0, longest_mah_ = 0.0;  // the longest interval, where, its charge
+    long gaps_ = 0;                                    // intervals over kLongestGapS
+    double gaps_s_ = 0.0, gaps_mah_ = 0.0;             // their time, and the charge counted over them
     double ground_a_;
     ShapePack pack_;
     bool have_current_ = false;

@@ -529,6 +529,15 @@ TEST_CASE("a log whose clock jumps is said, and --realtime does not wait the jum
     for (const auto& note : j["input"]["notes"])
         said = said || note.get<std::string>().find("the log's clock jumps 3600 s at") == 0;
     CHECK(said);
+    // Two jumps: the longest said, and how many (a lab file's 13 pulse sets had read as one).
+    clitest::write_file(dir + "/three.csv", jumped_at(jumped_at(text, 100), 101));
+    r = run("replay " + q(dir + "/three.csv") + " -c " + q(kConfig) + " --json");
+    REQUIRE(r.exit_code == 0);
+    const nlohmann::json twice = nlohmann::json::parse(r.out);
+    said = false;
+    for (const auto& note : twice["input"]["notes"])
+        said = said || note.get<std::string>().find("; it is the longest of 2 jumps over 60 s, 7200 s in all") != std::string::npos;
+    CHECK(said);
     // The unbroken log has no such note.
     clitest::write_file(dir + "/one.csv", text);
     r = run("replay " + q(dir + "/one.csv") + " -c " + q(kConfig) + " --json");
