@@ -141,6 +141,25 @@ TEST_CASE("a NUL in a text log is refused where it is: line, field and byte offs
                                "they are not the NUL padding a logger that lost power leaves at the end of its file)");
 }
 
+TEST_CASE("a temperature column named in kelvin is read in kelvin", "[io]") {
+    // A helper's walkthrough: "Temperature (K)" had read 298 degC, and only a note asked for 273.15 off.
+    TempDir t;
+    ReaderOptions opt;
+    opt.columns.temperature = "Temperature (K)";
+    SourceInfo info;
+    const auto rows = read_all(t.write("k.csv", "time_s,voltage_v,current_a,Temperature (K)\n0,12.5,1,298.15\n1,12.4,1,280.15\n"),
+                               opt, &info);
+    REQUIRE(rows.size() == 2);
+    CHECK(rows[0].temperature_c == Approx(25.0f));
+    CHECK(rows[1].temperature_c == Approx(7.0f));
+    REQUIRE(info.notes.size() == 1);
+    CHECK(info.notes[0] == "the temperature column \"Temperature (K)\" is read in kelvin, as its name says, and converted to "
+                           "degrees Celsius");
+    // In degrees Celsius, as read.
+    opt.columns.temperature = "temp";
+    CHECK(read_all(t.write("c.csv", "time_s,voltage_v,current_a,temp\n0,12.5,1,25\n"), opt)[0].temperature_c == 25.0f);
+}
+
 TEST_CASE("a log padded with NULs to its end (power lost) keeps the rows before them, said", "[io]") {
     // A helper's sweep: a crash's log had been refused whole when the padding fell in the
     // bytes format detection peeks at, and read as "last line is cut off (1 of 3 fields)" past them.

@@ -512,7 +512,11 @@ void add_notes(OcvStitch& s, const std::vector<Flight>& flights) {
             hi = std::max(hi, f.s0);
         }
     auto mv = [](double v) { return std::to_string(static_cast<int>(std::lround(v * 1000.0))) + " mV"; };
-    if (hi - lo < 0.15)
+    const long fitted = std::count_if(flights.begin(), flights.end(), [](const Flight& f) { return !f.test; });
+    if (fitted == 1)
+        s.notes.push_back("one flight: nothing stitches its slice to another's, so the table's shape cannot be told "
+                          "from the sag's model; fit flights that take off at different charges");
+    else if (hi - lo < 0.15)
         s.notes.push_back("the flights start within " + std::to_string(static_cast<int>(std::lround((hi - lo) * 100.0))) +
                           " % of charge of each other: nothing stitches their slices, so the table's shape cannot be told "
                           "from the sag's model; fit flights that take off at different charges");

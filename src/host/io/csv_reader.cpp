@@ -1010,6 +1010,13 @@ private:
         // Temperature (optional unless named explicitly).
         temp_col_ = m.temperature.empty() ? find("temperature_c") : require("temperature", m.temperature);
         info_.has_temperature = temp_col_ >= 0;
+        // A column named in kelvin ("Temperature (K)", "temp_k") is read so: it had been taken
+        // as degrees Celsius and only the "in kelvin?" note asked for 273.15 off.
+        if (temp_col_ >= 0 && has_unit(lower_names_[static_cast<std::size_t>(temp_col_)], "k")) {
+            temperature_offset_c_ = -273.15;
+            info_.notes.push_back("the temperature column \"" + names_[static_cast<std::size_t>(temp_col_)] +
+                                  "\" is read in kelvin, as its name says, and converted to degrees Celsius");
+        }
     }
 
     // A radio log's row before the receiver sends battery telemetry, or after it is lost;
@@ -1104,7 +1111,7 @@ private:
                 if (no_temperature_rows_++ == 0) first_no_temperature_line_ = lines_.line_number();
             } else {
                 if (!get_number(tc, v)) return Row::CutOff;
-                out.temperature_c = to_float(v, tc);
+                out.temperature_c = to_float(v + temperature_offset_c_, tc);
                 out.has_temperature = true;
                 ++temperature_rows_;
             }
@@ -1146,6 +1153,7 @@ private:
     bool have_first_day_ = false;
     long skipped_rows_ = 0;
     long first_skipped_line_ = 0;
+    double temperature_offset_c_ = 0.0;  // -273.15 for a column in kelvin
     long no_temperature_rows_ = 0;  // a temperature column's dropouts (parse_row)
     long first_no_temperature_line_ = 0;
     long temperature_rows_ = 0;
