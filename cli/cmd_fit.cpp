@@ -33,7 +33,7 @@ std::function<int()> setup(CLI::App& sub) {
                    "Enable an extension before fitting: rc[:TAU_S], temperature[:REF_C], thermal[:AMBIENT_C], "
                    "hysteresis, ocv[:N], sensor, timing (repeatable; residual's names, such as rc_polarisation or self_heating, also)");
     add_list_option(sub, "--params", a->params,
-                    "Parameters to fit (default: e0,r,kappa,a,b,q and those of the enabled extensions; none = only evaluate)");
+                    "Parameters to fit (default: e0,r,kappa,a,b,q and those of the enabled extensions; none = no model parameter: only the initial charge with --initial free, nothing with monitor or zero)");
     add_list_option(sub, "--per-log", a->per_log, "Parameters fitted separately for each log (e.g. r,q)");
     sub.add_option("--initial", a->initial, "Initial charge at the monitor's settle sample: free (fitted per log), monitor (model inversion), zero (log starts full)")
         ->capture_default_str();

@@ -231,7 +231,8 @@ TEST_CASE("option values found by a sweep of every command's options: refused be
         {"score --columns joint,joint -j1 " + q(kSource + "/configs/scenarios/4s-racing-healthy-a.json"),
          "--columns: \"joint\" given twice"},
         {"residual " + q(kExample) + " --fixed q,q", "--fixed: parameter \"q\" given twice"},
-        {"fit " + q(kExample) + " --params abc", "unknown parameter \"abc\"; expected one of e0, r, kappa"},
+        {"fit " + q(kExample) + " --params abc", "--params: unknown parameter \"abc\"; expected one of e0, r, kappa"},
+        {"fit " + q(kExample) + " --per-log rr", "--per-log: unknown parameter \"rr\"; expected one of e0, r, kappa"},
         {"discharge " + q(kExample) + " -c " + q(kConfig) + " --decimate 5000",
          "--decimate 5000 averages the discharge's 3913 samples into 1 point; expected at most 1956"},
         {"batch " + q(kExample) + " -j -1 -o " + q(dir + "/t.md"), "--jobs: Value -1 not in range 1 to 1024"}};
@@ -240,6 +241,8 @@ TEST_CASE("option values found by a sweep of every command's options: refused be
         const auto r = run(args);
         CHECK(r.exit_code == 2);
         CHECK_THAT(r.err, Catch::Contains(said));
+        // Before any log is read (a helper's walkthrough: a misspelt name came after minutes of reading).
+        CHECK_THAT(r.err, !Catch::Contains(": reading "));
     }
     // A missing log is said as such before the default config's missing OCV table (exit 1).
     const auto cal = run("calibrate " + q(dir + "/nonexistent.csv"));
@@ -390,6 +393,7 @@ TEST_CASE("small typos that read on unseen: a weak cell twice, a misspelt --fixe
     r = run("residual " + q(kExample) + " -c " + q(kConfig) + " --candidates rc_polarization");
     CHECK(r.exit_code == 2);
     CHECK_THAT(r.err, Catch::Contains("unknown candidate \"rc_polarization\"; expected rc_polarisation, temperature"));
+    CHECK_THAT(r.err, !Catch::Contains("residual: reading "));
     r = run("fit " + q(kExample) + " -c " + q(kConfig) + " --add self_heating --params none --json");
     INFO(r.err);
     CHECK(r.exit_code == 0);

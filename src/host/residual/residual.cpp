@@ -596,15 +596,9 @@ CandidateScore judge(const std::string& name, const std::vector<Trace>& traces, 
     return c;
 }
 
-}  // namespace
-
-ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, const ResidualOptions& options,
-                       std::ostream* progress) {
-    if (traces.empty()) throw std::invalid_argument("no logs");
-    ResidualOptions o = options;
-    o.max_capacity_ah = o.max_capacity_factor * spec.battery.capacity_ah;
-    if (o.bounds_full_voltage_v <= 0) o.bounds_full_voltage_v = spec.battery.full_voltage_v;
-    o.bounds_capacity_ah = spec.battery.capacity_ah;
+// The options' names and counts, checked before any log is read (a misspelt name after
+// minutes of reading long logs had cost those minutes).
+void check_names(const ResidualOptions& o) {
     if (o.blocks < 4 || o.blocks % 2 != 0) throw std::invalid_argument("--blocks must be even and at least 4");
     // A misspelt --fixed name had been ignored, and the parameter fitted after all.
     const std::vector<std::string> known = fit::known_parameter_names();
@@ -617,6 +611,28 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
         if (std::find(o.fixed.begin(), o.fixed.begin() + static_cast<long>(i), f) != o.fixed.begin() + static_cast<long>(i))
             throw std::invalid_argument("--fixed: parameter \"" + f + "\" given twice");  // as fit's --params says
     }
+    const std::vector<std::string> effects = candidate_names();
+    for (const std::string& given : o.candidates) {
+        const std::string n = fit::candidate_name(given);  // fit --add's short names (rc, thermal, ocv, sensor, timing) too
+        if (std::find(effects.begin(), effects.end(), n) == effects.end()) {
+            std::string list;
+            for (const std::string& k : effects) list += (list.empty() ? "" : ", ") + k;
+            throw std::invalid_argument("unknown candidate \"" + n + "\"; expected " + list +
+                                        " (or fit --add's names: rc, thermal, ocv, sensor, timing)");
+        }
+    }
+}
+
+}  // namespace
+
+ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, const ResidualOptions& options,
+                       std::ostream* progress) {
+    if (traces.empty()) throw std::invalid_argument("no logs");
+    ResidualOptions o = options;
+    o.max_capacity_ah = o.max_capacity_factor * spec.battery.capacity_ah;
+    if (o.bounds_full_voltage_v <= 0) o.bounds_full_voltage_v = spec.battery.full_voltage_v;
+    o.bounds_capacity_ah = spec.battery.capacity_ah;
+    check_names(o);
     ResidualReport rep;
     rep.initial = o.initial;
     for (const Trace& t : traces) rep.logs.push_back(t.path);
@@ -624,16 +640,7 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
     const Split split = make_split(traces, o.window, o.initial, o.blocks);
     const fit::InitialMode config_mode = o.initial == fit::InitialMode::Zero ? fit::InitialMode::Zero : fit::InitialMode::Monitor;
     std::vector<std::string> names = o.candidates.empty() ? candidate_names() : o.candidates;
-    for (std::string& n : names) {
-        n = fit::candidate_name(n);  // fit --add's short names (rc, thermal, ocv, sensor, timing) too
-        const std::vector<std::string> known = candidate_names();
-        if (std::find(known.begin(), known.end(), n) == known.end()) {
-            std::string list;
-            for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
-            throw std::invalid_argument("unknown candidate \"" + n + "\"; expected " + list +
-                                        " (or fit --add's names: rc, thermal, ocv, sensor, timing)");
-        }
-    }
+    for (std::string& n : names) n = fit::candidate_name(n);  // fit --add's short names too (checked above)
 
     // Stage 0: the config as given, run as the monitor runs it.
     State config;
@@ -1071,6 +1078,7 @@ size_t plot_residual(const std::vector<Trace>& traces, const ResidualReport& r, 
 nlohmann::json run_residual_job(const ResidualJob& job, ResidualReport* out, std::ostream* progress) {
     if (job.logs.empty()) throw std::invalid_argument("no logs");
     if (!job.plot_path.empty()) plot::check_plot_path(job.plot_path);
+    check_names(job.options);
     // The logs in the order of their paths: the fits are pooled sums, and a greedy choice on
     // the edge of significance had followed the order they were given in (Matrice 100 flights
     // 1 and 140 gained rc_polarisation one way, self_heating and sample_timing the other).
