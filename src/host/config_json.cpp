@@ -497,6 +497,7 @@ json config_to_json(const LoadedConfig& c) {
 namespace {
 // How config_notes ends the notes that say the config is for another pack than the log's.
 const char* const kOtherPackEnd = ": does the config match this pack?";
+const char* const kMillivoltsEnd = ": a voltage in mV read as volts?";  // the pack's rest a thousand times a cell's
 const char* const kMakeConfigAdvice = ": battsim make-config --from-log ";
 const char* const kMakeConfigAdviceEnd = " writes one for it";
 bool ends_with_text(const std::string& s, const std::string& end) {
@@ -505,7 +506,7 @@ bool ends_with_text(const std::string& s, const std::string& end) {
 }  // namespace
 
 bool is_other_pack_note(const std::string& note) {
-    return ends_with_text(note, kOtherPackEnd) ||
+    return ends_with_text(note, kOtherPackEnd) || ends_with_text(note, kMillivoltsEnd) ||
            (note.find(kMakeConfigAdvice) != std::string::npos && ends_with_text(note, kMakeConfigAdviceEnd));
 }
 
@@ -574,7 +575,10 @@ std::vector<std::string> config_notes(const core::MonitorConfig& config, const L
             char buf[160];
             std::snprintf(buf, sizeof buf, "the pack rests at %.2f V, %.3f V per cell for the config's %d cells in series",
                           log.resting_voltage_v, per_cell_v, cells);
-            notes.push_back(std::string(buf) + ", outside any lithium cell's resting range (2.9-4.45 V)" + advice);
+            // A thousand times a cell's volts: the log's millivolts, not another pack.
+            const bool millivolts = per_cell_v > 1000.0 * kRestMinV && per_cell_v < 1000.0 * kRestMaxV;
+            notes.push_back(std::string(buf) + ", outside any lithium cell's resting range (2.9-4.45 V)" +
+                            (millivolts ? std::string(kMillivoltsEnd) : advice));
         }
     }
     if (log.declared_cells > 0 && log.declared_cells != cells)

@@ -75,6 +75,9 @@ TEST_CASE("a voltage column in millivolts with a plain name is asked about, not 
     CHECK_THAT(r.err, Catch::Contains("100 pack_voltage_high (sensor.max_pack_voltage_v); a voltage in mV read as volts "
                                       "(name the column voltage_mv, or \"voltage (mV)\")?"));
     CHECK_THAT(r.err, !Catch::Contains("0.1 V steps"));
+    CHECK_THAT(r.err, Catch::Contains("the pack rests at 16500.00 V, 4125.000 V per cell for the config's 4 cells in series, "
+                                      "outside any lithium cell's resting range (2.9-4.45 V): a voltage in mV read as volts?"));
+    CHECK_THAT(r.err, !Catch::Contains("make-config --from-log"));
     // Named so, it reads.
     std::string named = log;
     named.replace(0, named.find('\n'), "time_s,voltage_mv,current_a");
