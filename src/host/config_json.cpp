@@ -512,12 +512,16 @@ bool is_other_pack_note(const std::string& note) {
 
 namespace {
 const char* const kNoTemperatureStart = "the config's model depends on the temperature";
+// Whether the temperature block moves anything (an enabled block of zeros does not).
+bool temperature_terms(const core::TemperatureDependence& t) {
+    return t.enabled && (t.resistance_activation_k != 0.0f || t.polarisation_activation_k != 0.0f ||
+                         t.capacity_ah_per_c != 0.0f || t.e0_v_per_c != 0.0f);
+}
 }  // namespace
 
 std::string missing_temperature_note(const core::MonitorConfig& config, bool log_has_temperature) {
     const core::TemperatureDependence& t = config.extensions.temperature;
-    const bool terms = t.enabled && (t.resistance_activation_k != 0.0f || t.polarisation_activation_k != 0.0f ||
-                                     t.capacity_ah_per_c != 0.0f || t.e0_v_per_c != 0.0f);
+    const bool terms = temperature_terms(t);
     // A lumped thermal state drives the terms without a measurement: such a config was made
     // for logs without one.
     if (log_has_temperature || !terms || config.extensions.thermal.enabled) return std::string();
@@ -531,10 +535,6 @@ std::string missing_temperature_note(const core::MonitorConfig& config, bool log
 
 namespace {
 const char* const kSelfHeatingStart = "the config's temperature terms are driven by its self-heating state";
-bool temperature_terms(const core::TemperatureDependence& t) {
-    return t.enabled && (t.resistance_activation_k != 0.0f || t.polarisation_activation_k != 0.0f ||
-                         t.capacity_ah_per_c != 0.0f || t.e0_v_per_c != 0.0f);
-}
 }  // namespace
 
 std::string measured_temperature_note(const core::MonitorConfig& config, bool log_has_temperature) {

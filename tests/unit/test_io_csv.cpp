@@ -179,6 +179,10 @@ TEST_CASE("a log padded with NULs to its end (power lost) keeps the rows before 
             CHECK(std::count(info.notes.begin(), info.notes.end(), want) == 1);
         }
     }
+    // Nothing before a partial row: refused, saying why the row is cut.
+    const std::string only = t.write("only.csv", "time_s,voltage_v,current_a\n0,12." + std::string(100, '\0'));
+    CHECK(read_error(only) == only + ":2: no complete data rows: the only data line is cut off (NUL bytes in it, to the "
+                                     "end of the file)");
     // A raw predictive-bms log (the dissertation logger's own) the same.
     const std::string r = t.write("raw.txt", "627,16.57,4.14,4.14,4.14,4.16,47.99,0.39,\n695,16.57,4.14,4.14,4.14,4.16,47.99,0.39,\n" +
                                                  std::string(512, '\0'));

@@ -89,9 +89,8 @@ std::vector<Def> expand(const std::string& name, const ModelSpec& s, double full
     if (name == "gain") return one(Kind::Gain, "", 0.9, 1.1, 0.01);
     if (name == "offset") return one(Kind::Offset, "A", -10, 10, 0.01);
     if (name == "lead") return one(Kind::Lead, "s", -1, 1, 0.01);
-    std::string known;
-    for (const std::string& k : known_parameter_names()) known += (known.empty() ? "" : ", ") + k;
-    throw std::invalid_argument("unknown parameter \"" + name + "\"; expected one of " + known);
+    check_parameter_name(name);
+    throw std::logic_error("parameter \"" + name + "\" is known but has no definition");
 }
 
 double get(const ModelSpec& s, const NaturalParams& n, const Def& d) {
@@ -696,6 +695,15 @@ std::vector<std::string> known_parameter_names() {
     return {"e0", "r", "kappa", "a", "b", "q", "reaction", "rc1_r", "rc1_tau", "rc2_r", "rc2_tau", "rc3_r", "rc3_tau",
             "temp_r", "temp_k", "temp_q", "temp_e0", "thermal_rth", "thermal_tau", "hyst_m", "hyst_rate", "ocv",
             "gain", "offset", "lead"};
+}
+
+void check_parameter_name(const std::string& name, const std::string& option) {
+    const std::vector<std::string> known = known_parameter_names();
+    if (std::find(known.begin(), known.end(), name) != known.end()) return;
+    std::string list;
+    for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+    throw std::invalid_argument((option.empty() ? std::string() : option + ": ") + "unknown parameter \"" + name +
+                                "\"; expected one of " + list);
 }
 
 std::vector<std::string> default_parameters(const ModelSpec& s) {

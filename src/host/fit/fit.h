@@ -29,6 +29,9 @@ namespace fit {
 // `initial` (charge drawn at the settle sample) is always per log and free with
 // InitialMode::Free.
 std::vector<std::string> known_parameter_names();
+// Throws std::invalid_argument ("OPTION: unknown parameter "x"; expected one of ...", no
+// prefix when `option` is empty) unless `name` is one of known_parameter_names().
+void check_parameter_name(const std::string& name, const std::string& option = std::string());
 // The base parameters plus those of every extension enabled in `spec`.
 std::vector<std::string> default_parameters(const ModelSpec& spec);
 

@@ -108,15 +108,10 @@ nlohmann::json run_fit_job(const FitJob& job, std::ostream* progress) {
     {
         ModelSpec probe = spec_from_config(job.config);
         for (const std::string& a : job.add) enable_extension(probe, a);
-        const std::vector<std::string> known = known_parameter_names();
-        std::string known_text;
-        for (const std::string& k : known) known_text += (known_text.empty() ? "" : ", ") + k;
         for (const auto& [option, names] : {std::make_pair("--params", &job.options.params),
                                              std::make_pair("--per-log", &job.options.per_log_params)})
             for (const std::string& n : *names)
-                if (n != "none" && std::find(known.begin(), known.end(), n) == known.end())
-                    throw std::invalid_argument(std::string(option) + ": unknown parameter \"" + n + "\"; expected one of " +
-                                                known_text);
+                if (n != "none") check_parameter_name(n, option);
     }
     // The logs in the order of their paths, so the same set gives the same fit (the pooled
     // sums' order had moved a fit stopped at its iteration limit in the fifth digit).

@@ -117,6 +117,16 @@ bool split_fields(std::string_view line, std::vector<std::string_view>& fields, 
     }
 }
 
+long field_at(std::string_view line, std::size_t pos) {
+    long field = 1;
+    bool quoted = false;
+    for (std::size_t i = 0; i < pos && i < line.size(); ++i) {
+        if (line[i] == '"') quoted = !quoted;
+        else if (line[i] == ',' && !quoted) ++field;
+    }
+    return field;
+}
+
 std::string unquote(std::string_view field) {
     std::string s;
     s.reserve(field.size());
@@ -309,7 +319,7 @@ protected:
         if (!has_pending_) {
             if (cut_line_ > 0) {
                 throw InputError(info_.path, cut_line_, 0,
-                                 "no complete data rows: the only data line is cut off (no newline at the end)");
+                                 "no complete data rows: the only data line is cut off (" + cut_reason_ + ")");
             }
             throw InputError(info_.path, 0, 0,
                              lines_.line_number() == 0 ? "file is empty"
@@ -417,6 +427,7 @@ protected:
     std::size_t time_field_ = 0;
     std::size_t cut_field_ = 0;  // 1-based field whose failure means "cut off"; 0 = none
     long cut_line_ = 0;
+    std::string cut_reason_ = "no newline at the end";  // why line cut_line_ is cut off
 
     void add_cut_note(const std::string& why) {
         cut_line_ = lines_.line_number();
@@ -441,12 +452,7 @@ private:
     // after them are damage inside the log: refused where they start.
     void end_at_nul_padding(std::string_view line, std::size_t z) {
         const long ln = lines_.line_number();
-        long field = 1;
-        bool quoted = false;
-        for (std::size_t i = 0; i < z; ++i) {
-            if (line[i] == '"') quoted = !quoted;
-            if (line[i] == ',' && !quoted) ++field;
-        }
+        const long field = text::field_at(line, z);
         std::uint64_t nuls = 0;
         bool padding = true;
         for (std::string_view rest = line.substr(z);;) {
@@ -466,7 +472,10 @@ private:
         info_.notes.push_back("line " + std::to_string(ln) + ": the file ends in NUL bytes (about " + std::to_string(nuls) +
                               "), the padding a logger that lost power leaves; the rows before are kept" +
                               (partial ? ", the part of line " + std::to_string(ln) + " before them skipped" : ""));
-        if (partial) cut_line_ = ln;
+        if (partial) {
+            cut_line_ = ln;
+            cut_reason_ = "NUL bytes in it, to the end of the file";
+        }
     }
 
     bool read_row(core::Sample& out) {

@@ -45,6 +45,10 @@ NumberStatus parse_number(std::string_view text, double& out);
 // and sets `bad_field` (1-based) if a quoted field is not closed or is followed by text.
 bool split_fields(std::string_view line, std::vector<std::string_view>& fields, long& bad_field);
 
+// 1-based field of `line` that byte `pos` falls in, counting commas outside quotes as
+// split_fields() does (for messages about a byte inside a line).
+long field_at(std::string_view line, std::size_t pos);
+
 // Undoes the "" escape inside a field that split_fields() took out of quotes.
 std::string unquote(std::string_view field);
 

@@ -140,20 +140,15 @@ std::string wide_text(const std::vector<unsigned char>& head, std::string& chars
 // field it falls in (fields counted as split_fields() does, quotes and all).
 [[noreturn]] void refuse_nul_in_text(const std::string& path, const std::vector<unsigned char>& head, size_t begin,
                                      size_t nul) {
-    long line = 1, field = 1;
-    bool quoted = false;
-    for (size_t i = begin; i < nul; ++i) {
+    long line = 1;
+    size_t line_start = begin;
+    for (size_t i = begin; i < nul; ++i)
         if (head[i] == '\n') {
             ++line;
-            field = 1;
-            quoted = false;
-        } else if (head[i] == '"') {
-            quoted = !quoted;
-        } else if (head[i] == ',' && !quoted) {
-            ++field;
+            line_start = i + 1;
         }
-    }
-    throw InputError(path, line, field,
+    const std::string_view text_line(reinterpret_cast<const char*>(head.data()) + line_start, nul - line_start);
+    throw InputError(path, line, text::field_at(text_line, text_line.size()),
                      "a NUL byte at byte offset " + std::to_string(nul) +
                          ": expected text (a CSV log holds no NUL bytes; a logger that lost power may have padded "
                          "its file with them: cut the file before this line)");

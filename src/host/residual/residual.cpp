@@ -601,13 +601,9 @@ CandidateScore judge(const std::string& name, const std::vector<Trace>& traces, 
 void check_names(const ResidualOptions& o) {
     if (o.blocks < 4 || o.blocks % 2 != 0) throw std::invalid_argument("--blocks must be even and at least 4");
     // A misspelt --fixed name had been ignored, and the parameter fitted after all.
-    const std::vector<std::string> known = fit::known_parameter_names();
-    std::string known_text;
-    for (const std::string& k : known) known_text += (known_text.empty() ? "" : ", ") + k;
     for (size_t i = 0; i < o.fixed.size(); ++i) {
         const std::string& f = o.fixed[i];
-        if (std::find(known.begin(), known.end(), f) == known.end())
-            throw std::invalid_argument("--fixed: unknown parameter \"" + f + "\"; expected one of " + known_text);
+        fit::check_parameter_name(f, "--fixed");
         if (std::find(o.fixed.begin(), o.fixed.begin() + static_cast<long>(i), f) != o.fixed.begin() + static_cast<long>(i))
             throw std::invalid_argument("--fixed: parameter \"" + f + "\" given twice");  // as fit's --params says
     }
