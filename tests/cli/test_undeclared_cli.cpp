@@ -69,6 +69,21 @@ TEST_CASE("battsim residual names the simulator's undeclared effects, and only t
     const double after = full["per_log"][0]["after"]["all"]["rmse_v"].get<double>();
     CHECK(after < 0.5 * before);
     CHECK(after < 0.5 * refit);  // the effects, not just refitted parameters, cut the error
+    CHECK(full["verdict"].get<std::string>().find("improve together") == std::string::npos);
+
+    // Blocks of a few samples each share the effects' slow course: the test's independence
+    // fails and the verdict says so (200 blocks had added current_sensor at p = 0.02, without a word).
+    const clitest::Result fine = clitest::run("residual '" + dir + "/undeclared.csv' -c '" + kSource +
+                                              "/configs/sim-4s.json' --blocks 200 --json");
+    INFO(fine.err);
+    REQUIRE(fine.exit_code == 0);
+    const json fine_report = json::parse(fine.out);
+    CHECK_THAT(fine_report["verdict"].get<std::string>(),
+               Catch::Contains("improve together") && Catch::Contains("the p-values read too small"));
+    double largest_r = -1;
+    for (const json& st : fine_report["stages"])
+        if (st.contains("block_lag1_r")) largest_r = std::max(largest_r, st["block_lag1_r"].get<double>());
+    CHECK(largest_r > 0.3);
 
     // The control: the same flight with the RC branches and the temperature dependence
     // switched off in the plant. Polarisation and self-heating must not be claimed.

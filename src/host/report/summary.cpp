@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 namespace battsim {
 namespace host {
@@ -22,9 +23,11 @@ using nlohmann::json;
 
 double round_sig(double x, int digits) {
     if (!std::isfinite(x) || x == 0.0) return std::isfinite(x) ? 0.0 : x;
-    const double mag = std::floor(std::log10(std::fabs(x)));
-    const double scale = std::pow(10.0, digits - 1 - mag);
-    return std::round(x * scale) / scale;
+    // Through the decimal text: the nearest double to the rounded decimal prints as that
+    // decimal; round(x·10ⁿ)/10ⁿ could land an ulp off and print as 6.799999999999999e-23.
+    char text[40];
+    std::snprintf(text, sizeof text, "%.*e", std::max(0, digits - 1), x);
+    return std::strtod(text, nullptr);
 }
 
 double time_s_of_us(uint64_t time_us) { return static_cast<double>(time_us) / 1e6; }

@@ -60,6 +60,10 @@ struct CandidateScore {
     double gain = 0;     // 1 − held-out MSE with the effect / without
     double p_value = 1;  // one-sided Wilcoxon signed-rank test over the held-out blocks
     int blocks_better = 0, blocks = 0;
+    // Lag-1 autocorrelation of the held-out blocks' improvements, over neighbouring pairs
+    // within a log: the test above assumes it is near 0.
+    double block_lag1_r = 0;
+    int block_pairs = 0;
     bool significant = false;
     std::vector<std::pair<std::string, double>> values;  // the effect's fitted parameters
 };
@@ -73,6 +77,8 @@ struct Stage {
     std::string description;
     StageStats stats;
     double gain = 0, p_value = 1;  // of this step on the held-out blocks
+    double block_lag1_r = 0;       // of the effect added (CandidateScore)
+    int block_pairs = 0;
     std::vector<CandidateScore> candidates;  // scored at this stage (the next step chose from these)
     fit::ModelSpec spec;  // of the first log
 };
