@@ -192,6 +192,25 @@ TEST_CASE("Levenberg-Marquardt: linear regression and its covariance", "[fit]") 
     CHECK(bounded.x[0] == 2.5);
     CHECK(bounded.at_bound[0]);
     CHECK_FALSE(bounded.at_bound[1]);
+
+    // A third parameter the residuals do not depend on, started at its lower bound: the logs
+    // leave it there (zero gradient). It is at its bound, not only "not moved" (a fit's kappa
+    // had been listed so).
+    LmProblem idle = p;
+    idle.n_params = 3;
+    idle.lower = Eigen::Vector3d(2.5, -100, 0);
+    idle.upper = Eigen::Vector3d(100, 100, 1);
+    idle.typical = Eigen::Vector3d(1, 1, 1);
+    idle.residuals = [&](const Eigen::VectorXd& b, int, double* r) {
+        for (int i = 0; i < m; ++i) r[i] = y[i] - (b[0] + b[1] * x[i]);
+    };
+    const LmResult left = levenberg_marquardt(idle, Eigen::Vector3d(3, 0, 0), LmOptions{});
+    CHECK(left.x[2] == 0);
+    CHECK(left.at_bound[2]);
+    CHECK_FALSE(left.at_bound[1]);
+    // Its started value away from the bound is not "at bound".
+    const LmResult inside = levenberg_marquardt(idle, Eigen::Vector3d(3, 0, 0.5), LmOptions{});
+    CHECK_FALSE(inside.at_bound[2]);
 }
 
 TEST_CASE("A fit recovers the parameters of a generated log, with honest uncertainty", "[fit]") {

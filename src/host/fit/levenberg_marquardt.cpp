@@ -174,7 +174,9 @@ LmResult levenberg_marquardt(const LmProblem& problem, const Eigen::VectorXd& x0
     out.at_bound.resize(n);
     for (int j = 0; j < n; ++j) {
         const double tol = 1e-9 * std::max(1.0, std::fabs(x[j]));
-        out.at_bound[j] = (x[j] - problem.lower[j] <= tol && g[j] > 0) || (problem.upper[j] - x[j] <= tol && g[j] < 0);
+        // Held there, or left there by logs that do not move it (zero gradient): either way at
+        // its bound, as the brief says, not "not moved by these logs" alone.
+        out.at_bound[j] = (x[j] - problem.lower[j] <= tol && g[j] >= 0) || (problem.upper[j] - x[j] <= tol && g[j] <= 0);
     }
     return out;
 }
