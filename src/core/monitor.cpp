@@ -127,8 +127,15 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
             initial_ah = model_.used_ah_at_voltage(settle_v, settle_a);
             initial_wh = model.energy_wh_to(initial_ah, settle_a);
         }
+        if (!reference) {
+            // The charge drawn the joint estimator's own state of charge says (its OCV
+            // table), not the loaded Tremblay curve's: a pack resting part-charged had read
+            // 96 % drawn in `consumed` next to a state of charge of 38 %.
+            joint_.start(settle_v, settle_a);
+            initial_ah = (1.0f - joint_.status().soc) * capacity_.fixed_model().params().capacity_ah;
+            initial_wh = model.energy_wh_to(initial_ah, settle_a);
+        }
         counter_.reset(initial_ah * 1000.0f, initial_wh * 1000.0f);
-        if (!reference) joint_.start(settle_v, settle_a);
     } else {
         counter_.update(current_a, sample.voltage_v, dt_s);
     }

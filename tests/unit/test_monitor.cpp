@@ -9,6 +9,7 @@
 
 #include "core/monitor.h"
 #include "host/config_json.h"
+#include "host/pack_config.h"
 #include "host/io/sample_reader.h"
 
 using namespace battsim::core;
@@ -55,6 +56,30 @@ TEST_CASE("Monitor settles at rest, counts charge, flies", "[monitor]") {
         CHECK(all_finite(m.status()));
         CHECK(m.status().time_valid);
     }
+}
+
+TEST_CASE("Joint mode counts its charge drawn from its own state of charge at the first rest", "[monitor]") {
+    // A pack resting part-charged (3.90 V per cell): the joint estimator's OCV table reads its
+    // state of charge; `consumed` had started from the loaded Tremblay curve instead (on an
+    // ArduPilot octocopter's log 96 % drawn next to a state of charge of 38 %), and the
+    // MAVLink current_consumed and battery_remaining disagreed by that much.
+    // make-config's 4S 1.55 Ah pack: its OCV table (the simulator's LiPo rest curve) and its
+    // Tremblay curve (at 4.5C) read a resting 15.2 V as 47 % and 8 % full.
+    battsim::host::PackRating rating;
+    rating.cells = 4;
+    rating.capacity_ah = 1.55;
+    const MonitorConfig cfg = battsim::host::config_from_json(battsim::host::pack_config_json(rating), "test").monitor;
+    REQUIRE(cfg.estimator == EstimatorKind::Joint);
+    Monitor m;
+    m.configure(cfg);
+    uint64_t t = 0;
+    for (int k = 0; k < 100; ++k, t += 67000) m.update(make(t, 15.2f, 0.3f));
+    const MonitorStatus& s = m.status();
+    REQUIRE(s.initialised);
+    REQUIRE(s.soc > 0.3f);
+    REQUIRE(s.soc < 0.7f);
+    // Within what 100 samples at 0.3 A draw (0.56 mAh) and the filter's own rest updates move.
+    CHECK(s.consumed_mah == Approx((1.0f - s.soc) * 1550.0f).margin(15.0f));
 }
 
 TEST_CASE("Sensor faults are flagged and kept out of the estimators", "[monitor]") {
