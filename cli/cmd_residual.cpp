@@ -51,6 +51,7 @@ std::function<int()> setup(CLI::App& sub) {
                                                    text_output("--report", a->common.report),
                                                    {"--plot", a->common.plot}};
         if (int rc = check_outputs(me, inputs, outputs)) return rc;
+        if (int rc = check_plot_option(me, a->common.plot)) return rc;
         if (int rc = check_logs_once(me, std::vector<host::NamedPath>(inputs.begin() + 1, inputs.end()))) return rc;
         job.logs = a->logs;
         job.options.max_capacity_factor = a->common.max_capacity_factor;

@@ -218,11 +218,17 @@ int finish_report(const std::string& command, const nlohmann::json& report, cons
 }
 
 int check_plot_option(const std::string& command, const std::string& path) {
+    if (path.empty()) return kExitOk;
     try {
-        if (!path.empty()) host::plot::check_plot_path(path);
+        host::plot::check_plot_path(path);
     } catch (const std::invalid_argument& e) {
         std::cerr << command << ": " << e.what() << "\n";
         return kExitUsage;
+    }
+    if (!host::plot::gnuplot_on_path()) {
+        std::cerr << command << ": --plot " << path
+                  << ": gnuplot is not on PATH (Debian: apt-get install gnuplot-nox); nothing was run\n";
+        return kExitOutputError;
     }
     return kExitOk;
 }

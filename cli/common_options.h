@@ -78,8 +78,9 @@ int run_job(const std::string& command, const std::function<void()>& job);
 // brief to `people`; returns the exit code.
 int finish_report(const std::string& command, const nlohmann::json& report, const std::string& path, bool json,
                   const std::function<void(std::ostream&)>& brief, std::ostream& people = std::cout);
-// kExitOk if `path` is empty or a plot name (.png, .svg); else says why, kExitUsage. Checked
-// before the work, so a typo does not cost a long run.
+// kExitOk if `path` is empty or a plot name (.png, .svg) with gnuplot on PATH; else says why,
+// kExitUsage (the name) or kExitOutputError (no gnuplot). Checked before the work, so a typo
+// or a missing gnuplot does not cost a long run and the outputs after it.
 int check_plot_option(const std::string& command, const std::string& path);
 // kExitOk unless an output names an input or another output's file (host::check_output_paths;
 // kExitUsage) or cannot be written (host::first_unwritable_output; kExitOutputError); then

@@ -325,6 +325,38 @@ TEST_CASE("Ctrl-C while gnuplot draws leaves neither its message file nor the pl
     }
 }
 
+TEST_CASE("--plot without a working gnuplot exits 5 with a message, never by SIGPIPE", "[cli][paths]") {
+    // A missing gnuplot had ended a real-sized run by SIGPIPE (exit 141) without a word, and
+    // the outputs still to be written (fit's --report, discharge's --config-out) were lost.
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/log.csv", testsupport::raw_flight(12, 0.0001, 8000));  // a plot script past the pipe's 64 KiB
+    fs::create_directories(dir + "/none");
+    fs::create_directories(dir + "/bin");
+    const auto run_with_path = [&](const std::string& bin, const std::string& args) {
+        return testsupport::run_program("env", "PATH=" + q(bin) + " " + q(BATTSIM_BINARY) + " " + args);
+    };
+    const std::string log = q(dir + "/log.csv");
+    // Not on PATH: said with the options, before anything is run or written.
+    for (const char* command : {"replay", "residual", "fit"}) {
+        INFO(command);
+        const clitest::Result r = run_with_path(dir + "/none", std::string(command) + " " + log + " --plot " + q(dir + "/p.png") +
+                                                             (std::string(command) == "replay" ? " --summary " : " --report ") +
+                                                             q(dir + "/s.json"));
+        CHECK(r.exit_code == 5);
+        CHECK_THAT(r.err, Catch::Contains("gnuplot is not on PATH"));
+        CHECK_FALSE(fs::exists(dir + "/s.json"));
+    }
+    // One that dies at once without reading its script: the write into the closed pipe fails,
+    // and the run says so (the summary before the plot is kept).
+    clitest::write_file(dir + "/bin/gnuplot", "#!/bin/sh\nexit 1\n");
+    fs::permissions(dir + "/bin/gnuplot", fs::perms::owner_all);
+    const clitest::Result r = run_with_path(dir + "/bin", "replay " + log + " --plot " + q(dir + "/p.png") + " --summary " + q(dir + "/s.json"));
+    CHECK(r.exit_code == 5);
+    CHECK_THAT(r.err, Catch::Contains("gnuplot failed to write"));
+    CHECK(fs::exists(dir + "/s.json"));
+    CHECK_FALSE(fs::exists(dir + "/p.png"));
+}
+
 TEST_CASE("standard output by another name is standard output: /dev/stdout beside --json is refused", "[cli][paths]") {
     const std::string dir = clitest::temp_dir();
     clitest::write_file(dir + "/log.csv", testsupport::raw_flight(12, 0.001));

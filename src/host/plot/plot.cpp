@@ -4,9 +4,13 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <gnuplot-iostream.h>
+#include <signal.h>
+#include <unistd.h>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -104,6 +108,21 @@ bool Panel::has_points() const {
 void check_plot_path(const std::string& path) {
     if (!ends_with(path, ".png") && !ends_with(path, ".svg"))
         throw std::invalid_argument("plot file \"" + path + "\": expected a name ending in .png or .svg");
+}
+
+bool gnuplot_on_path() {
+    const char* path = std::getenv("PATH");
+    if (path == nullptr) return false;
+    std::string dirs = path;
+    size_t start = 0;
+    while (start <= dirs.size()) {
+        const size_t end = std::min(dirs.find(':', start), dirs.size());
+        std::string dir = dirs.substr(start, end - start);
+        if (dir.empty()) dir = ".";  // an empty PATH entry is the working directory
+        if (::access((dir + "/gnuplot").c_str(), X_OK) == 0) return true;
+        start = end + 1;
+    }
+    return false;
 }
 
 void thin_envelope(const std::vector<double>& x, const std::vector<double>& y, size_t max_points,
@@ -265,12 +284,26 @@ void render(const std::vector<Panel>& panels, const std::string& title, const st
     static const char* const kDone = "battsim-plot-done";
     script += std::string("print '") + kDone + "'\n";
 
-    try {
-        Gnuplot gp("gnuplot > " + shell_quoted(err_path) + " 2>&1");
-        gp << script;
-        gp.flush();
-    } catch (const std::exception& e) {
-        throw std::runtime_error(std::string("plot: cannot run gnuplot: ") + e.what());
+    {
+        // A gnuplot that died (or never started) closes the pipe: the write fails and the
+        // checks below say so, instead of SIGPIPE ending the run without a word.
+        struct IgnorePipe {
+            struct sigaction old_action {};
+            IgnorePipe() {
+                struct sigaction ignore {};
+                ignore.sa_handler = SIG_IGN;
+                sigemptyset(&ignore.sa_mask);
+                sigaction(SIGPIPE, &ignore, &old_action);
+            }
+            ~IgnorePipe() { sigaction(SIGPIPE, &old_action, nullptr); }
+        } ignore_pipe;
+        try {
+            Gnuplot gp("gnuplot > " + shell_quoted(err_path) + " 2>&1");
+            gp << script;
+            gp.flush();
+        } catch (const std::exception& e) {
+            throw std::runtime_error(std::string("plot: cannot run gnuplot: ") + e.what());
+        }
     }
     // The Gnuplot object has closed the pipe and waited for gnuplot to exit.
     const std::string messages = read_all(err_path);

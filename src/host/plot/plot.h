@@ -39,6 +39,9 @@ struct Panel {
 
 // Throws std::invalid_argument unless `path` ends in .png or .svg.
 void check_plot_path(const std::string& path);
+// Whether an executable `gnuplot` is on PATH: checked with the options, before any work (a
+// missing one had killed the run by SIGPIPE with exit 141, the outputs after the plot lost).
+bool gnuplot_on_path();
 // A line of `x`, `y` thinned to about 8000 points for drawing (spikes kept).
 Series line_series(const std::string& title, const std::vector<double>& x, const std::vector<double>& y,
                    const std::string& color, bool y2 = false, double width = 1.0);
