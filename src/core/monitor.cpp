@@ -108,6 +108,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
     const bool reference = config_.estimator == EstimatorKind::Reference;
     if (flying && reference) resistance_.update(sample.voltage_v, current_a, dt_s);
     status_.resistance_ohm = resistance_.status().resistance_ohm;
+    status_.resistance_measured = status_.resistance_ohm > 0.0f;
 
     if (!status_.initialised) {
         const TremblayModel& model = capacity_.fixed_model();
@@ -194,6 +195,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         status_.capacity_ah = js.capacity_ah;
         status_.capacity_sigma_ah = js.sigma_capacity_ah;
         status_.resistance_ohm = js.resistance_ohm;
+        status_.resistance_measured = js.measured_resistance_ohm > 0.0f;
         status_.soc = js.soc;
         status_.remaining_time_s = js.remaining_time_s;
         status_.total_time_s = js.total_time_s;

@@ -75,6 +75,9 @@ struct MonitorStatus {
     float capacity_ah = 0.0f;              // estimated pack capacity
     float capacity_sigma_ah = 0.0f;        // joint estimator: its standard error (0 = none)
     float resistance_ohm = 0.0f;           // online resistance estimate
+    // Measured from this pack's current steps: the joint estimator's resistance_ohm is its
+    // configured prior until then, which a summary must not average in as a measurement.
+    bool resistance_measured = false;
     float usable_capacity_ah = 0.0f;
     float remaining_time_s = 0.0f;  // flight left at the flight's mean power to the loaded cutoff (min_flight_voltage_v)
     float total_time_s = 0.0f;      // the whole flight's, from the take-off

@@ -329,6 +329,10 @@ TEST_CASE("The OLED shows no resistance until there is an estimate, as the serie
         return f.substr(start, f.find('\n', start) - start);
     };
     CHECK(row3() == "Cap 1.55Ah R --mOhm  ");  // had read "R  0mOhm", like a measurement
+    // The joint estimator's configured prior is no measurement either.
+    status.resistance_ohm = 0.02f;
+    CHECK(row3() == "Cap 1.55Ah R --mOhm  ");
     status.resistance_ohm = 0.0214f;
+    status.resistance_measured = true;
     CHECK(row3() == "Cap 1.55Ah R 21mOhm  ");
 }

@@ -45,8 +45,9 @@ void draw_monitor_page(Display& d, const MonitorPage& page) {
 
     r.clear();
     r.appendf("Cap %4.2fAh ", static_cast<double>(s.capacity_ah));
-    // No estimate yet reads "--", as the series leaves it empty: "R  0mOhm" looked measured.
-    if (s.resistance_ohm > 0.0f) {
+    // No estimate yet reads "--": "R  0mOhm" looked measured, and so did the joint
+    // estimator's configured prior before the pack's own current steps measured one.
+    if (s.resistance_measured) {
         r.appendf("R%3.0fmOhm", static_cast<double>(s.resistance_ohm * 1000.0f));
     } else {
         r.append("R --mOhm");

@@ -88,8 +88,11 @@ void print_flight_brief(const nlohmann::json& s, std::ostream& out) {
         out << "mean " << fixed(cap["mean"], 3) << " Ah (first 20 %: " << fixed(cap["first20_mean"], 3) << ", " << end << " "
             << fixed(cap["final"], 3) << ")";
     }
-    out << "; resistance mean " << fixed(f["resistance_ohm"]["mean"], 2, 1000.0) << " mOhm; model MAE "
-        << fixed(f["voltage_error_v"]["model"]["mean_abs"], 3) << " V";
+    if (f["resistance_ohm"]["mean"].is_null())
+        out << "; resistance not measured";  // the joint estimator kept its configured prior
+    else
+        out << "; resistance mean " << fixed(f["resistance_ohm"]["mean"], 2, 1000.0) << " mOhm";
+    out << "; model MAE " << fixed(f["voltage_error_v"]["model"]["mean_abs"], 3) << " V";
     // The joint estimator's own model (its tracking filter, one step ahead) is what it
     // compares with the measurement; the configured curve's error says how far the config is.
     if (s["estimator"] == "joint") out << " (the estimator's own: " << fixed(f["voltage_error_v"]["adapted"]["mean_abs"], 3) << " V)";

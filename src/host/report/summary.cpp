@@ -165,9 +165,10 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
     Totals t;
     t.n = 1;
     t.capacity_ah = s.capacity_ah;
-    // No estimate yet (0) is no resistance of 0 ohm.
-    t.resistance_n = s.resistance_ohm > 0.0f ? 1 : 0;
-    t.resistance_ohm = s.resistance_ohm > 0.0f ? s.resistance_ohm : 0.0f;
+    // No estimate yet (0, or the joint estimator's configured prior) is no measurement: a
+    // flight too short to measure one had read the config's 0.02 ohm as mean and final.
+    t.resistance_n = s.resistance_measured ? 1 : 0;
+    t.resistance_ohm = s.resistance_measured ? s.resistance_ohm : 0.0f;
     const double e = static_cast<double>(s.voltage_v) - s.model_voltage_v;
     const double ea = static_cast<double>(s.voltage_v) - s.adapted_model_voltage_v;
     t.error_v = e;
@@ -291,8 +292,8 @@ json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
                                  {"after_rest", rest_capacity_ah_ > 0.0f ? json(round_sig(rest_capacity_ah_)) : json(nullptr)}};
         flight["resistance_ohm"] = {{"mean", mean_or_null(f.resistance_ohm, f.resistance_n)},
                                     {"first20_mean", mean_or_null(first20.resistance_ohm, first20.resistance_n)},
-                                    {"final", last_flying_.resistance_ohm > 0.0f ? json(round_sig(last_flying_.resistance_ohm))
-                                                                                : json(nullptr)}};
+                                    {"final", last_flying_.resistance_measured ? json(round_sig(last_flying_.resistance_ohm))
+                                                                               : json(nullptr)}};
         flight["voltage_error_v"] = {
             {"model", {{"mean", mean_or_null(f.error_v, f.n)},
                        {"mean_abs", mean_or_null(f.abs_error_v, f.n)},
