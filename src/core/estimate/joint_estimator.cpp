@@ -4,6 +4,11 @@
 
 namespace battsim {
 namespace core {
+namespace {
+// A resting pack's voltage this far per cell from the tracking filter's prediction means the
+// filter has lost it (a healthy filter rests within about 5 mV per cell of the measurement).
+constexpr float kLostAtRestVPerCell = 0.05f;
+}  // namespace
 
 void JointEstimator::configure_branch(Branch& b, const Config::HealthFilter& c, float capacity_ah) {
     b = Branch{};
@@ -60,6 +65,8 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     takeoff_soc_valid_ = false;
     charge_total_ah_ = rest_s_ = ground_s_ = gap_hold_s_ = 0.0f;
     has_flown_ = false;
+    landing_soc_ = 1.0f;
+    rest_anchored_ = false;
     taken_off_ = false;
     rest_reads_ = 0;
     last_voltage_v_ = 0.0f;
@@ -232,13 +239,31 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         const float drop = start_soc_ - soc_rest;
         // The curve reads the mean cell; like capacity_ah, report what the weakest holds.
         if (drop >= config_.rest_capacity_min_soc_drop) status_.rest_capacity_ah = weakest_cell_ah(charge_total_ah_ / drop);
+        // A filter whose prediction stays far from a resting pack has lost it: its
+        // polarisation held an ohmic drop its R0 never measured (a log sampled once a
+        // second), so the landing's step read as charge and the gate then refused every
+        // resting sample (an ArduPilot 3S pack resting at 3.50 V per cell read 53 % full for
+        // minutes). At rest the voltage is the state of charge: each filter is set to it,
+        // its capacity and polarisation kept.
+        if (fabsf(tracking_.ekf.status().innovation_v) > kLostAtRestVPerCell * static_cast<float>(cells_)) {
+            for (Branch* b : branches) b->ekf.shift_soc(soc_rest - b->ekf.status().soc);
+            rest_anchored_ = true;
+        }
     }
     if (airborne) {
         flying_s_ += dt_s;
         flying_energy_j_ += voltage_v * true_charge_a * dt_s;
         charge_since_takeoff_ah_ += true_charge_a * dt_s / 3600.0f;
     }
-    status_.soc = clampf(es.soc, 0.0f, 1.0f);
+    // A pack gains no charge on the ground: after a landing the state of charge shown stays
+    // at most the landing's until a rest has set the filters (a 3S pack had gone from 32 %
+    // to 64 % in the sample after its failsafe landing, and MAVLink sent it).
+    // The last loaded sample's: the samples a landing is held through already see the step.
+    if (flying) landing_soc_ = tracking_.ekf.status().soc;
+    if (airborne) rest_anchored_ = false;
+    const float shown_soc = has_flown_ && !flying && !rest_anchored_ ? minf(tracking_.ekf.status().soc, landing_soc_)
+                                                                     : tracking_.ekf.status().soc;
+    status_.soc = clampf(shown_soc, 0.0f, 1.0f);
     status_.capacity_ah = weakest_cell_ah(health().capacity_ah);
     // Scaled as the capacity is (the weak cell's deficit taken as known), and the systematic
     // part that grows with the charge drawn (Config); held on the ground after a flight,

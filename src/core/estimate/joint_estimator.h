@@ -301,6 +301,10 @@ private:
     float ground_s_ = 0.0f;              // on the ground (not flying), since
     float rest_s_ = 0.0f;                // on the ground below the rest current, since
     bool has_flown_ = false;
+    // The state of charge at the last airborne sample, and whether a rest since has set the
+    // filters' to the resting voltage's (see update: a landing must not read the pack fuller).
+    float landing_soc_ = 1.0f;
+    bool rest_anchored_ = false;
     bool taken_off_ = false;  // the offset is learnt only before this
     float last_voltage_v_ = 0.0f;
     float last_current_a_ = 0.0f;  // the previous sample's, for a gap's charge
