@@ -3,7 +3,7 @@
 # of the firmware that needs no ESP8266 Arduino core) with Debian's xtensa-lx106 GCC, as
 # for the NodeMCU, and reports flash (text: code, literals, read-only data) and static
 # RAM (data + bss) with xtensa-lx106-elf-size. Fails when the core is over its budget:
-# 32 KiB text, 2 KiB static RAM. Also prints sizeof of the big objects on the target.
+# 32.5 KiB text, 2 KiB static RAM. Also prints sizeof of the big objects on the target.
 #
 #   sh scripts/cross-compile.sh [--header battsim_config.h] [-o DIR]
 #
@@ -17,7 +17,9 @@ cxx=${XTENSA_CXX:-xtensa-lx106-elf-g++}
 size_tool=${XTENSA_SIZE:-xtensa-lx106-elf-size}
 nm_tool=${XTENSA_NM:-xtensa-lx106-elf-nm}
 ar_tool=${XTENSA_AR:-xtensa-lx106-elf-ar}
-text_budget=${CORE_TEXT_BUDGET:-32768}
+# 32 KiB until the forty-eighth session; raised by 512 B for three corrections a user sees
+# (docs/firmware.md, "Size on the ESP8266"), with 137 B of it found again first.
+text_budget=${CORE_TEXT_BUDGET:-33280}
 ram_budget=${CORE_RAM_BUDGET:-2048}
 header=""
 out=""

@@ -108,7 +108,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
     const bool reference = config_.estimator == EstimatorKind::Reference;
     if (flying && reference) resistance_.update(sample.voltage_v, current_a, dt_s);
     status_.resistance_ohm = resistance_.status().resistance_ohm;
-    status_.resistance_measured = status_.resistance_ohm > 0.0f;
+    status_.resistance_measured = resistance_.status().updates > 0;
 
     if (!status_.initialised) {
         const TremblayModel& model = capacity_.fixed_model();
@@ -122,20 +122,17 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         // The sample it settled from: this one, or the last at rest before a take-off.
         const float settle_v = initial_.status().voltage_v;
         const float settle_a = initial_.status().current_a;
-        if (extended) {
-            // The charge drawn from the extended model (its RC and temperature states at this
-            // moment); the energy to it from the plain model's closed form.
-            initial_ah = model_.used_ah_at_voltage(settle_v, settle_a);
-            initial_wh = model.energy_wh_to(initial_ah, settle_a);
-        }
+        // The charge drawn from the extended model (its RC and temperature states at this
+        // moment); with the joint estimator, what its own state of charge says (its OCV
+        // table), not the loaded Tremblay curve's: a pack resting part-charged had read 96 %
+        // drawn in `consumed` next to a state of charge of 38 %. The energy to it from the
+        // plain model's closed form.
+        if (extended) initial_ah = model_.used_ah_at_voltage(settle_v, settle_a);
         if (!reference) {
-            // The charge drawn the joint estimator's own state of charge says (its OCV
-            // table), not the loaded Tremblay curve's: a pack resting part-charged had read
-            // 96 % drawn in `consumed` next to a state of charge of 38 %.
             joint_.start(settle_v, settle_a);
-            initial_ah = (1.0f - joint_.status().soc) * capacity_.fixed_model().params().capacity_ah;
-            initial_wh = model.energy_wh_to(initial_ah, settle_a);
+            initial_ah = (1.0f - joint_.status().soc) * model.params().capacity_ah;
         }
+        if (extended || !reference) initial_wh = model.energy_wh_to(initial_ah, settle_a);
         counter_.reset(initial_ah * 1000.0f, initial_wh * 1000.0f);
     } else {
         counter_.update(current_a, sample.voltage_v, dt_s);
@@ -195,7 +192,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
         status_.capacity_ah = js.capacity_ah;
         status_.capacity_sigma_ah = js.sigma_capacity_ah;
         status_.resistance_ohm = js.resistance_ohm;
-        status_.resistance_measured = js.measured_resistance_ohm > 0.0f;
+        status_.resistance_measured = js.resistance_measured;
         status_.soc = js.soc;
         status_.remaining_time_s = js.remaining_time_s;
         status_.total_time_s = js.total_time_s;

@@ -66,7 +66,6 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     charge_total_ah_ = rest_s_ = ground_s_ = gap_hold_s_ = 0.0f;
     has_flown_ = false;
     landing_soc_ = 1.0f;
-    rest_anchored_ = false;
     taken_off_ = false;
     rest_reads_ = 0;
     last_voltage_v_ = 0.0f;
@@ -247,7 +246,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         // its capacity and polarisation kept.
         if (fabsf(tracking_.ekf.status().innovation_v) > kLostAtRestVPerCell * static_cast<float>(cells_)) {
             for (Branch* b : branches) b->ekf.shift_soc(soc_rest - b->ekf.status().soc);
-            rest_anchored_ = true;
+            landing_soc_ = 2.0f;  // what the rest reads is shown, whichever way it moved
         }
     }
     if (airborne) {
@@ -256,14 +255,13 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
         charge_since_takeoff_ah_ += true_charge_a * dt_s / 3600.0f;
     }
     // A pack gains no charge on the ground: after a landing the state of charge shown stays
-    // at most the landing's until a rest has set the filters (a 3S pack had gone from 32 %
-    // to 64 % in the sample after its failsafe landing, and MAVLink sent it).
-    // The last loaded sample's: the samples a landing is held through already see the step.
-    if (flying) landing_soc_ = tracking_.ekf.status().soc;
-    if (airborne) rest_anchored_ = false;
-    const float shown_soc = has_flown_ && !flying && !rest_anchored_ ? minf(tracking_.ekf.status().soc, landing_soc_)
-                                                                     : tracking_.ekf.status().soc;
-    status_.soc = clampf(shown_soc, 0.0f, 1.0f);
+    // at most the last loaded sample's (the samples a landing is held through already see
+    // the step) until a rest has set the filters (a 3S pack had gone from 32 % to 64 % in the
+    // sample after its failsafe landing, and MAVLink sent it).
+    float soc = es.soc;
+    if (flying) landing_soc_ = soc;
+    if (has_flown_ && soc > landing_soc_) soc = landing_soc_;
+    status_.soc = clampf(soc, 0.0f, 1.0f);
     status_.capacity_ah = weakest_cell_ah(health().capacity_ah);
     // Scaled as the capacity is (the weak cell's deficit taken as known), and the systematic
     // part that grows with the charge drawn (Config); held on the ground after a flight,
@@ -275,6 +273,7 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     }
     status_.measured_resistance_ohm = rs.valid ? rs.resistance_now_ohm : 0.0f;
     status_.measured_resistance_sigma_ohm = rs.valid ? rs.sigma_now_ohm : 0.0f;
+    status_.resistance_measured = rs.valid;
     status_.polarisation_ohm = es.polarisation_ohm * tracking_.scale;
     status_.polarisation_current_a = tracking_.polarisation_current_a;
     status_.mean_power_w = flying_s_ > 0.0f ? flying_energy_j_ / flying_s_ : 0.0f;
@@ -351,14 +350,26 @@ void JointEstimator::start_solve() {
     const float p = solve_power_w_;
     const float v_min = config_.min_voltage_v;
     const int n = config_.solver_steps;
+    // One call with the arguments chosen (five calls of eight arguments had cost flash).
+    float soc = soc_takeoff, capacity_ah = q, r = r_total, cell_share = share, cell_ratio = ratio;
     switch (solve_) {
-        case kSolveRemaining: solver_.start(clampf(es.soc, 0.0f, 1.0f), q, r_total, p, v_min, n, share, ratio); break;
+        case kSolveRemaining: soc = clampf(es.soc, 0.0f, 1.0f); break;
         case kSolveTotal:
-        case kSolveHealth: solver_.start(soc_takeoff, q, r_total, p, v_min, n, share, ratio); break;
-        case kSolveExpected: solver_.start(soc_takeoff, rated_.capacity_ah, r_rated, p, v_min, n); break;
-        case kSolveCapacityOnly: solver_.start(soc_takeoff, q, r_rated, p, v_min, n, share, ratio); break;
-        default: solver_.start(soc_takeoff, rated_.capacity_ah, r_total, p, v_min, n); break;
+        case kSolveHealth: break;
+        case kSolveExpected:
+            capacity_ah = rated_.capacity_ah;
+            r = r_rated;
+            cell_share = 0.0f;  // a healthy pack: no weak cell
+            cell_ratio = 1.0f;
+            break;
+        case kSolveCapacityOnly: r = r_rated; break;
+        default:
+            capacity_ah = rated_.capacity_ah;
+            cell_share = 0.0f;
+            cell_ratio = 1.0f;
+            break;
     }
+    solver_.start(soc, capacity_ah, r, p, v_min, n, cell_share, cell_ratio);
 }
 
 void JointEstimator::finish_solve() {

@@ -202,6 +202,7 @@ public:
         float effective_resistance_ohm = 0.0f;  // the window mean the filter and the solves use
         float measured_resistance_ohm = 0.0f;  // from the differences alone (0 until valid)
         float measured_resistance_sigma_ohm = 0.0f;
+        bool resistance_measured = false;  // the two above are valid (else resistance_ohm is the prior's)
         float polarisation_ohm = 0.0f;
         float polarisation_current_a = 0.0f;  // the low-passed current the polarisation sees
         float mean_power_w = 0.0f;         // since take-off
@@ -301,10 +302,9 @@ private:
     float ground_s_ = 0.0f;              // on the ground (not flying), since
     float rest_s_ = 0.0f;                // on the ground below the rest current, since
     bool has_flown_ = false;
-    // The state of charge at the last airborne sample, and whether a rest since has set the
-    // filters' to the resting voltage's (see update: a landing must not read the pack fuller).
+    // The most state of charge shown on the ground after a flight: the last loaded sample's
+    // until a rest sets the filters (see update: a landing must not read the pack fuller).
     float landing_soc_ = 1.0f;
-    bool rest_anchored_ = false;
     bool taken_off_ = false;  // the offset is learnt only before this
     float last_voltage_v_ = 0.0f;
     float last_current_a_ = 0.0f;  // the previous sample's, for a gap's charge
