@@ -156,6 +156,25 @@ TEST_CASE("battsim residual --plot shows every log it traced, up to four", "[cli
     CHECK(text.find("battsim residual: 2 logs") != std::string::npos);
 }
 
+TEST_CASE("battsim residual says the fitted charge fits less well only when it does", "[cli][residual][data]") {
+    // The sentence had been printed whenever the final model was polished for the monitor's
+    // start; on flight 30 the fitted figure was the better one.
+    const std::string dir = clitest::temp_dir(), report = dir + "/r.json";
+    const std::string flights = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/";
+    const clitest::Result run = clitest::run("residual " + clitest::q(flights + "30.csv") + " -c " +
+                                             clitest::q(kSource + "/configs/reference-modified.json") +
+                                             " --candidates rc_polarisation --max-effects 1 --report " + clitest::q(report));
+    INFO(run.err);
+    REQUIRE(run.exit_code == 0);
+    const json r = json::parse(clitest::read_file(report));
+    REQUIRE(r["monitor_polished"] == true);
+    const double last = r["stages"].back()["all"]["rmse_v"].get<double>();
+    const double fitted = r["per_log"][0]["after"]["all"]["rmse_v"].get<double>();
+    INFO(run.out);
+    CHECK((run.out.find("fits less well than the last step above") != std::string::npos) == (fitted > last));
+    CHECK_THAT(run.out, Catch::Contains("the final model was refitted for the initial charge the monitor sets"));
+}
+
 TEST_CASE("battsim residual gives the same model whatever the order of its logs", "[cli][residual][data]") {
     // Given as 1, 140 it had added rc_polarisation; as 140, 1 self_heating and sample_timing.
     const std::string flights = std::string(BATTSIM_DATA_DIR) + "/cmu-m100/flights/";
