@@ -207,3 +207,23 @@ TEST_CASE("fit-ocv reports bad input and bad options with their exit codes", "[c
     CHECK(none.exit_code == 3);
     CHECK(clitest::read_file(dir + "/out.json").empty());
 }
+
+TEST_CASE("fit-ocv: no held-out error without --test logs, and logs that never fly are refused", "[cli][data]") {
+    const std::string dir = clitest::temp_dir();
+    // Without --test there is no held-out error: it had read 0.0, a perfect fit.
+    const auto j = clitest::run_json("fit-ocv" + flights({1, 3, 5}) + " -c " + q(kSource + "/configs/dji-tb47d-6s.json") + kCmu +
+                                     " --json");
+    CHECK(j["rms_v_per_cell"]["test_fitted"].is_null());
+    CHECK(j["rms_v_per_cell"]["test_config_curve"].is_null());
+    CHECK(j["rms_v_per_cell"]["fitted"].get<double>() > 0.0);
+    // The bundled flight's first minute, on the ground: nothing to read a curve over. It had
+    // exited 0 with a slow polarisation resistance of -1.4 ohm.
+    std::ifstream in(kSource + "/logs/example-4s.csv");
+    std::string line, ground;
+    for (int k = 0; k < 900 && std::getline(in, line); ++k) ground += line + "\n";
+    clitest::write_file(dir + "/ground.csv", ground);
+    const clitest::Result r = run("fit-ocv " + q(dir + "/ground.csv") + " -c " + q(kSource + "/configs/sim-4s.json") + " --json");
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("in flight, under 2 % of the config's 1.55 Ah"));
+    CHECK(r.out.empty());
+}

@@ -1,6 +1,7 @@
 #include "host/fit/ocv_stitch.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <ostream>
 #include <stdexcept>
@@ -613,6 +614,20 @@ OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& 
     }
     if (std::find(is_test.begin(), is_test.end(), false) == is_test.end())
         throw TooLittleData(logs.size() == 1 ? logs[0].path : std::string(), "no log to fit holds 10 valid samples");
+    // The curve is read over the charge the flights draw: logs that never fly had "fitted" a
+    // resistance below zero and a state of charge above 1, exit 0.
+    double flown_ah = 0;
+    for (size_t n = 0; n < traces.size(); ++n)
+        for (const TracePoint& p : traces[n].points)
+            if (!is_test[n] && p.valid && p.flying) flown_ah += static_cast<double>(p.current_a) * p.dt_s / 3600.0;
+    if (!(flown_ah >= 0.02 * s.capacity_ah)) {
+        char what[160];
+        std::snprintf(what, sizeof what,
+                      "the logs to fit draw %.3f Ah in flight, under 2 %% of the config's %.3g Ah: the OCV is read over the "
+                      "charge flights draw",
+                      flown_ah, s.capacity_ah);
+        throw TooLittleData(logs.size() == 1 ? logs[0].path : std::string(), what);
+    }
 
     // One fit per candidate slow time constant; the one whose fit leaves the smallest error wins.
     const double r_config = mc.battery.internal_resistance_ohm / s.cells;
@@ -742,6 +757,8 @@ nlohmann::json to_json(const OcvStitch& s) {
         return a;
     };
     json flights = json::array();
+    bool any_test = false;  // without --test logs there is no held-out error (it had read 0.0)
+    for (const OcvStitchFlight& f : s.flights) any_test = any_test || f.test;
     for (const OcvStitchFlight& f : s.flights)
         flights.push_back({{"log", f.log},
                            {"test", f.test},
@@ -762,7 +779,8 @@ nlohmann::json to_json(const OcvStitch& s) {
              {{"config_curve", {{"ohmic_median", r(s.resistance_before_ohm)}, {"fast", r(s.fast_before_ohm)}, {"slow", r(s.slow_before_ohm)}}},
               {"fitted", {{"ohmic_median", r(s.resistance_ohm)}, {"fast", r(s.fast_ohm)}, {"slow", r(s.slow_ohm)}}}}},
             {"rms_v_per_cell",
-             {{"config_curve", r(s.rms_before_v)}, {"fitted", r(s.rms_v)}, {"test_config_curve", r(s.test_rms_before_v)}, {"test_fitted", r(s.test_rms_v)}}},
+             {{"config_curve", r(s.rms_before_v)}, {"fitted", r(s.rms_v)}, {"test_config_curve", any_test ? json(r(s.test_rms_before_v)) : json(nullptr)},
+              {"test_fitted", any_test ? json(r(s.test_rms_v)) : json(nullptr)}}},
             {"iterations", s.iterations},
             {"polarisation_time_s", {{"fast", r(s.fast_time_s)}, {"slow", r(s.slow_time_s)}}},
             {"slow_time_candidates", [&] {
