@@ -87,6 +87,23 @@ std::function<int()> setup(CLI::App& sub) {
         for (const auto& note : result.info.notes) std::cerr << "battsim discharge: note: " << note << "\n";
         if (!result.ended_early.empty()) std::cerr << "battsim discharge: note: " << result.ended_early << "\n";
         nlohmann::json summary = host::discharge::discharge_to_json(result, true);
+        // A config for another pack reads the curve per cell of its own count: the built-in
+        // 4S config on one Samsung cell had written a config of 0.63-1.04 V per cell, silently.
+        host::LogFacts facts;
+        facts.resting_voltage_v = result.first_voltage_v;
+        facts.path = a->log;
+        nlohmann::json other_pack = nlohmann::json::array();
+        for (const std::string& note : host::config_notes(config.monitor, facts)) {
+            if (!host::is_other_pack_note(note)) continue;
+            std::cerr << "battsim discharge: note: " << note << "\n";
+            other_pack.push_back(note);
+        }
+        if (!other_pack.empty()) summary["config_notes"] = other_pack;
+        if (!other_pack.empty() && !a->config_out.empty()) {
+            std::cerr << "battsim discharge: --config-out: the config is for another pack than the log's (above), so its "
+                         "OCV table and curve points would be per cell of the wrong count; give -c a config for this pack\n";
+            return kExitConfigError;
+        }
         host::discharge::OcvTableRead ocv;
         const bool with_ocv = a->ocv_points != 0 && result.ended_early.empty();  // part of a discharge: no SOC scale
         if (with_ocv) {
@@ -100,6 +117,8 @@ std::function<int()> setup(CLI::App& sub) {
             }
             for (const auto& note : ocv.notes) std::cerr << "battsim discharge: note: " << note << "\n";
             summary["ocv_table"] = host::discharge::ocv_table_to_json(ocv);
+        } else {
+            summary["ocv_table"] = nullptr;  // the key is always there (it had been left out)
         }
         // The start config first: a discharge it cannot be read off (no zones) fails before
         // any output is written, not after the table and the summary.

@@ -499,7 +499,9 @@ namespace {
 const char* const kOtherPackEnd = ": does the config match this pack?";
 const char* const kMillivoltsEnd = ": a voltage in mV read as volts?";  // the pack's rest a thousand times a cell's
 const char* const kMakeConfigAdvice = ": battsim make-config --from-log ";
-const char* const kMakeConfigAdviceEnd = " writes one for it";
+// An ordinary CSV records no capacity, and make-config asks for one (the advice alone had
+// exited 2 on a Matrice 100 flight).
+const char* const kMakeConfigAdviceEnd = " writes one for it (with --capacity-mah if the log does not record the capacity)";
 bool ends_with_text(const std::string& s, const std::string& end) {
     return s.size() >= end.size() && s.compare(s.size() - end.size(), end.size(), end) == 0;
 }

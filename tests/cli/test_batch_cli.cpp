@@ -117,7 +117,7 @@ TEST_CASE("batch: a config for another pack than the logs' is said, not only cou
     REQUIRE(r.exit_code == 1);
     CHECK(nlohmann::json::parse(r.out)["rows"][0]["status"] == "no_valid_samples");
     CHECK_THAT(r.err, Catch::Contains("battsim batch: note: " + dir + "/six.csv: the pack rests at") &&
-                          Catch::Contains(": battsim make-config --from-log " + dir + "/six.csv writes one for it"));
+                          Catch::Contains(": battsim make-config --from-log " + dir + "/six.csv writes one for it (with --capacity-mah"));
     // With its own config, no such note.
     const auto own = run("batch " + q(dir + "/six.csv") + " -c " + q(kSource + "/configs/generic-6s.json") +
                          " --no-progress --format json");

@@ -248,3 +248,32 @@ TEST_CASE("errors are prefixed once with the command", "[cli][fit]") {
     CHECK(r.exit_code == 3);
     CHECK_THAT(r.err, Catch::Contains("battsim fit: " + two + ": 2 samples to fit") && !Catch::Contains("fit: fit:"));
 }
+
+TEST_CASE("discharge: a part of a discharge says so in its JSON; a config for another pack writes no config", "[cli][data]") {
+    const std::string source = BATTSIM_SOURCE_DIR;
+    // The bundled flight stops at 15.07 V, above the 13.3 V minimum: its capacity_mah is only
+    // what flowed, which only standard error had said.
+    const clitest::Result part = clitest::run("discharge " + clitest::q(source + "/logs/example-4s.csv") + " -c " +
+                                              clitest::q(source + "/configs/sim-4s.json") + " --json");
+    REQUIRE(part.exit_code == 0);
+    const nlohmann::json p = nlohmann::json::parse(part.out);
+    CHECK(p["complete"] == false);
+    CHECK(p["zones"]["found"] == false);
+    CHECK(p["ocv_table"].is_null());
+    bool said = false;
+    for (const auto& n : p["input"]["notes"]) said = said || n.get<std::string>().find("only what flowed until then") != std::string::npos;
+    CHECK(said);
+    // One Samsung cell with the built-in 4S config: noted, and no config written (it had
+    // written one of 0.63-1.04 V per cell without a word).
+    const std::string dir = clitest::temp_dir();
+    const std::string cell = clitest::q(std::string(BATTSIM_DATA_DIR) + "/samsung-30q/Q30_S001_C10.csv");
+    const clitest::Result four = clitest::run("discharge " + cell + " --min-voltage 2.5 --max-voltage 4.2 --negative-discharge --json"
+                                              " --config-out " + clitest::q(dir + "/c.json"));
+    CHECK(four.exit_code == 4);
+    CHECK_THAT(four.err, Catch::Contains("1.035 V per cell for the config's 4 cells in series"));
+    CHECK_FALSE(std::ifstream(dir + "/c.json").good());
+    const nlohmann::json whole = clitest::run_json("discharge " + cell + " --min-voltage 2.5 --max-voltage 4.2 --negative-discharge --json");
+    CHECK(whole["complete"] == true);
+    CHECK(whole["zones"]["found"] == true);
+    REQUIRE(whole["config_notes"].size() == 1);
+}

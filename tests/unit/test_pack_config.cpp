@@ -278,7 +278,8 @@ TEST_CASE("Replay notes a config for another pack than the log's autopilot flew"
     std::vector<std::string> notes = config_notes(m, f);
     REQUIRE(notes.size() == 1);
     CHECK(notes[0] == "the log's autopilot was set for a 1.76 Ah pack (the log's BATT_CAPACITY 1760 mAh), the config's is "
-                      "1.55 Ah: battsim make-config --from-log flight.bin writes one for it");
+                      "1.55 Ah: battsim make-config --from-log flight.bin writes one for it (with --capacity-mah if the log does not "
+                      "record the capacity)");
     f.declared_capacity_ah = 1.6;  // within 10 %: labels differ that much
     CHECK(config_notes(m, f).empty());
     f.declared_cells = 6;

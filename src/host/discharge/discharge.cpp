@@ -373,7 +373,12 @@ nlohmann::json discharge_to_json(const DischargeResult& r, bool with_table) {
     j["schema"] = "battsim.discharge";
     j["schema_version"] = 1;
     j["battsim_version"] = BATTSIM_VERSION;  // as every other report: which release wrote it
-    j["input"] = {{"path", r.path}, {"format", to_string(r.info.format)}, {"notes", r.info.notes}};
+    // A discharge that stopped above the minimum voltage is said where a program looks: its
+    // capacity_mah is only what flowed until then (it had been said on standard error alone).
+    nlohmann::json notes = r.info.notes;
+    if (!r.ended_early.empty()) notes.push_back(r.ended_early);
+    j["input"] = {{"path", r.path}, {"format", to_string(r.info.format)}, {"notes", notes}};
+    j["complete"] = r.ended_early.empty();
     j["samples"] = {{"read", r.samples_read}, {"kept", r.samples_kept}, {"curve_points", r.curve.size()}};
     j["kept_from_s"] = round_time_s(r.start_time_s);
     j["kept_to_s"] = round_time_s(r.end_time_s);
@@ -387,7 +392,8 @@ nlohmann::json discharge_to_json(const DischargeResult& r, bool with_table) {
     j["last_voltage_v"] = round_sig(r.last_voltage_v, 6);
     const Zones& z = r.zones;
     if (z.found) {
-        j["zones"] = {{"full_voltage_v", round_sig(z.full_voltage_v, 6)},
+        j["zones"] = {{"found", true},
+                      {"full_voltage_v", round_sig(z.full_voltage_v, 6)},
                       {"exponential_end", {{"capacity_ah", round_sig(z.exponential_end_ah, 5)}, {"voltage_v", round_sig(z.exponential_end_v, 5)}}},
                       {"nominal_end", {{"capacity_ah", round_sig(z.nominal_end_ah, 5)}, {"voltage_v", round_sig(z.nominal_end_v, 5)}}},
                       {"nominal_gradient_v_per_ah", round_sig(z.nominal_gradient_v_per_ah, 5)}};
