@@ -507,6 +507,8 @@ bool ends_with_text(const std::string& s, const std::string& end) {
 }
 }  // namespace
 
+bool is_millivolts_note(const std::string& note) { return ends_with_text(note, kMillivoltsEnd); }
+
 bool is_other_pack_note(const std::string& note) {
     return ends_with_text(note, kOtherPackEnd) || ends_with_text(note, kMillivoltsEnd) ||
            (note.find(kMakeConfigAdvice) != std::string::npos && ends_with_text(note, kMakeConfigAdviceEnd));

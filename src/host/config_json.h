@@ -67,6 +67,8 @@ std::vector<std::string> config_notes(const core::MonitorConfig& config, const L
 // Whether a note of config_notes says the config is for another pack than the log's (its
 // cell count, its resting voltage, what its autopilot was set for).
 bool is_other_pack_note(const std::string& note);
+// Whether it is the one that asks whether the log's voltage is in mV (a rest a thousand times a cell's).
+bool is_millivolts_note(const std::string& note);
 // The note config_notes makes when the config's model depends on the temperature
 // (battery.extensions.temperature, with no lumped thermal state to drive it) and the log
 // carries none: the model then runs at its reference temperature throughout, and a cold

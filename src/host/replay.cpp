@@ -63,9 +63,13 @@ std::string kept_out_text(const nlohmann::json& summary) {
     // A current column in mA read as A reads a thousand times high: the unit before the pack.
     if (rejected.contains("current_high")) out += "; a current in mA read as amperes (give --current-unit mA)?";
     // Likewise a voltage in mV, every reading of it (a CSV column named plainly "voltage").
+    // Not when the pack rests at volts of another cell count: a Matrice 100's 24.22 V on the
+    // built-in 4S config had been asked whether it was in mV.
     const nlohmann::json high_v = rejected.value("pack_voltage_high", nlohmann::json());
+    bool volts_of_another_pack = false;
+    for (const std::string& note : other_pack_notes(summary)) volts_of_another_pack = volts_of_another_pack || !is_millivolts_note(note);
     if (high_v.is_number_unsigned() && high_v == summary["samples"].value("total", nlohmann::json()) &&
-        summary["input"].value("format", std::string()) == "csv")
+        summary["input"].value("format", std::string()) == "csv" && !volts_of_another_pack)
         out += "; a voltage in mV read as volts (name the column voltage_mv, or \"voltage (mV)\")?";
     out += pack_kept_out ? "; does the config match this pack?" : "; a loose balance lead, or a config for another cell count?";
     return out;

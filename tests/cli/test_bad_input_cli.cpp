@@ -78,6 +78,15 @@ TEST_CASE("a voltage column in millivolts with a plain name is asked about, not 
     CHECK_THAT(r.err, Catch::Contains("the pack rests at 16500.00 V, 4125.000 V per cell for the config's 4 cells in series, "
                                       "outside any lithium cell's resting range (2.9-4.45 V): a voltage in mV read as volts?"));
     CHECK_THAT(r.err, !Catch::Contains("make-config --from-log"));
+    // A pack resting at volts of another cell count is not asked about millivolts: a
+    // Matrice 100's 24.22 V on the built-in 4S config had been.
+    std::string six = "time_s,voltage,current_a\n";
+    for (int k = 0; k < 100; ++k) six += std::to_string(0.1 * k) + ",24.2,0.3\n";
+    clitest::write_file(dir + "/six.csv", six);
+    const auto r6 = run("replay " + q(dir + "/six.csv") + " --voltage-col voltage");
+    CHECK(r6.exit_code == 1);
+    CHECK_THAT(r6.err, Catch::Contains("100 pack_voltage_high (sensor.max_pack_voltage_v); does the config match this pack?"));
+    CHECK_THAT(r6.err, !Catch::Contains("in mV"));
     // Named so, it reads.
     std::string named = log;
     named.replace(0, named.find('\n'), "time_s,voltage_mv,current_a");
