@@ -309,6 +309,9 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("shunt_offset_ma", m.shunt.offset_ma, -kBig, kBig);
         r.number("shunt_scale_mv_per_10a", m.shunt.scale_mv_per_10a, 1e-9, kBig);
         r.number("max_pack_voltage_v", m.sensor.max_pack_voltage_v, 0, 10000);
+        // The per-cell floor before the key is read, so that the reference lists it as the
+        // key's default (it had listed the core's 1.0 V).
+        if (!floor_set && per_cell_floor_v < m.sensor.max_pack_voltage_v) m.sensor.min_pack_voltage_v = per_cell_floor_v;
         r.number("min_pack_voltage_v", m.sensor.min_pack_voltage_v, 0, 10000);
         r.number("max_current_a", m.sensor.max_current_a, -kBig, kBig);
         r.number("min_current_a", m.sensor.min_current_a, -kBig, kBig);

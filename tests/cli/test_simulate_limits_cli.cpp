@@ -120,3 +120,15 @@ TEST_CASE("simulate and replay say when a small craft's ground idle reads as fli
     CHECK(landed["flight"]["landed"].get<bool>());
     for (const auto& n : landed["input"]["notes"]) CHECK(n.get<std::string>().find("no ground before it") == std::string::npos);
 }
+
+TEST_CASE("the bundled example and its truth are what simulate writes today", "[cli]") {
+    // The truth file embeds the monitor's config; it had kept a glitch floor of 1.0 V after the
+    // reader's default became 2.0 V per cell, while the log itself still matched.
+    const std::string dir = clitest::temp_dir();
+    const clitest::Result r = clitest::run("simulate " + clitest::q(kSource + "/configs/scenarios/4s-racing-healthy-a.json") + " -o " +
+                                           clitest::q(dir + "/example-4s.csv"));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK(clitest::read_file(dir + "/example-4s.csv") == clitest::read_file(kSource + "/logs/example-4s.csv"));
+    CHECK(clitest::read_file(dir + "/example-4s.truth.json") == clitest::read_file(kSource + "/logs/example-4s.truth.json"));
+}
