@@ -8,6 +8,7 @@
 #include "common_options.h"
 #include "host/batch/bench.h"
 #include "host/config_json.h"
+#include "host/report/summary.h"
 
 namespace battsim {
 namespace cli {
@@ -55,20 +56,28 @@ int plan(const BenchArgs& a, std::vector<host::BatchItem>& items) {
     return kExitOk;
 }
 
-void print(const nlohmann::json& j, bool as_json) {
+// The figures to six significant digits (seconds had printed as 9.133000000000578e-06), and
+// as JSON with the schema fields every other report carries.
+void print(const std::string& benchmark, nlohmann::json j, bool as_json) {
+    for (auto it = j.begin(); it != j.end(); ++it)
+        if (it.value().is_number_float()) it.value() = host::round_sig(it.value().get<double>());
     if (as_json) {
-        std::cout << host::json_text(j, 2) << "\n";
+        nlohmann::json out = {{"schema", "battsim.bench"}, {"schema_version", 1}, {"battsim_version", BATTSIM_VERSION},
+                              {"benchmark", benchmark}};
+        for (auto it = j.begin(); it != j.end(); ++it) out[it.key()] = it.value();
+        std::cout << host::json_text(out, 2) << "\n";
         return;
     }
     for (auto it = j.begin(); it != j.end(); ++it) std::cout << it.key() << ": " << host::json_text(it.value()) << "\n";
 }
 
 // Times the first planned log with `bench`, which returns the figures to print.
-int bench_first_log(const BenchArgs& a, const std::function<nlohmann::json(const host::BatchItem&)>& bench) {
+int bench_first_log(const BenchArgs& a, const std::string& benchmark,
+                    const std::function<nlohmann::json(const host::BatchItem&)>& bench) {
     std::vector<host::BatchItem> items;
     if (int rc = plan(a, items)) return rc;
     try {
-        print(bench(items.front()), a.json);
+        print(benchmark, bench(items.front()), a.json);
     } catch (const host::InputError& e) {
         std::cerr << "battsim bench: " << e.what() << "\n";
         return kExitInputError;
@@ -77,7 +86,7 @@ int bench_first_log(const BenchArgs& a, const std::function<nlohmann::json(const
 }
 
 int run_monitor(const BenchArgs& a) {
-    return bench_first_log(a, [&a](const host::BatchItem& it) -> nlohmann::json {
+    return bench_first_log(a, "monitor", [&a](const host::BatchItem& it) -> nlohmann::json {
         const host::MonitorBench r = host::bench_monitor(it.path, it.replay, a.passes, a.min_time);
         return {{"log", it.path},
                 {"samples_per_pass", r.samples},
@@ -92,7 +101,7 @@ int run_monitor(const BenchArgs& a) {
 }
 
 int run_replay(const BenchArgs& a) {
-    return bench_first_log(a, [&a](const host::BatchItem& it) -> nlohmann::json {
+    return bench_first_log(a, "replay", [&a](const host::BatchItem& it) -> nlohmann::json {
         const host::ThroughputBench r = host::bench_replay(it.path, it.replay, a.min_time, a.min_runs);
         return {{"log", it.path},
                 {"runs", r.runs},
@@ -118,7 +127,7 @@ int run_batch(const BenchArgs& a) {
         std::cerr << "battsim bench: " << r.failure << "\n";
         return kExitInputError;
     }
-    print({{"runs", r.runs},
+    print("batch", {{"runs", r.runs},
            {"logs", r.logs},
            {"jobs", r.jobs},
            {"samples", r.samples},

@@ -220,7 +220,9 @@ json config_keys_json(const std::vector<ConfigKey>& keys) {
         if (k.type == "number" || k.type == "integer") o["range"] = {k.lo, k.hi};
         arr.push_back(o);
     }
-    return json{{"keys", arr}};
+    // The schema fields every other report carries (the list had gone without them).
+    return json{{"schema", "battsim.config_keys"}, {"schema_version", 1}, {"battsim_version", BATTSIM_VERSION},
+                {"config_schema", "battsim.config"}, {"config_version", 1}, {"keys", arr}};
 }
 
 }  // namespace host
