@@ -123,6 +123,14 @@ TEST_CASE("batch: a config for another pack than the logs' is said, not only cou
                          " --no-progress --format json");
     CHECK(own.exit_code == 0);
     CHECK_THAT(own.err, !Catch::Contains("does the config match"));
+    // A 3S flight on the 4S config keeps its samples: its Markdown row had read a plain "ok"
+    // next to figures of another pack.
+    REQUIRE(run("simulate " + q(kSource + "/configs/scenarios/3s-hover-healthy.json") + " -o " + q(dir + "/three.csv")).exit_code == 0);
+    const auto three = run("batch " + q(dir + "/three.csv") + " -c " + q(kConfig) + " --no-progress");
+    CHECK(three.exit_code == 0);
+    CHECK_THAT(three.out, Catch::Contains("| ok (config for another pack: see notes) |"));
+    const auto three_own = run("batch " + q(dir + "/three.csv") + " -c " + q(kSource + "/configs/generic-3s.json") + " --no-progress");
+    CHECK_THAT(three_own.out, Catch::Contains("| ok |"));
 }
 
 TEST_CASE("batch: a log's notes are the table's notes column and said on stderr, as replay says them", "[cli][batch]") {

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "host/config_json.h"
 #include "host/io/json_text.h"
 #include "host/io/sample_reader.h"
 #include "host/report/charger_check.h"
@@ -168,6 +169,12 @@ std::string render_rows_md(const json& table) {
         }
         std::string status = text(r["status"]);
         if (status == kRowOk && !r["flight"].get<bool>()) status = "ok (no flight)";
+        // A log replayed with a config for another pack reads "ok" with nonsense figures (a 3S
+        // log on the built-in 4S config: 160 V of model error); its note sat in the CSV alone.
+        bool other_pack = false;
+        if (r.value("notes", json()).is_array())
+            for (const json& n : r["notes"]) other_pack = other_pack || (n.is_string() && is_other_pack_note(n.get<std::string>()));
+        if (status.compare(0, 2, kRowOk) == 0 && other_pack) status += " (config for another pack: see notes)";
         if (status == kRowNoValidSamples) status = "no valid samples";
         if (status != "ok" && r["error"].is_string()) status += ": " + r["error"].get<std::string>();
         o << "| " << md_cell(text(r["test"])) << " | " << md_cell(file_name(text(r["log"]))) << " | "
