@@ -113,3 +113,20 @@ TEST_CASE("Summary: times stamped in Unix time keep their microseconds", "[summa
     CHECK(host::time_s_of_us(141558000ull) == 141.558);
     CHECK(host::round_time_s(141.55800000000002) == 141.558);
 }
+
+TEST_CASE("fixed_text rounds a half of the printed decimal away from zero; round_sig prints its decimal", "[summary]") {
+    using battsim::host::fixed_text;
+    using battsim::host::round_sig;
+    // 1.3175 is 1.31749999... as a double: it had printed as 1.317 beside 1.7515 as 1.752.
+    CHECK(fixed_text(nlohmann::json(1.3175), 3) == "1.318");
+    CHECK(fixed_text(nlohmann::json(1.7515), 3) == "1.752");
+    CHECK(fixed_text(nlohmann::json(-0.2145), 3) == "-0.215");
+    CHECK(fixed_text(nlohmann::json(55.9355), 3) == "55.936");
+    CHECK(fixed_text(nlohmann::json(1.31749), 3) == "1.317");
+    CHECK(fixed_text(nlohmann::json(-0.0001), 3) == "0.000");
+    CHECK(fixed_text(nlohmann::json(nullptr), 3) == "–");
+    // round_sig's value prints as the rounded decimal (6.799999999999999e-23 had printed for 6.8e-23).
+    CHECK(nlohmann::json(round_sig(6.8e-23, 3)).dump() == "6.8e-23");
+    CHECK(round_sig(2.6e-22 / 3.0, 3) == 8.67e-23);
+    CHECK(round_sig(123456.7, 6) == 123457.0);
+}

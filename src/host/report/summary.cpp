@@ -39,8 +39,13 @@ double round_time_s(double time_s) {
 
 std::string fixed_text(const json& v, int decimals, const char* none, double scale) {
     if (!v.is_number()) return none;
+    // A half of the decimal the JSON prints rounds away from zero: 1.3175 is 1.317499… as a
+    // double and had printed as 1.317 beside 1.7515 as 1.752. The nudge is far below the six
+    // significant digits the figures carry.
+    double x = v.get<double>() * scale;
+    x += std::copysign(std::fabs(x) * 1e-12, x);
     char buf[64];
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, v.get<double>() * scale);
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, x);
     std::string s = buf;
     if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
     return s;
