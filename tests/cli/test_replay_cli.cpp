@@ -1051,7 +1051,7 @@ TEST_CASE("replay --plot draws the replay as SVG, and rejects other names", "[cl
     CHECK(text.find("<svg") != std::string::npos);
     // Legend entries and axis labels are SVG text elements.
     for (const char* title : {"measured", "fixed model", "adapted model", "current (right axis)", "capacity",
-                              "resistance (right axis)", "remaining", "total (solved from take-off)", "cell 1", "cell 4",
+                              "resistance (right axis)", "remaining", "total flight time", "cell 1", "cell 4",
                               "take-off", "landing", "voltage (V)", "current (A)", "capacity (Ah)", "resistance (mΩ)",
                               "flight time (s)", "difference (mV)", "log time (s)"}) {
         INFO(title);

@@ -467,7 +467,8 @@ void plot_replay(const ReplaySeries& s, const std::string& title, const std::str
     t.series.push_back(line_series("remaining", s.time_s, s.remaining_s, "#ff7f0e", false, 1.5));
     // With the joint estimator the total is the verdict's own solve from take-off, not flown +
     // remaining (which follows the tracking filter): the two need not agree.
-    t.series.push_back(line_series("total (solved from take-off)", s.time_s, s.total_s, "#8c564b", false, 1.5));
+    // Labelled for both estimators: the reference's is flown + remaining, on the ground too.
+    t.series.push_back(line_series("total flight time", s.time_s, s.total_s, "#8c564b", false, 1.5));
     panels.push_back(t);
     size_t deviations = SIZE_MAX;  // index of the cell-difference panel, if any
     if (!s.cell_v.empty()) {
