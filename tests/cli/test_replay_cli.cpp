@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <sstream>
 #include <vector>
@@ -1133,4 +1134,21 @@ TEST_CASE("replay says when a log holds its voltage between slower updates than 
     const auto example = clitest::run_json("replay " + q(source + "/logs/example-4s.csv") + " -c " + q(source + "/configs/sim-4s.json") +
                                            " --json");
     for (const auto& n : example["input"]["notes"]) CHECK(n.get<std::string>().find("repeats the sample before") == std::string::npos);
+}
+
+TEST_CASE("a flight too short to measure reports no resistance and no cell standard error, not the config's or 0", "[cli]") {
+    // The bundled example's first 960 rows: a take-off and a few seconds of flight.
+    const std::string source = BATTSIM_SOURCE_DIR;
+    std::ifstream in(source + "/logs/example-4s.csv");
+    std::string text, line;
+    for (int k = 0; k < 960 && std::getline(in, line); ++k) text += line + "\n";
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/short.csv", text);
+    const auto j = clitest::run_json("replay " + q(dir + "/short.csv") + " -c " + q(source + "/configs/sim-4s.json") +
+                                     " --estimator joint --json");
+    const auto& f = j["flight"];
+    REQUIRE(f.is_object());
+    CHECK(f["resistance_ohm"]["mean"].is_null());  // it had read the config's 0.02 ohm
+    CHECK(f["resistance_ohm"]["final"].is_null());
+    for (const auto& s : f["cell_capacity_deficit_sigma"]) CHECK(s.is_null());  // it had read 0
 }

@@ -326,7 +326,10 @@ json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
             for (int c = 0; c < cells && c < core::kMaxCells; ++c) {
                 r.push_back(round_sig(last_flying_.cell_resistance_ohm[c], 4));
                 d.push_back(round_sig(last_flying_.cell_capacity_deficit[c], 3));
-                ds.push_back(round_sig(last_flying_.cell_capacity_deficit_sigma[c], 3));
+                // No standard error yet is none, not a certainty of 0 (a flight too short for
+                // the cell check had read [0, 0, 0, 0]).
+                const float sigma = last_flying_.cell_capacity_deficit_sigma[c];
+                ds.push_back(sigma > 0.0f ? json(round_sig(sigma, 3)) : json(nullptr));
             }
             flight["cell_resistance_ohm"] = r;
             flight["cell_capacity_deficit"] = d;
