@@ -146,7 +146,16 @@ TEST_CASE("replay says when the battery states LOW and CRITICAL began, which are
     CHECK(r["critical_from_s"].get<double>() >= j["flight"]["start_s"].get<double>());
     CHECK_THAT(clitest::run("replay " + q(log)).out,
                Catch::Contains("  battery state (telemetry.low_time_s, critical_time_s): LOW from ") &&
-                   Catch::Contains(", CRITICAL from "));
+                   Catch::Contains("; CRITICAL from "));
+    // A state that went off and came back says how often and when it last began: flight 34's
+    // LOW at 2 s into the flight cleared 13 s later and came back at 215.5 s, which had read as
+    // LOW from take-off on.
+    const std::string f34 = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/34.csv";
+    const auto j34 = clitest::run_json("replay " + q(f34) + " -c " + q(kSource + "/configs/sim-4s.json") + " --estimator joint --json");
+    CHECK(j34["flight"]["remaining_time_s"]["low_spells"] == 2);
+    CHECK(j34["flight"]["remaining_time_s"]["low_last_from_s"].get<double>() == Approx(215.5).margin(0.05));
+    CHECK_THAT(clitest::run("replay " + q(f34) + " -c " + q(kSource + "/configs/sim-4s.json") + " --estimator joint").out,
+               Catch::Contains("LOW from 114.4 s (2.0 s into the flight), 2 spells, the last from 215.5 s; CRITICAL from"));
     // On the landing sample itself it says so (the dissertation's flight 29: LOW as it lands,
     // which had read "145.1 s into the flight" of a 145.1 s flight).
     const std::string f29 = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/29.csv";

@@ -111,9 +111,16 @@ void print_flight_brief(const nlohmann::json& s, std::ostream& out) {
         return fixed(t, 1) + " s (" + fixed(t.get<double>() - f["start_s"].get<double>(), 1) + " s into the flight)";
     };
     const std::string low = began("low_from_s"), critical = began("critical_from_s");
+    // A state that went off and came back: how often, and when it last began.
+    const auto again = [&](const char* spells, const char* last) -> std::string {
+        const auto& n = f["remaining_time_s"].value(spells, nlohmann::json());
+        if (!n.is_number_integer() || n.get<long>() < 2) return std::string();
+        const auto& t = f["remaining_time_s"].value(last, nlohmann::json());
+        return ", " + std::to_string(n.get<long>()) + " spells, the last from " + fixed(t, 1) + " s";
+    };
     if (!low.empty()) {
-        out << "  battery state (telemetry.low_time_s, critical_time_s): LOW from " << low;
-        if (!critical.empty()) out << ", CRITICAL from " << critical;
+        out << "  battery state (telemetry.low_time_s, critical_time_s): LOW from " << low << again("low_spells", "low_last_from_s");
+        if (!critical.empty()) out << "; CRITICAL from " << critical << again("critical_spells", "critical_last_from_s");
         out << "\n";
     }
 }

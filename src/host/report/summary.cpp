@@ -205,6 +205,15 @@ void SummaryAccumulator::add(const core::MonitorStatus& s) {
             critical_seen_ = true;
             critical_from_us_ = s.time_us;
         }
+        const auto spell = [&s](bool below, bool& on, long& spells, uint64_t& last_us) {
+            if (below && !on) {
+                ++spells;
+                last_us = s.time_us;
+            }
+            on = below;
+        };
+        spell(s.remaining_time_s < low_time_s_, low_on_, low_spells_, low_last_us_);
+        spell(s.remaining_time_s < critical_time_s_, critical_on_, critical_spells_, critical_last_us_);
     }
     if (s.flying) {
         flight_last_us_ = s.time_us;
@@ -314,6 +323,10 @@ json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
         const auto began = [](bool seen, uint64_t us) { return seen ? json(time_s_of_us(us)) : json(nullptr); };
         flight["remaining_time_s"]["low_from_s"] = began(low_seen_, low_from_us_);
         flight["remaining_time_s"]["critical_from_s"] = began(critical_seen_, critical_from_us_);
+        flight["remaining_time_s"]["low_spells"] = low_spells_;
+        flight["remaining_time_s"]["low_last_from_s"] = began(low_seen_, low_last_us_);
+        flight["remaining_time_s"]["critical_spells"] = critical_spells_;
+        flight["remaining_time_s"]["critical_last_from_s"] = began(critical_seen_, critical_last_us_);
         flight["total_time_s"] = {{"final", last_flying_.time_valid ? json(round_sig(last_flying_.total_time_s)) : json(nullptr)}};
         json scores = json::array();
         for (int c = 0; c < cells && c < core::kMaxCells; ++c) scores.push_back(round_sig(last_flying_.cell_score[c], 4));

@@ -108,6 +108,11 @@ private:
     float low_time_s_ = -1.0f, critical_time_s_ = -1.0f;  // -1: not set
     bool low_seen_ = false, critical_seen_ = false;
     uint64_t low_from_us_ = 0, critical_from_us_ = 0;
+    // Each state's spells in flight, and when the last began: a LOW at take-off that cleared
+    // 13 s later and came back 80 s before the landing had read as LOW from take-off on.
+    bool low_on_ = false, critical_on_ = false;
+    long low_spells_ = 0, critical_spells_ = 0;
+    uint64_t low_last_us_ = 0, critical_last_us_ = 0;
     float max_pack_deficit_ = 0.0f;  // the most the pack counted of a weak cell, in flight
     core::MonitorStatus first_flying_, last_flying_, last_;
     core::MonitorStatus latest_;  // any sample, valid or not: warnings and fault counts
