@@ -4,7 +4,6 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
