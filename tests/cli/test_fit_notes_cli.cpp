@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 
@@ -276,4 +278,25 @@ TEST_CASE("discharge: a part of a discharge says so in its JSON; a config for an
     CHECK(whole["complete"] == true);
     CHECK(whole["zones"]["found"] == true);
     REQUIRE(whole["config_notes"].size() == 1);
+}
+
+TEST_CASE("fit says in its JSON how far the logs determine each parameter", "[cli][fit]") {
+    // The bundled flight's first minute, on the ground: q read 0.041 +/- 0.018 Ah with the
+    // doubt said in the brief alone.
+    const std::string source = BATTSIM_SOURCE_DIR;
+    std::ifstream in(source + "/logs/example-4s.csv");
+    std::string text, line;
+    for (int k = 0; k < 900 && std::getline(in, line); ++k) text += line + "\n";
+    const std::string dir = clitest::temp_dir();
+    clitest::write_file(dir + "/ground.csv", text);
+    const nlohmann::json j = clitest::run_json("fit " + q(dir + "/ground.csv") + " -c " + q(source + "/configs/sim-4s.json") + " --json");
+    std::map<std::string, std::string> d;
+    for (const auto& p : j["parameters"]) d[p["name"].get<std::string>()] = p["determined"].get<std::string>();
+    CHECK(d.at("q") == "barely");
+    CHECK(d.at("initial") == "signed");
+    for (const auto& kv : d) {
+        INFO(kv.first);
+        CHECK((kv.second == "determined" || kv.second == "barely" || kv.second == "not_moved" || kv.second == "at_bound" ||
+               kv.second == "signed"));
+    }
 }
