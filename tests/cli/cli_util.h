@@ -15,6 +15,18 @@ using testsupport::write_file;
 // A fresh directory, removed when the test program exits.
 inline std::string temp_dir() { return testsupport::scratch_dir("cli"); }
 
+// The first `rows` lines of the file at `from` (a log's start: its ground, a short flight),
+// written to `to`.
+inline void write_first_rows(const std::string& from, int rows, const std::string& to) {
+    const std::string text = read_file(from);
+    size_t end = 0;
+    for (int k = 0; k < rows && end < text.size(); ++k) {
+        const size_t nl = text.find('\n', end);
+        end = nl == std::string::npos ? text.size() : nl + 1;
+    }
+    write_file(to, text.substr(0, end));
+}
+
 // `args` is appended to the binary path as shell words; quote paths yourself.
 inline Result run(const std::string& args) { return testsupport::run_program(BATTSIM_BINARY, args); }
 

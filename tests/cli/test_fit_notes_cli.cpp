@@ -284,11 +284,8 @@ TEST_CASE("fit says in its JSON how far the logs determine each parameter", "[cl
     // The bundled flight's first minute, on the ground: q read 0.041 +/- 0.018 Ah with the
     // doubt said in the brief alone.
     const std::string source = BATTSIM_SOURCE_DIR;
-    std::ifstream in(source + "/logs/example-4s.csv");
-    std::string text, line;
-    for (int k = 0; k < 900 && std::getline(in, line); ++k) text += line + "\n";
     const std::string dir = clitest::temp_dir();
-    clitest::write_file(dir + "/ground.csv", text);
+    clitest::write_first_rows(source + "/logs/example-4s.csv", 900, dir + "/ground.csv");
     const nlohmann::json j = clitest::run_json("fit " + q(dir + "/ground.csv") + " -c " + q(source + "/configs/sim-4s.json") + " --json");
     std::map<std::string, std::string> d;
     for (const auto& p : j["parameters"]) d[p["name"].get<std::string>()] = p["determined"].get<std::string>();

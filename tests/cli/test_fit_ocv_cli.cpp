@@ -108,11 +108,8 @@ TEST_CASE("fit-ocv says where its table is extrapolation; logs on the ground are
     const auto first_rows = [&](int rows) {
         std::string logs;
         for (const char* n : {"29", "30", "32"}) {
-            std::ifstream in(kData + "/predictive-bms/flights/" + n + ".csv");
-            std::string text, line;
-            for (int k = 0; k < rows && std::getline(in, line); ++k) text += line + "\n";
             const std::string path = dir + "/first" + std::to_string(rows) + "-" + n + ".csv";
-            clitest::write_file(path, text);
+            clitest::write_first_rows(kData + "/predictive-bms/flights/" + n + ".csv", rows, path);
             logs += " " + q(path);
         }
         return logs;
@@ -223,10 +220,7 @@ TEST_CASE("fit-ocv: no held-out error without --test logs, and logs that never f
     CHECK(j["rms_v_per_cell"]["fitted"].get<double>() > 0.0);
     // The bundled flight's first minute, on the ground: nothing to read a curve over. It had
     // exited 0 with a slow polarisation resistance of -1.4 ohm.
-    std::ifstream in(kSource + "/logs/example-4s.csv");
-    std::string line, ground;
-    for (int k = 0; k < 900 && std::getline(in, line); ++k) ground += line + "\n";
-    clitest::write_file(dir + "/ground.csv", ground);
+    clitest::write_first_rows(kSource + "/logs/example-4s.csv", 900, dir + "/ground.csv");
     const clitest::Result r = run("fit-ocv " + q(dir + "/ground.csv") + " -c " + q(kSource + "/configs/sim-4s.json") + " --json");
     CHECK(r.exit_code == 3);
     CHECK_THAT(r.err, Catch::Contains("in flight, under 2 % of the config's 1.55 Ah"));

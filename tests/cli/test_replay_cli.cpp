@@ -1148,11 +1148,8 @@ TEST_CASE("replay says when a log holds its voltage between slower updates than 
 TEST_CASE("a flight too short to measure reports no resistance and no cell standard error, not the config's or 0", "[cli]") {
     // The bundled example's first 960 rows: a take-off and a few seconds of flight.
     const std::string source = BATTSIM_SOURCE_DIR;
-    std::ifstream in(source + "/logs/example-4s.csv");
-    std::string text, line;
-    for (int k = 0; k < 960 && std::getline(in, line); ++k) text += line + "\n";
     const std::string dir = clitest::temp_dir();
-    clitest::write_file(dir + "/short.csv", text);
+    clitest::write_first_rows(source + "/logs/example-4s.csv", 960, dir + "/short.csv");
     const auto j = clitest::run_json("replay " + q(dir + "/short.csv") + " -c " + q(source + "/configs/sim-4s.json") +
                                      " --estimator joint --json");
     const auto& f = j["flight"];
