@@ -144,7 +144,7 @@ const std::map<std::string, std::string>& config_key_descriptions() {
     {"joint.max_sample_gap_s", "A gap between samples longer than this (s), or than three of the log's usual intervals if that is longer, is a sensor fault (cause sample_gap); its charge is counted at the mean of the currents either side."},
     // joint: the per-cell check (cell analyzer and step resistance).
     {"joint.cell_resistance_ratio", "Name a cell for high resistance when it is above this × the median of the others, by `cell_significance_sigmas` standard errors."},
-    {"joint.cell_capacity_deficit", "Name a cell for low capacity when it holds this fraction less than each other compared cell, beyond its significance bar."},
+    {"joint.cell_capacity_deficit", "Name a cell for low capacity when it holds this fraction less than the median of the other compared cells, beyond its significance bar."},
     {"joint.cell_significance_sigmas", "Standard errors a cell must clear for a resistance verdict, and for a capacity verdict beyond twice `cell_capacity_deficit`."},
     {"joint.cell_capacity_significance_sigmas", "Standard errors a capacity deficit must clear to name a cell below twice `cell_capacity_deficit` (and always for the cell read across the lead): the drift's errors are not white."},
     {"joint.cell_pack_deficit_sigmas", "Before any cell is named, the pack's capacity and flight-time solves count the largest compared cell's deficit less this many standard errors (a series pack delivers what its weakest cell holds); 0: only a named cell's."},
