@@ -270,6 +270,34 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
         std::isfinite(facts.capacity_passed_s) || std::isfinite(facts.pole_runaway_s) ||
         std::any_of(notes.begin(), notes.end(), [](const std::string& n) { return is_other_pack_note(n); }) ||
         (facts.temperature_samples > 0 && !measured_temperature_note(options.config.monitor, true).empty());
+    // A capacity held at the estimator's bound is the bound, not the pack's, and its σ (the
+    // filter's, computed as if the bound were an estimate) claims a precision it does not
+    // have: Matrice 100 flight 51 read 13.950 Ah (3 × the config's 4.65) with the reference
+    // estimator and flight 22 9.300 ± 0.273 Ah with the joint one, both without a word.
+    // With the reference estimator, not when a note already gives the cause (another pack, a
+    // count past the capacity, a measured temperature driving terms fitted to a self-heating
+    // state): its capacity rests on that model. The joint estimator's rests on its OCV table.
+    const core::MonitorConfig& m = options.config.monitor;
+    const bool joint = m.estimator == core::EstimatorKind::Joint;
+    if (body["flight"].is_object() && (joint || !explained) && body["flight"]["capacity_ah"]["final"].is_number()) {
+        const core::CapacityEkf::Config& ekf = m.joint.health.enabled ? m.joint.health.ekf : m.joint.ekf;
+        const double rated_ah = m.battery.capacity_ah;
+        const double lo = rated_ah * (joint ? ekf.min_capacity_fraction : m.capacity.min_capacity_fraction);
+        const double hi = rated_ah * (joint ? ekf.max_capacity_fraction : m.capacity.max_capacity_fraction);
+        const double final_ah = body["flight"]["capacity_ah"]["final"].get<double>();
+        const bool high = final_ah >= 0.995 * hi, low = final_ah <= 1.005 * lo;
+        if (rated_ah > 0.0 && (high || low)) {
+            char buf[512];
+            std::snprintf(buf, sizeof buf,
+                          "the capacity ended at the estimator's %s bound, %.3f Ah (%.1f x the config's %.3f Ah): the "
+                          "flight did not tell the pack's capacity, so its figure%s, the remaining time and the "
+                          "warnings that rest on it are not to be trusted. Does the config's curve fit this pack? (%s)",
+                          high ? "upper" : "lower", high ? hi : lo, (high ? hi : lo) / rated_ah, rated_ah,
+                          joint ? " and its standard error" : "",
+                          joint ? "battsim fit-ocv" : "battsim residual LOG -c CONFIG -o FITTED.json");
+            notes.push_back(buf);
+        }
+    }
     if (body["flight"].is_object() && !explained) {
         // A config whose model is volts off every reading (a typed extension setting an order of
         // magnitude out: resistance_activation_k −1e5 put flight 29's model 78 V off) had

@@ -227,6 +227,30 @@ TEST_CASE("replay --estimator joint reports the cell step check's measurements",
     CHECK_FALSE(clitest::run_json("replay " + q(dir + "/ok.csv") + " -c " + q(kConfig) + " --json")["flight"].contains("cell_steps"));
 }
 
+TEST_CASE("replay notes a capacity that ended at the estimator's bound", "[cli]") {
+    // The bundled 1.55 Ah example read with a config for 0.5 Ah: the joint estimator's
+    // capacity climbs to its bound, 2 × the config's, and had reported 1.000 ± 0.076 Ah
+    // without a word (Matrice 100 flight 22: 9.300 ± 0.273 Ah for a 4.5 Ah pack).
+    const std::string dir = clitest::temp_dir();
+    nlohmann::json c = nlohmann::json::parse(std::ifstream(kSource + "/configs/sim-4s.json"));
+    c["battery"]["capacity_ah"] = 0.5;
+    clitest::write_file(dir + "/small.json", c.dump());
+    const std::string log = q(kSource + "/logs/example-4s.csv");
+    auto r = run("replay " + log + " -c " + q(dir + "/small.json") + " --estimator joint --json");
+    REQUIRE(r.exit_code == 0);
+    const auto j = nlohmann::json::parse(r.out);
+    CHECK(j["flight"]["capacity_ah"]["final"].get<double>() == Approx(1.0).epsilon(1e-3));
+    const auto notes = j.value("config_notes", nlohmann::json::array());
+    CHECK(std::any_of(notes.begin(), notes.end(), [](const nlohmann::json& n) {
+        return n.get<std::string>().rfind("the capacity ended at the estimator's upper bound, 1.000 Ah (2.0 x the config's 0.500 Ah)", 0) == 0;
+    }));
+    CHECK_THAT(r.err, Catch::Contains("note: the capacity ended at the estimator's upper bound"));
+    // The pack's own config: its capacity is the flight's, and nothing is said.
+    auto ok = run("replay " + log + " -c " + q(kSource + "/configs/sim-4s.json") + " --estimator joint --json");
+    REQUIRE(ok.exit_code == 0);
+    CHECK(ok.err.find("estimator's upper bound") == std::string::npos);
+}
+
 TEST_CASE("replay notes what the config makes unreliable: no OCV table for the joint estimator, another pack", "[cli]") {
     // reference-modified.json has no table (its Tremblay curve stands in); sim-4s.json has one.
     const std::string dir = clitest::temp_dir();

@@ -470,6 +470,43 @@ TEST_CASE("least-squares slope and the pack table", "[batch]") {
     CHECK(packs[0]["capacity_scatter_ratio"].is_null());
 }
 
+TEST_CASE("the pack table follows the landing's capacity and leaves out flights read with another pack's config",
+          "[batch]") {
+    // A pack wearing out as the joint estimator reads it: each flight's mean is pulled up by
+    // its first minutes at the rating, its landing falls (flights 30 and 34 of the dissertation
+    // as one pack read a trend of +0.292 Ah/flight by the means, 1.479 → 1.043 Ah at the landings).
+    auto row = [](double mean_ah, double final_ah, const char* note) {
+        json r{{"pack", "W"},
+               {"status", "ok"},
+               {"capacity_mean_ah", mean_ah},
+               {"resistance_mean_ohm", 0.02},
+               {"capacity_final_ah", final_ah},
+               {"capacity_final_sigma_ah", 0.03},
+               {"notes", json::array()}};
+        if (note) r["notes"].push_back(note);
+        return r;
+    };
+    const std::string other =
+        "the log has 4 cell voltages but the config 3 cells in series (cells_in_series): battsim make-config --from-log "
+        "29.csv writes one for it (with --capacity-mah if the log does not record the capacity)";
+    REQUIRE(battsim::host::is_other_pack_note(other));
+    const std::vector<json> rows = {row(1.38, 1.479, nullptr), row(1.70, 1.043, nullptr), row(3.92, 4.650, other.c_str()),
+                                    row(1.65, 0.95, nullptr)};
+    const auto packs = pack_rows(rows);
+    REQUIRE(packs.size() == 1);
+    CHECK(packs[0]["flights"] == 4);
+    CHECK(packs[0]["failed"] == 0);
+    CHECK(packs[0]["other_pack_config"] == 1);
+    // Flights 1, 2 and 4 (the third keeps its number): finals 1.479, 1.043, 0.95 at x = 1, 2, 4;
+    // slope = Σ(x − 7/3)(y − ȳ) / Σ(x − 7/3)², by hand −0.736333 / 4.666667 = −0.15779 Ah/flight.
+    CHECK(packs[0]["capacity_final_trend_ah_per_flight"].get<double>() == Approx(-0.15779).epsilon(1e-4));
+    CHECK(packs[0]["capacity_trend_ah_per_flight"].get<double>() > 0.0);  // the means rise
+    CHECK(packs[0]["capacity_final_median_ah"].get<double>() == Approx(1.043));
+    CHECK(packs[0]["capacity_mean_ah"].get<double>() == Approx((1.38 + 1.70 + 1.65) / 3.0));
+    const std::string md = render_packs(make_table(rows, rows.size(), "0123456789abcdef", ShardSpec()), TableFormat::Markdown);
+    CHECK(md.find("| W | 4 | 0 | 1 | 1.043 | -0.158 |") != std::string::npos);
+}
+
 TEST_CASE("median and robust spread; the pack table's agreement of final capacities with their sigma", "[batch]") {
     CHECK(std::isnan(battsim::host::median({})));
     CHECK(battsim::host::median({3.0, 1.0, 2.0}) == 2.0);
@@ -501,16 +538,16 @@ TEST_CASE("median and robust spread; the pack table's agreement of final capacit
     CHECK(packs[1]["capacity_final_spread_ah"].is_null());  // one flight
     CHECK(packs[1]["capacity_scatter_ratio"].is_null());
     const std::string md = render_packs(make_table(rows, rows.size(), "0123456789abcdef", ShardSpec()), TableFormat::Markdown);
-    CHECK(md.find("| P | 6 | 1 | 1.200 | 0 | 1.200 | 3.2 |") != std::string::npos);
+    CHECK(md.find("| P | 6 | 1 | 0 | 1.200 | +0.100 | 3.2 |") != std::string::npos);
     // A trend keeps its three significant figures' zeros: R 0.0200, 0.0201, 0.0202 Ω over three
     // flights is +0.000100 Ω/flight (a helper read "-0.0001" on the Matrice 100 fleet as rounded).
     std::vector<json> aging;
     for (int k = 0; k < 3; ++k)
-        aging.push_back(json{{"pack", "R"}, {"status", "ok"}, {"capacity_mean_ah", 1.2 - 0.01 * k},
-                             {"resistance_mean_ohm", 0.02 + 0.0001 * k}, {"capacity_final_ah", 1.2},
+        aging.push_back(json{{"pack", "R"}, {"status", "ok"}, {"capacity_mean_ah", 1.2},
+                             {"resistance_mean_ohm", 0.02 + 0.0001 * k}, {"capacity_final_ah", 1.2 - 0.01 * k},
                              {"capacity_final_sigma_ah", nullptr}});
     const std::string trend = render_packs(make_table(aging, aging.size(), "0123456789abcdef", ShardSpec()), TableFormat::Markdown);
-    CHECK(trend.find("| R | 3 | 0 | 1.190 | -0.0100 | 1.200 | – | 0.0201 | +0.000100 |") != std::string::npos);
+    CHECK(trend.find("| R | 3 | 0 | 0 | 1.190 | -0.0100 | – | 0.0201 | +0.000100 |") != std::string::npos);
 }
 
 TEST_CASE("the monitor table pools each monitor's charger checks as the median suggested gain", "[batch]") {
@@ -675,7 +712,7 @@ TEST_CASE("table rendering: Markdown escapes, CSV quotes, JSON round-trips", "[b
     CHECK(csv.rfind("index,test,log,pack,monitor,config,estimator,status,error,flight,", 0) == 0);
     CHECK(csv.find("0,\"t,1\",/d/a|b.csv,P,,reference-4s-modified,reference,error,\"bad \"\"x\"\"\nline\",false,") != std::string::npos);
     CHECK(json::parse(render_table(table, TableFormat::Json)) == table);
-    CHECK(render_packs(table, TableFormat::Csv).rfind("pack,flights,failed,capacity_mean_ah,", 0) == 0);
+    CHECK(render_packs(table, TableFormat::Csv).rfind("pack,flights,failed,other_pack_config,capacity_mean_ah,", 0) == 0);
     CHECK_THROWS_WITH(parse_table_format("xlsx"), "unknown table format \"xlsx\"; expected md, csv or json");
 }
 

@@ -65,11 +65,20 @@ std::string row_type_problem(const json& r) {
     return "";
 }
 
-const std::vector<std::string> kPackKeys = {"pack", "flights", "failed", "capacity_mean_ah",
+const std::vector<std::string> kPackKeys = {"pack", "flights", "failed", "other_pack_config", "capacity_mean_ah",
                                             "capacity_trend_ah_per_flight", "capacity_final_median_ah",
-                                            "capacity_final_spread_ah", "capacity_final_sigma_median_ah",
-                                            "capacity_scatter_ratio", "resistance_mean_ohm",
-                                            "resistance_trend_ohm_per_flight"};
+                                            "capacity_final_trend_ah_per_flight", "capacity_final_spread_ah",
+                                            "capacity_final_sigma_median_ah", "capacity_scatter_ratio",
+                                            "resistance_mean_ohm", "resistance_trend_ohm_per_flight"};
+
+// A row whose notes say its config is for another pack than the log's (cell count, voltage).
+bool read_with_other_pack_config(const json& r) {
+    const json notes = r.value("notes", json());
+    if (!notes.is_array()) return false;
+    for (const json& n : notes)
+        if (n.is_string() && is_other_pack_note(n.get<std::string>())) return true;
+    return false;
+}
 
 const std::vector<std::string> kMonitorKeys = {"monitor", "flights", "failed", "charger_checks", "charger_flagged",
                                                "charger_pooled", "charger_ratio_pooled", "suggested_gain_spread",
@@ -171,10 +180,7 @@ std::string render_rows_md(const json& table) {
         if (status == kRowOk && !r["flight"].get<bool>()) status = "ok (no flight)";
         // A log replayed with a config for another pack reads "ok" with nonsense figures (a 3S
         // log on the built-in 4S config: 160 V of model error); its note sat in the CSV alone.
-        bool other_pack = false;
-        if (r.value("notes", json()).is_array())
-            for (const json& n : r["notes"]) other_pack = other_pack || (n.is_string() && is_other_pack_note(n.get<std::string>()));
-        if (status.compare(0, 2, kRowOk) == 0 && other_pack) status += " (config for another pack: see notes)";
+        if (status.compare(0, 2, kRowOk) == 0 && read_with_other_pack_config(r)) status += " (config for another pack: see notes)";
         if (status == kRowNoValidSamples) status = "no valid samples";
         if (status != "ok" && r["error"].is_string()) status += ": " + r["error"].get<std::string>();
         o << "| " << md_cell(text(r["test"])) << " | " << md_cell(file_name(text(r["log"]))) << " | "
@@ -190,15 +196,17 @@ std::string render_rows_md(const json& table) {
 
 std::string render_packs_md(const json& packs) {
     std::ostringstream o;
-    o << "| pack | flights | failed | capacity Ah | capacity trend Ah/flight | final capacity Ah | final spread / σ "
-         "| R Ω | R trend Ω/flight |\n";
+    // The capacity at the landing, not the flight's mean: the mean of a converging estimate
+    // ranked an aged pack above a new one and read a rising trend on a pack wearing out.
+    o << "| pack | flights | failed | left out (another pack's config) | final capacity Ah | final capacity trend Ah/flight "
+         "| final spread / σ | R Ω | R trend Ω/flight |\n";
     o << "|---|--:|--:|--:|--:|--:|--:|--:|--:|\n";
     for (const json& p : packs) {
         o << "| " << md_cell(text(p["pack"])) << " | " << json_text(p["flights"]) << " | " << json_text(p["failed"]) << " | "
-          << fixed(p["capacity_mean_ah"], 3) << " | " << significant(p["capacity_trend_ah_per_flight"], 3) << " | "
-          << fixed(p["capacity_final_median_ah"], 3) << " | " << fixed(p["capacity_scatter_ratio"], 1) << " | "
-          << fixed(p["resistance_mean_ohm"], 4) << " | " << significant(p["resistance_trend_ohm_per_flight"], 3)
-          << " |\n";
+          << json_text(p.value("other_pack_config", json(0))) << " | " << fixed(p["capacity_final_median_ah"], 3) << " | "
+          << significant(p.value("capacity_final_trend_ah_per_flight", json()), 3) << " | "
+          << fixed(p["capacity_scatter_ratio"], 1) << " | " << fixed(p["resistance_mean_ohm"], 4) << " | "
+          << significant(p["resistance_trend_ohm_per_flight"], 3) << " |\n";
     }
     return o.str();
 }
@@ -422,12 +430,18 @@ std::map<std::string, FleetEffect> fleet_effects(const std::vector<json>& rows, 
 std::vector<json> pack_rows(const std::vector<json>& rows) {
     std::vector<json> out;
     for (const auto& group : group_rows(rows, "pack")) {
-        size_t failed = 0;
-        std::vector<double> cap_x, cap_y, res_x, res_y, final_ah, final_sigma_ah;
+        size_t failed = 0, other_pack = 0;
+        std::vector<double> cap_x, cap_y, res_x, res_y, final_x, final_ah, final_sigma_ah;
         for (size_t k = 0; k < group.second.size(); ++k) {
             const json& r = *group.second[k];
             const double x = static_cast<double>(k + 1);  // flight number within the pack
             if (r.value("status", json()) != "ok") ++failed;
+            // Another pack's figures would enter this pack's: a 3S config on a 4S flight read
+            // 3.9 Ah for a 1.6 Ah pack. Counted, kept out, the flight keeping its number.
+            if (read_with_other_pack_config(r)) {
+                ++other_pack;
+                continue;
+            }
             const json cap = r.value("capacity_mean_ah", json()), res = r.value("resistance_mean_ohm", json());
             if (cap.is_number()) {
                 cap_x.push_back(x);
@@ -435,7 +449,10 @@ std::vector<json> pack_rows(const std::vector<json>& rows) {
             }
             const json f_ah = r.value("capacity_final_ah", json());
             const json f_sigma_ah = r.value("capacity_final_sigma_ah", json());
-            if (f_ah.is_number()) final_ah.push_back(f_ah.get<double>());
+            if (f_ah.is_number()) {
+                final_x.push_back(x);
+                final_ah.push_back(f_ah.get<double>());
+            }
             if (f_sigma_ah.is_number()) final_sigma_ah.push_back(f_sigma_ah.get<double>());
             if (res.is_number()) {
                 res_x.push_back(x);
@@ -446,8 +463,10 @@ std::vector<json> pack_rows(const std::vector<json>& rows) {
         p["pack"] = group.first;
         p["flights"] = group.second.size();
         p["failed"] = failed;
+        p["other_pack_config"] = other_pack;
         p["capacity_mean_ah"] = number_or_null(mean_of(cap_y));
         p["capacity_trend_ah_per_flight"] = number_or_null(least_squares_slope(cap_x, cap_y));
+        p["capacity_final_trend_ah_per_flight"] = number_or_null(least_squares_slope(final_x, final_ah));
         // Do the flights agree within their own standard errors? The spread of the final
         // capacities against the median σ a flight reports: about 1 when they do; far above,
         // and the config's curve does not fit the pack (or the flights draw too little of it).
