@@ -61,6 +61,7 @@ int run(const BatchArgs& a) {
     }
     plan.paths = a.paths;
     plan.manifest = a.manifest;
+    plan.outputs = {a.output_given ? a.output : std::string(), a.packs, a.monitors};
 
     std::vector<host::BatchItem> all;
     try {
@@ -156,6 +157,7 @@ int run(const BatchArgs& a) {
     const nlohmann::json table = host::make_table(std::move(result.rows), all.size(), digest, shard);
     for (const nlohmann::json& r : table["rows"])
         if (r["status"] != "ok") std::cerr << me << "failed: " << host::failed_row_text(r) << "\n";
+    for (const std::string& r : result.removed) std::cerr << me << r << "\n";
     // What replay would say of each log (a truncated file, a config for another pack than the
     // log's: every row "ok" all the same), the first few in full: a 4S config on a 6S fleet
     // says it of every log.

@@ -91,6 +91,22 @@ TEST_CASE("directories, patterns and files expand in a fixed order", "[batch]") 
     CHECK(expand_inputs({empty.path()})[0].error == "directory holds no log files");
 }
 
+TEST_CASE("a directory or pattern leaves out battsim's own outputs: summaries, tables and the command's files",
+          "[batch]") {
+    // `batch DIR --out DIR -o DIR/t.csv` had read its own 9.json and t.csv as logs the second night.
+    TempDir t;
+    for (const char* n : {"9.csv", "10.bin", "9.json", "fleet.MD", "x.truth.json", "t.csv"}) t.write(n, "x");
+    const auto dir = expand_inputs({t.path()}, {t.path("t.csv"), "-", ""});
+    CHECK(paths_of(dir) == std::vector<std::string>{"9.csv", "10.bin"});
+    CHECK(paths_of(expand_inputs({t.path() + "/*"}, {t.path("t.csv")})) == std::vector<std::string>{"9.csv", "10.bin"});
+    // Asked for by name or by a pattern of their own, they are read (and the replay says what they are).
+    CHECK(paths_of(expand_inputs({t.path() + "/*.json"})) == std::vector<std::string>{"9.json", "x.truth.json"});
+    CHECK(paths_of(expand_inputs({t.path("t.csv")}, {t.path("t.csv")})) == std::vector<std::string>{"t.csv"});
+    TempDir only;
+    only.write("30.json", "{}");
+    CHECK(expand_inputs({only.path()})[0].error == "directory holds no log files");
+}
+
 TEST_CASE("shards partition the inputs by index modulo N", "[batch]") {
     const ShardSpec s = parse_shard("2/3");
     CHECK(s.index == 2);
@@ -369,6 +385,22 @@ TEST_CASE("plan: manifest order, settings per file, paths matched to entries", "
     // The command line's config is one mistake for the whole run.
     req.command_line.config = t.path("missing.json");
     CHECK_THROWS_AS(plan_batch(req), ConfigError);
+
+    // A pattern that matches nothing names its manifest line; logs of one stem are labelled
+    // as their summaries are named, unless the manifest labels them.
+    t.write("a/f.csv", raw_flight(20, 0.001));
+    t.write("b/f.csv", raw_flight(20, 0.001));
+    req = BatchPlanRequest();
+    req.manifest = t.write("s.json", R"({"schema": "battsim.manifest",
+      "logs": [{"path": "a/f.csv"}, {"path": "b/f.csv"}, {"path": "b/f.csv", "test": "mine"}, {"path": "none/*.bin"}]})");
+    CHECK_THROWS_AS(plan_batch(req), InputError);  // b/f.csv twice
+    req.manifest = t.write("s.json", R"({"schema": "battsim.manifest",
+      "logs": [{"path": "a/f.csv"}, {"path": "b/f.csv", "test": "mine"}, {"path": "nothing-*.bin"}]})");
+    items = plan_batch(req);
+    REQUIRE(items.size() == 3);
+    CHECK(items[0].test == "a__f.csv");
+    CHECK(items[1].test == "mine");
+    CHECK(items[2].error == "pattern matches no file (" + req.manifest + ":2:74)");  // the entry's {
 }
 
 TEST_CASE("plan: a log listed twice is refused, naming both places", "[batch]") {
@@ -442,6 +474,14 @@ TEST_CASE("run_batch: the same rows for any number of jobs, errors as rows", "[b
         CHECK(sx == sy);
     }
     CHECK_FALSE(fs::exists(t.path("out1/bad.json")));
+    CHECK(a.removed.empty());  // no earlier summary of bad.csv to remove
+    // An earlier run's summary of the log that now fails is removed, and that is said.
+    { std::ofstream(t.path("out1/bad.json")) << "{}\n"; }
+    const BatchResult again = run_batch(items, one);
+    CHECK_FALSE(fs::exists(t.path("out1/bad.json")));
+    REQUIRE(again.removed.size() == 1);
+    CHECK(again.removed[0] == t.path("bad.csv") + ": an earlier run's summary " + t.path("out1/bad.json") +
+                                  " was removed: the log failed this run, and that summary would read as this run's");
 }
 
 TEST_CASE("least-squares slope and the pack table", "[batch]") {

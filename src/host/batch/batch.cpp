@@ -57,7 +57,7 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
         for (const ManifestEntry& e : manifest->logs) {
             std::vector<ExpandedPath> files;
             try {
-                files = expand_inputs({e.path});
+                files = expand_inputs({e.path}, request.outputs);
             } catch (const std::invalid_argument& why) {
                 throw InputError(manifest->path, e.line, e.column, why.what());
             }
@@ -84,7 +84,13 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
             const std::string named_at = e.settings.config ? manifest->path + ":" + std::to_string(e.line) +
                                                                   (e.column > 0 ? ":" + std::to_string(e.column) : std::string())
                                                 : std::string();
-            for (const ExpandedPath& f : files) from_manifest.push_back({f, s, named_at});
+            for (ExpandedPath f : files) {
+                // "pattern matches no file" alone did not say which of the manifest's lines.
+                if (!f.error.empty())
+                    f.error += " (" + manifest->path + ":" + std::to_string(e.line) +
+                               (e.column > 0 ? ":" + std::to_string(e.column) : std::string()) + ")";
+                from_manifest.push_back({f, s, named_at});
+            }
         }
     }
 
@@ -96,7 +102,7 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
         for (const Planned& p : from_manifest) {
             if (p.input.error.empty()) by_file.emplace(file_key(p.input.path), &p);
         }
-        for (const ExpandedPath& f : expand_inputs(request.paths)) {
+        for (const ExpandedPath& f : expand_inputs(request.paths, request.outputs)) {
             Planned p{f, manifest ? manifest->defaults : LogSettings(), std::string()};
             auto it = by_file.find(file_key(f.path));
             if (it != by_file.end()) {
@@ -111,6 +117,7 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
     std::map<std::string, std::string> bad_configs;  // and each that failed, with why
     std::vector<BatchItem> items;
     items.reserve(planned.size());
+    std::vector<bool> labelled;  // the row's label given, not the stem
     for (Planned& p : planned) {
         p.settings.overlay(request.command_line);
         BatchItem item;
@@ -151,9 +158,15 @@ std::vector<BatchItem> plan_batch(const BatchPlanRequest& request) {
             item.replay.config = builtin_config();  // as replay with no -c
         }
         if (p.settings.estimator) item.replay.config.monitor.estimator = *p.settings.estimator;
+        labelled.push_back(p.settings.test.has_value());
         items.push_back(std::move(item));
     }
     assign_summary_names(items);
+    // Logs of one stem (every card's 00000001.BIN) are labelled as their summaries are named:
+    // two rows had both read "00000001" in the Markdown table.
+    for (size_t k = 0; k < items.size(); ++k)
+        if (!labelled[k] && items[k].error.empty() && items[k].summary_stem() != items[k].stem)
+            items[k].test = items[k].summary_stem();
     return items;
 }
 
@@ -409,6 +422,7 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
 
     std::vector<std::string> unwritten(n);
     std::vector<std::vector<std::string>> log_notes(n);
+    std::vector<std::string> removed(n);
     std::atomic<size_t> next{0};
     std::mutex lock;
     size_t done = 0;
@@ -416,7 +430,10 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
     auto forget_old_summary = [&](size_t k) {
         const fs::path old_summary = fs::path(options.out_dir) / (items[k].summary_stem() + ".json");
         std::error_code ec;
-        if (!fs::remove(old_summary, ec) && ec && ec != std::errc::no_such_file_or_directory)
+        if (fs::remove(old_summary, ec))
+            removed[k] = items[k].path + ": an earlier run's summary " + old_summary.string() +
+                         " was removed: the log failed this run, and that summary would read as this run's";
+        else if (ec && ec != std::errc::no_such_file_or_directory)
             unwritten[k] = items[k].path + ": an earlier run's summary " + old_summary.string() + " could not be removed (" +
                            ec.message() + "); it is not this run's";
     };
@@ -500,6 +517,8 @@ BatchResult run_batch(const std::vector<BatchItem>& items, const BatchRunOptions
         if (!u.empty()) result.unwritten.push_back(std::move(u));
     for (auto& notes : log_notes)
         for (std::string& note : notes) result.log_notes.push_back(std::move(note));
+    for (std::string& r : removed)
+        if (!r.empty()) result.removed.push_back(std::move(r));
     return result;
 }
 

@@ -41,6 +41,7 @@ struct BatchPlanRequest {
     std::vector<std::string> paths;  // files, directories, patterns; empty with a manifest = all its logs
     std::string manifest;            // empty = none
     LogSettings command_line;        // options given on the command line; they win over the manifest
+    std::vector<std::string> outputs;  // files the command writes: left out of directories and patterns
 };
 
 // The full ordered list. With a manifest and no paths: the manifest's logs in its order
@@ -105,6 +106,10 @@ struct BatchResult {
     // that log beyond what its config alone makes unreliable (a config for another pack than
     // the log's, a count past the capacity), "log: note", in item order.
     std::vector<std::string> log_notes;
+    // Earlier runs' --out summaries of logs that failed this run, removed (so they cannot read
+    // as this run's): "log: what", in item order. Said, since an operator rerunning a fleet
+    // had lost a flight's only summary without a word.
+    std::vector<std::string> removed;
 };
 
 // Replays `items` on a pool of `jobs` threads. A log that fails becomes an error row

@@ -4,10 +4,12 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <system_error>
 
@@ -44,6 +46,19 @@ bool natural_less(const std::string& a, const std::string& b) {
 
 namespace {
 
+// A summary, table or truth file battsim writes (`batch --out` beside its logs had read its
+// own 29.json as a log on the second run, and renamed the real summaries).
+bool is_battsim_output_name(const std::string& name) {
+    auto ends_with = [&](const char* end) {
+        const std::string e(end);
+        if (name.size() < e.size()) return false;
+        for (size_t k = 0; k < e.size(); ++k)
+            if (std::tolower(static_cast<unsigned char>(name[name.size() - e.size() + k])) != e[k]) return false;
+        return true;
+    };
+    return ends_with(".json") || ends_with(".md");
+}
+
 // Regular (or symlinked-to-regular) files directly in `dir`, hidden ones skipped, sorted.
 // `why` is set when the directory cannot be listed: one the user may not read had read as
 // "holds no log files", as if the fleet's logs were not there.
@@ -56,6 +71,7 @@ std::vector<std::string> list_directory(const std::string& dir, std::string& why
         if (name.empty() || name[0] == '.') continue;
         std::error_code sec;
         if (!fs::is_regular_file(it->path(), sec)) continue;
+        if (is_battsim_output_name(name)) continue;
         names.push_back(name);
     }
     if (ec) {
@@ -124,9 +140,18 @@ std::string listed_twice(const ExpandedPath& again, const ExpandedPath& first, c
            "; list each log once (twice, it would count twice in the per-pack and per-monitor tables)";
 }
 
-std::vector<ExpandedPath> expand_inputs(const std::vector<std::string>& arguments) {
+std::vector<ExpandedPath> expand_inputs(const std::vector<std::string>& arguments, const std::vector<std::string>& outputs) {
     std::vector<ExpandedPath> out;
     std::map<std::string, size_t> seen;  // file key -> its entry in `out`
+    std::set<std::string> written;       // the command's outputs, by file key
+    for (const std::string& o : outputs)
+        if (!o.empty() && o != "-") written.insert(log_file_key(o));
+    const auto not_written = [&](const std::vector<std::string>& files) {
+        std::vector<std::string> kept;
+        for (const std::string& f : files)
+            if (!written.count(log_file_key(f))) kept.push_back(f);
+        return kept;
+    };
     auto add = [&](const std::string& path, const std::string& arg) {
         const ExpandedPath e{path, arg, ""};
         const auto [it, fresh] = seen.emplace(log_file_key(path), out.size());
@@ -136,7 +161,7 @@ std::vector<ExpandedPath> expand_inputs(const std::vector<std::string>& argument
     for (const std::string& arg : arguments) {
         if (is_directory(arg)) {
             std::string why;
-            const std::vector<std::string> files = list_directory(arg, why);
+            const std::vector<std::string> files = not_written(list_directory(arg, why));
             if (!why.empty()) out.push_back({arg, arg, why});
             else if (files.empty()) out.push_back({arg, arg, "directory holds no log files"});
             for (const std::string& f : files) add(f, arg);
@@ -148,11 +173,12 @@ std::vector<ExpandedPath> expand_inputs(const std::vector<std::string>& argument
                     std::string why;
                     for (const std::string& f : list_directory(m, why)) files.push_back(f);
                     if (!why.empty()) unreadable.push_back(m + ": " + why);
-                } else {
+                } else if (!is_battsim_output_name(m) || is_battsim_output_name(arg)) {  // "d/*" as "d"; "d/*.json" asks
                     files.push_back(m);
                 }
             }
             for (const std::string& u : unreadable) out.push_back({arg, arg, u});
+            files = not_written(files);
             if (files.empty() && unreadable.empty()) out.push_back({arg, arg, "pattern matches no file"});
             for (const std::string& f : files) add(f, arg);
         } else {

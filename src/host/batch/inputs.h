@@ -16,12 +16,16 @@ struct ExpandedPath {
 };
 
 // In argument order; a directory gives its regular, non-hidden files (not recursive), a
-// pattern (*, ?, [ and no such file) its matches; both sorted by natural_less. An argument
-// that yields nothing gives one entry with `error` set, so it shows up as a failed row
-// instead of vanishing. A file met twice, by any name (log_file_key), throws
-// std::invalid_argument naming both: listed twice, a log would count twice in the per-pack
-// and per-monitor tables.
-std::vector<ExpandedPath> expand_inputs(const std::vector<std::string>& arguments);
+// pattern (*, ?, [ and no such file) its matches; both sorted by natural_less. A directory
+// or a pattern leaves out battsim's own outputs: .json and .md files (summaries, tables,
+// truth), which no log format is, and the files in `outputs` (the command's -o, --packs,
+// --monitors), so a nightly run writing into its log directory reads the same logs the
+// second night. An argument that yields nothing gives one entry with `error` set, so it
+// shows up as a failed row instead of vanishing. A file met twice, by any name
+// (log_file_key), throws std::invalid_argument naming both: listed twice, a log would
+// count twice in the per-pack and per-monitor tables.
+std::vector<ExpandedPath> expand_inputs(const std::vector<std::string>& arguments,
+                                        const std::vector<std::string>& outputs = {});
 
 // Equal for two names of one file: an existing file by device and inode (symlinks and hard
 // links included), another by its path made canonical (std::filesystem::weakly_canonical).
