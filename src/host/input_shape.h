@@ -90,7 +90,11 @@ private:
     // Above this every reading: kelvin (a cell at 200 degC has long burnt).
     static constexpr double kKelvinMinC = 200.0;
     double longest_s_ = 0.0, longest_at_s_ = 0.0, longest_mah_ = 0.0;  // the longest interval, where, its charge
-    long gaps_ = 0;                                    // intervals over kLongestGapS
+    static constexpr double kGapCountShare = 0.99;     // of kLongestGapS: an interval counted as long
+    long gaps_ = 0;                                    // intervals over kGapCountShare × kLongestGapS
+    long gap_runs_ = 0;                                // runs of consecutive such intervals
+    bool last_step_long_ = false;
+    double first_long_at_s_ = 0.0;                     // where the first such interval begins
     double gaps_s_ = 0.0, gaps_mah_ = 0.0;             // their time, and the charge counted over them
     double ground_a_;
     ShapePack pack_;
