@@ -11,6 +11,7 @@
 #include "host/io/atomic_file.h"
 #include "core/sample.h"
 #include "host/pack_config.h"
+#include "host/report/summary.h"
 
 namespace battsim {
 namespace cli {
@@ -38,6 +39,9 @@ int list_keys(const MakeConfigArgs& a) {
                                              : host::config_keys_markdown(keys));
     return kExitOk;
 }
+
+// A loaded cutoff below any LiPo pilot's (V per cell): a Li-ion cell's.
+constexpr double kLiIonCutoffBelowVPerCell = 2.95;
 
 int run(const MakeConfigArgs& a) {
     const char* me = "battsim make-config";
@@ -113,6 +117,19 @@ int run(const MakeConfigArgs& a) {
             std::cerr << me << ": from the board's config " << a.board << ": " << list << "\n";
             j["description"] = j["description"].get<std::string>() + " Board settings (" + list + ") from " + a.board + ".";
         }
+    }
+    // The table is a LiPo's: a cutoff under 2.95 V per cell, below any LiPo pilot's loaded
+    // cutoff, is a Li-ion cell's (18650s run to 2.5 V), whose curve lies lower; read with this
+    // table the Panasonic 2.9 Ah cell had ended at 5.76 Ah without a word.
+    const nlohmann::json& table = j["joint"]["ocv_cell_voltage_v"];
+    const double cutoff_per_cell_v = j["monitor"]["min_flight_voltage_v"].get<double>() / r.cells;
+    if (table.is_array() && !table.empty() && cutoff_per_cell_v < kLiIonCutoffBelowVPerCell) {
+        std::cerr << me << ": note: the cutoff, " << host::fixed_text(cutoff_per_cell_v, 3)
+                  << " V per cell, lies below the empty point of the config's OCV table ("
+                  << host::fixed_text(table[0].get<double>(), 3)
+                  << " V per cell), a lithium-polymer pack's: for a Li-ion cell, whose curve lies lower, read its "
+                     "own table off a slow discharge (battsim discharge LOG -c CONFIG --config-out PACK.json) or "
+                     "stitch one from its flights (battsim fit-ocv), or the capacity reads high\n";
     }
     host::write_file_atomic(a.output, host::json_text(j, 2) + "\n");
     return kExitOk;

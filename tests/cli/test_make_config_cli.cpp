@@ -52,6 +52,14 @@ TEST_CASE("battsim make-config: from a rating, and what it refuses", "[cli][make
     const clitest::Result bad_cutoff = clitest::run("make-config --cells 4 --capacity-mah 1500 --cutoff-v 8");
     CHECK(bad_cutoff.exit_code == 2);
     CHECK(bad_cutoff.err.find("V per cell, found 2 V") != std::string::npos);
+    // A Li-ion cell's cutoff (2.5 V) is noted: the table is a LiPo's; a LiPo pilot's 3.0 V is not.
+    const clitest::Result li_ion = clitest::run("make-config --cells 1 --capacity-mah 2900 --cutoff-v 2.5 -o " + q(dir + "/li.json"));
+    CHECK(li_ion.exit_code == 0);
+    CHECK_THAT(li_ion.err, Catch::Contains("note: the cutoff, 2.500 V per cell, lies below the empty point of the "
+                                           "config's OCV table (3.327 V per cell), a lithium-polymer pack's"));
+    const clitest::Result low_lipo = clitest::run("make-config --cells 4 --capacity-mah 1500 --cutoff-v 12 -o " + q(dir + "/lp.json"));
+    CHECK(low_lipo.exit_code == 0);
+    CHECK(low_lipo.err.find("lies below the empty point") == std::string::npos);
     const clitest::Result missing = clitest::run("make-config --from-log " + q(dir + "/nothing.bin"));
     CHECK(missing.exit_code == 3);
     // A CSV log without cell columns whose voltage fits two cell counts says what it lacks.
