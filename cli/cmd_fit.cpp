@@ -53,6 +53,15 @@ std::function<int()> setup(CLI::App& sub) {
         host::fit::FitJob job;
         if (int rc = resolve_input(a->common.input, job.reader, job.config, me)) return rc;
         if (int rc = check_plot_option(me, a->common.plot)) return rc;
+        // Before any log is read (these had come after reading them all).
+        if (!a->per_log.empty() && !a->output.empty()) {
+            std::cerr << me << ": with per-log parameters there is one config per log: use --output-dir, not -o\n";
+            return kExitUsage;
+        }
+        if (!a->per_log.empty() && !a->tests.empty()) {
+            std::cerr << me << ": with per-log parameters there is no single model to test on other logs\n";
+            return kExitUsage;
+        }
         job.logs = a->logs;
         job.options.max_capacity_factor = a->common.max_capacity_factor;
         job.test_logs = a->tests;

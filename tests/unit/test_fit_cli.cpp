@@ -143,6 +143,9 @@ TEST_CASE("battsim fit exit codes", "[fit][cli]") {
     CHECK(run(log + " --initial guess") == 2);
     CHECK(run(log + " --add warp") == 2);
     CHECK(run(log + " --per-log r -o /tmp/x.json") == 2);  // per-log parameters need --output-dir
+    // Said before any log is read: a log that cannot be read (exit 3) is not reached.
+    CHECK(run("/nonexistent.csv --per-log r -o /tmp/x.json") == 2);
+    CHECK(run("/nonexistent.csv --per-log r --test " + log) == 2);
     CHECK(run(log + " -o /nonexistent-dir/out.json") == 5);
     std::remove(log.c_str());
 }

@@ -695,9 +695,16 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
         ResidualOptions one_thread = o;
         one_thread.jobs = 1;
         if (progress) {
-            for (const std::string& name : names)
-                *progress << "battsim residual: effect " << round + 1 << " of at most " << o.max_effects << ": trying " << name
-                          << "\n";
+            // Only the candidates that apply (a log with a temperature leaves self-heating out,
+            // one whose current never reverses hysteresis): "trying" each had read as if it were.
+            for (const std::string& name : names) {
+                State trial = current;
+                std::vector<std::string> added;
+                std::string note, description;
+                if (prepare(name, traces, trial, current_eval, split, o.initial, added, note, description))
+                    *progress << "battsim residual: effect " << round + 1 << " of at most " << o.max_effects
+                              << ": trying " << name << "\n";
+            }
         }
         std::vector<CandidateScore> tried(names.size());
         std::vector<State> fitted_states(names.size());
