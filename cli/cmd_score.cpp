@@ -36,7 +36,7 @@ std::function<int()> setup(CLI::App& sub) {
         ->check(CLI::Range(0, 1024));
     sub.add_option("--logs", a->logs_dir,
                    "Read each flight's log from DIR/NAME.csv (.bin, .ulg for those formats; written by `battsim simulate "
-                   "--out-dir`) instead of simulating it in memory");
+                   "--out-dir` from the scenarios as they are now: another seed's log is refused) instead of simulating it in memory");
     sub.add_option("--copies", a->copies,
                    "Fly the suite this many times: as written, then with other seeds (gusts, cell spreads, sensor "
                    "noise; copy k adds 7919 k to each seed); figures pool every copy, with the copies' range beside them")

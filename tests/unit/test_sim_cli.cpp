@@ -109,6 +109,24 @@ TEST_CASE("battsim simulate --format dataflash|ulog writes an autopilot's log th
     CHECK(missing.err.find(d.at("a.ulg") + ": cannot open file") != std::string::npos);
 }
 
+TEST_CASE("battsim score --logs refuses a log its scenario does not simulate now", "[cli][score]") {
+    Dir d, out;
+    clitest::write_file(d.at("a.json"), scenario_json("a", 1));
+    // Another seed's log had been graded against this seed's truth with only a note.
+    REQUIRE(run("simulate " + q(d.at("a.json")) + " --seed 777 --out-dir " + q(out.path)).exit_code == 0);
+    const auto other = run("score " + q(d.at("a.json")) + " --logs " + q(out.path) + " --columns oracle --json");
+    CHECK(other.exit_code == 3);
+    CHECK(other.out.empty());
+    CHECK_THAT(other.err, Catch::Contains(out.at("a.csv") + ": not the log scenario a (" + d.at("a.json") +
+                                          ") simulates as it is now"));
+    CHECK_THAT(other.err, Catch::Contains("re-simulate it"));
+    // Re-simulated from the scenario as it is: scored, as in memory.
+    REQUIRE(run("simulate " + q(d.at("a.json")) + " --out-dir " + q(out.path)).exit_code == 0);
+    const auto same = run("score " + q(d.at("a.json")) + " --logs " + q(out.path) + " --columns oracle --json");
+    INFO(same.err);
+    CHECK(same.exit_code == 0);
+}
+
 TEST_CASE("battsim score prints a table or JSON and checks its arguments", "[cli][score]") {
     Dir d;
     clitest::write_file(d.at("a.json"), scenario_json("a", 1));

@@ -430,6 +430,20 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& suite, const std::
                                  ": " + e.message());
         }
         scratch.reset();
+        if (!options.logs_dir.empty()) {
+            // The truth is this scenario's as it is now: a log of another seed or of an
+            // edited scenario would be graded against another flight's truth.
+            std::ifstream in(path, std::ios::binary);
+            std::stringstream buf;
+            buf << in.rdbuf();
+            if (buf.str() != simr.log_text)
+                throw InputError(path, 0, 0,
+                                 "not the log scenario " + simr.scenario.name + " (" + scenarios[i].source_path +
+                                     ") simulates as it is now (written with another --seed, --format or "
+                                     "--cutoff-v-per-cell, or from an edited scenario): its truth would not match the "
+                                     "log; re-simulate it with `battsim simulate SCENARIO --out-dir " +
+                                     options.logs_dir + "`");
+        }
         result.flights[i] = score_flight(simr, samples, columns);
         result.flights[i].copy = copy_of[i];
         if (simr.truth.sensor_stats.current_clipped > 0)
@@ -437,13 +451,6 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& suite, const std::
                                               std::to_string(simr.truth.sensor_stats.current_clipped) + " of " +
                                               std::to_string(simr.truth.sensor_stats.reads) +
                                               " reads at its shunt range: the log's current is wrong there");
-        if (!options.logs_dir.empty()) {
-            std::ifstream in(path, std::ios::binary);
-            std::stringstream buf;
-            buf << in.rdbuf();
-            if (buf.str() != simr.log_text)
-                result.flights[i].notes.push_back(path + " differs from what the scenario simulates now; the truth may not match it");
-        }
     });
     return result;
 }

@@ -38,7 +38,9 @@ constexpr int kScoreVersion = 1;
 
 struct ScoreOptions {
     int jobs = 1;
-    std::string logs_dir;  // non-empty: estimators read DIR/NAME.csv instead of the in-memory log
+    // Non-empty: estimators read DIR/NAME.csv instead of the in-memory log; it must be the
+    // log the scenario simulates now (an InputError otherwise), as the truth is its.
+    std::string logs_dir;
     // Copies of the suite flown: the suite itself, then sim::reseeded copies 1 … copies − 1
     // (other gusts, cell spreads and sensor noise). The table pools every copy's flights and
     // shows the spread of the copies' own figures. Not with logs_dir.
@@ -89,7 +91,8 @@ struct ScoreResult {
     std::vector<FlightScore> flights;
 };
 
-// Throws sim::ScenarioError (a scenario cannot be flown) or InputError (a log cannot be read).
+// Throws sim::ScenarioError (a scenario cannot be flown) or InputError (a log cannot be read,
+// or a log of logs_dir is not the one its scenario simulates now).
 ScoreResult score_scenarios(const std::vector<sim::Scenario>& scenarios, const std::vector<EstimatorColumn>& columns,
                             const ScoreOptions& options);
 
