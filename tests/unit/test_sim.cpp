@@ -562,3 +562,49 @@ TEST_CASE("simulate -o LOG's default truth file: the extension of the file name 
     CHECK(default_truth_path("./flight") == "./flight.truth.json");
     CHECK(default_truth_path("../out/f.csv") == "../out/f.truth.json");
 }
+
+TEST_CASE("Scenario files: schema and version required, whole numbers however written, zero thermal values kept", "[sim]") {
+    const testsupport::TempDir temp("sim");
+    const std::string cfg = std::string(BATTSIM_SOURCE_DIR) + "/configs/reference-modified.json";
+    const std::string rest = R"("name": "x", "monitor_config": ")" + cfg + "\"";
+    const std::string head = R"({"schema": "battsim.scenario", "version": 1, )" + rest;
+    const auto error_of = [&](const std::string& name, const std::string& text) -> std::string {
+        try {
+            load_scenario(temp.write(name, text));
+        } catch (const ScenarioError& e) {
+            return e.what();
+        }
+        return "";
+    };
+    // Documented as required; a file without them had been read as a scenario.
+    CHECK_THAT(error_of("noschema.json", "{" + rest + "}"), Catch::Contains("$.schema: missing: expected \"battsim.scenario\""));
+    CHECK_THAT(error_of("noversion.json", R"({"schema": "battsim.scenario", )" + rest + "}"),
+               Catch::Contains("$.version: missing: expected 1"));
+
+    // 4.0 and 1e3 are the whole numbers 4 and 1000 ("expected a whole number, found 4.0" had
+    // contradicted itself); 4.5 and -1 are not whole numbers of the range.
+    const Scenario plain = load_scenario(temp.write("plain.json", head + R"(, "seed": 1000, "pack": {"cells": 4}})"));
+    const Scenario floats = load_scenario(temp.write("floats.json", head + R"(, "seed": 1e3, "pack": {"cells": 4.0}})"));
+    CHECK(floats.seed == 1000u);
+    CHECK(floats.pack.cells == 4);
+    CHECK(simulate(floats).log_text == simulate(plain).log_text);
+    CHECK_THAT(error_of("half.json", head + R"(, "pack": {"cells": 4.5}})"), Catch::Contains("$.pack.cells: expected a whole number, found 4.5"));
+    CHECK_THAT(error_of("neg.json", head + R"(, "seed": -1})"),
+               Catch::Contains("$.seed: expected a whole number from 0 to 18446744073709551615, found -1"));
+    CHECK_THAT(error_of("huge.json", head + R"(, "seed": 1e20})"), Catch::Contains("$.seed: expected a whole number from 0"));
+    CHECK_THAT(error_of("weak.json", head + R"(, "pack": {"weak_cells": [{"cell": 2.0}, {"cell": 9.0}]}})"),
+               Catch::Contains("$.pack.weak_cells[1].cell: expected a whole number in [1, 4], found 9.0"));
+
+    // A conductance of 0 is an insulated pack (0 had been replaced by the default); a heat
+    // capacity of 0 is no pack at all.
+    const Scenario insulated = load_scenario(
+        temp.write("cond0.json", head + R"(, "pack": {"conductance_ground_w_per_k": 0, "conductance_flight_w_per_k": 0}})"));
+    CHECK(insulated.pack.conductance_ground_w_per_k == 0.0);
+    CHECK(insulated.pack.conductance_flight_w_per_k == 0.0);
+    CHECK(plain.pack.conductance_flight_w_per_k == Approx(1.6));
+    const SimulationResult warm = simulate(insulated), cooled = simulate(plain);
+    CHECK(warm.truth.final_temperature_c > cooled.truth.final_temperature_c + 2.0);
+    CHECK(scenario_to_json(warm.scenario)["pack"]["conductance_flight_w_per_k"] == 0.0);
+    CHECK_THAT(error_of("heat0.json", head + R"(, "pack": {"heat_capacity_j_per_k": 0}})"),
+               Catch::Contains("$.pack.heat_capacity_j_per_k: 0 J/K is no thermal mass"));
+}

@@ -51,23 +51,39 @@ public:
         out = d;
         return true;
     }
+    // A number with a whole value reads as that number however it is written (4.0, 1e3), as
+    // the monitor config and the options do: "expected a whole number, found 4.0" had
+    // contradicted itself.
+    static bool whole(const json& v) {
+        if (v.is_number_integer()) return true;
+        if (!v.is_number_float()) return false;
+        const double d = v.get<double>();
+        return std::isfinite(d) && d == std::floor(d);
+    }
     bool integer(const char* key, int& out, int lo, int hi) {
         const json* v = find(key);
         if (!v) return false;
-        if (!v->is_number_integer()) fail(at(key), "expected a whole number, found " + json_brief(*v));
-        const long long n = v->get<long long>();
-        if (n < lo || n > hi) {
+        if (!whole(*v)) fail(at(key), "expected a whole number, found " + json_brief(*v));
+        const double d = v->get<double>();  // exact for every int, the only range checked
+        if (d < lo || d > hi) {
             fail(at(key), "expected a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], found " +
-                              std::to_string(n));
+                              json_brief(*v));
         }
-        out = static_cast<int>(n);
+        out = static_cast<int>(d);
         return true;
     }
     bool seed(const char* key, uint64_t& out) {
         const json* v = find(key);
         if (!v) return false;
-        if (!v->is_number_unsigned()) fail(at(key), "expected a whole number >= 0, found " + json_brief(*v));
-        out = v->get<uint64_t>();
+        if (v->is_number_unsigned()) {
+            out = v->get<uint64_t>();
+            return true;
+        }
+        // 2^64 itself is the first double out of range.
+        constexpr double kTwoTo64 = 18446744073709551616.0;
+        if (!whole(*v) || v->get<double>() < 0.0 || v->get<double>() >= kTwoTo64)
+            fail(at(key), "expected a whole number from 0 to 18446744073709551615, found " + json_brief(*v));
+        out = static_cast<uint64_t>(v->get<double>());
         return true;
     }
     bool string(const char* key, std::string& out) {
@@ -107,7 +123,9 @@ void read_pack(Reader& r, PackSpec& p) {
     r.number("resistance_factor", p.resistance_factor, 0.1, 20.0);
     r.number("initial_soc", p.initial_soc, 0.05, 1.0);
     r.number("activation_energy_j_per_mol", p.activation_energy_j_per_mol, 0.0, 200000.0);
-    r.number("heat_capacity_j_per_k", p.heat_capacity_j_per_k, 0.0, 1e7);
+    if (r.number("heat_capacity_j_per_k", p.heat_capacity_j_per_k, 0.0, 1e7) && p.heat_capacity_j_per_k == 0.0)
+        r.fail(r.at("heat_capacity_j_per_k"), "0 J/K is no thermal mass: the temperature would jump without bound; "
+                                              "leave the key out for the default of 30.6 J/K per cell·Ah");
     r.number("conductance_ground_w_per_k", p.conductance_ground_w_per_k, 0.0, 1e5);
     r.number("conductance_flight_w_per_k", p.conductance_flight_w_per_k, 0.0, 1e5);
 }
@@ -131,9 +149,9 @@ void resolve_defaults(Scenario& s) {
     if (p.r1_ohm < 0.0) p.r1_ohm = 0.00155 / cap;
     if (p.r2_ohm < 0.0) p.r2_ohm = 0.0023 / cap;
     const double size = p.cells * cap;  // cell·Ah: mass and heat capacity scale with it
-    if (p.heat_capacity_j_per_k <= 0.0) p.heat_capacity_j_per_k = 30.6 * size;
-    if (p.conductance_ground_w_per_k <= 0.0) p.conductance_ground_w_per_k = 0.4 * pow23(size / 6.2);
-    if (p.conductance_flight_w_per_k <= 0.0) p.conductance_flight_w_per_k = 1.6 * pow23(size / 6.2);
+    if (p.heat_capacity_j_per_k < 0.0) p.heat_capacity_j_per_k = 30.6 * size;
+    if (p.conductance_ground_w_per_k < 0.0) p.conductance_ground_w_per_k = 0.4 * pow23(size / 6.2);
+    if (p.conductance_flight_w_per_k < 0.0) p.conductance_flight_w_per_k = 1.6 * pow23(size / 6.2);
     if (s.profile.mean_power_w <= 0.0) {
         const double per_cell = s.profile.kind == FlightKind::Racing ? 90.0 : 35.0;
         s.profile.mean_power_w = per_cell * p.cells * cap / 1.55;
@@ -224,8 +242,9 @@ Scenario scenario_from_json(const json& j, const std::string& origin, const std:
     Reader root(j, "$", origin);
     std::string schema = kSchema;
     int version = kVersion;
-    root.string("schema", schema);
-    root.integer("version", version, 0, 1000000);
+    // Required, as documented: a file without them had been read as a scenario whatever it was.
+    if (!root.string("schema", schema)) root.fail("$.schema", "missing: expected \"" + std::string(kSchema) + "\"");
+    if (!root.integer("version", version, 0, 1000000)) root.fail("$.version", "missing: expected " + std::to_string(kVersion));
     if (schema != kSchema) root.fail("$.schema", "expected \"" + std::string(kSchema) + "\", found \"" + schema + "\"");
     if (version != kVersion) root.fail("$.version", "expected " + std::to_string(kVersion) + ", found " + std::to_string(version));
     if (!root.string("name", s.name) || s.name.empty()) root.fail("$.name", "expected a non-empty name");

@@ -47,9 +47,11 @@ struct PackSpec {
     std::vector<WeakCell> weak_cells;
     double initial_soc = 1.0;
     double activation_energy_j_per_mol = 20000.0;
-    double heat_capacity_j_per_k = 0.0;       // 0 = 30.6 J/K per cell·Ah
-    double conductance_ground_w_per_k = 0.0;  // 0 = 0.4 W/K × (cells·Ah/6.2)^(2/3)
-    double conductance_flight_w_per_k = 0.0;  // 0 = 1.6 W/K × (cells·Ah/6.2)^(2/3)
+    // Unset (< 0) = derived from the size; a conductance of 0 is an insulated pack (0 had
+    // silently meant the default), a heat capacity of 0 is refused (no thermal mass).
+    double heat_capacity_j_per_k = -1.0;       // unset: 30.6 J/K per cell·Ah
+    double conductance_ground_w_per_k = -1.0;  // unset: 0.4 W/K × (cells·Ah/6.2)^(2/3)
+    double conductance_flight_w_per_k = -1.0;  // unset: 1.6 W/K × (cells·Ah/6.2)^(2/3)
 };
 
 struct Scenario {
@@ -95,8 +97,8 @@ std::vector<std::string> find_scenario_files(const std::vector<std::string>& pat
 // unchanged. `battsim score --copies` and scripts/joint-search.py --reseed use the same rule.
 Scenario reseeded(const Scenario& s, int copy);
 
-// Fills every value left at 0 (resistances, thermal constants, mean power) from the
-// pack's size. Idempotent; load_scenario() calls it.
+// Fills every value left unset (resistances and thermal constants < 0, mean power <= 0)
+// from the pack's size. Idempotent; load_scenario() calls it.
 void resolve_defaults(Scenario& s);
 // The plant for this scenario (resolve_defaults() first). `healthy`: the same pack
 // (same seeded cell spread) without its ageing and weak cells, the reference a
