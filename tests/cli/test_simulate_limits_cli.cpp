@@ -132,3 +132,19 @@ TEST_CASE("the bundled example and its truth are what simulate writes today", "[
     CHECK(clitest::read_file(dir + "/example-4s.csv") == clitest::read_file(kSource + "/logs/example-4s.csv"));
     CHECK(clitest::read_file(dir + "/example-4s.truth.json") == clitest::read_file(kSource + "/logs/example-4s.truth.json"));
 }
+
+TEST_CASE("score names every flight-fraction point a short flight leaves out", "[cli][score]") {
+    const std::string dir = clitest::temp_dir();
+    const auto notes_of = [&](const std::string& name, double flight_s) {
+        const std::string path = scenario(dir, name, 4, {{"profile", {{"flight_s", flight_s}}}});
+        const auto j = clitest::run_json("score " + q(path) + " --columns oracle --json");
+        std::string all;
+        for (const auto& n : j["flights"][0]["notes"]) all += n.get<std::string>() + "\n";
+        return all;
+    };
+    // The hover pack flies 586 s to its cutoff: 15 s is before 10 % (the note had named only
+    // the 50 % point), 90 s before 20 %, 200 s before 50 %.
+    CHECK_THAT(notes_of("f15", 15), Catch::Contains("landed before 10 % of the flight: the 10 %, 20 % and 50 % points are left out"));
+    CHECK_THAT(notes_of("f90", 90), Catch::Contains("landed before 20 % of the flight: the 20 % and 50 % points are left out"));
+    CHECK_THAT(notes_of("f200", 200), Catch::Contains("landed before 50 % of the flight: the 50 % point is left out"));
+}

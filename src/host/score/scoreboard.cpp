@@ -349,7 +349,17 @@ FlightScore score_flight(const sim::SimulationResult& sim, const std::vector<cor
     f.weak_cell = t.weak_cell;
     f.outlier_cells = t.outlier_cells;
     f.justified = t.justified_warnings;
-    if (f.flown_s < 0.5 * t.total_flight_time_s) f.notes.push_back("landed before 50 % of the flight: the 50 % point is left out");
+    // Every point past the landing is left out, not only 50 %'s (a 15 s flight loses all three).
+    std::vector<std::string> left_out;
+    for (double fraction : kFractions)
+        if (f.flown_s < fraction * t.total_flight_time_s) left_out.push_back(std::to_string(std::lround(fraction * 100.0)) + " %");
+    if (!left_out.empty()) {
+        std::string points = left_out.back();
+        if (left_out.size() >= 2) points = left_out[left_out.size() - 2] + " and " + points;
+        if (left_out.size() == 3) points = left_out[0] + ", " + points;
+        f.notes.push_back("landed before " + left_out.front() + " of the flight: the " + points + " point" +
+                          (left_out.size() > 1 ? "s are" : " is") + " left out");
+    }
 
     // Which truth snapshot belongs to each sample (the same row of the log).
     std::vector<long> snap(samples.size(), -1);
