@@ -131,6 +131,9 @@ std::function<int()> setup(CLI::App& sub) {
                           << "(the truth's current_clipped_reads)\n";
             const std::string ground = host::sim::ground_draw_note(r);
             if (!ground.empty()) std::cerr << "battsim simulate: note: " << ground << "\n";
+            for (const std::string& n : {host::sim::flight_draw_note(r), host::sim::empty_cell_note(r),
+                                         host::sim::log_interval_note(s)})
+                if (!n.empty()) std::cerr << "battsim simulate: note: " << s.name << ": " << n << "\n";
             std::cout << s.name << ": " << t.rows << " rows -> " << log << "; flight " << t.landing_s - t.takeoff_s
                       << " s of " << t.total_flight_time_s << " s to cutoff (healthy pack " << t.healthy_total_flight_time_s
                       << " s)" << (t.landed_by_cutoff ? ", cut short by the cutoff" : "") << "\n";

@@ -133,6 +133,51 @@ TEST_CASE("the bundled example and its truth are what simulate writes today", "[
     CHECK(clitest::read_file(dir + "/example-4s.truth.json") == clitest::read_file(kSource + "/logs/example-4s.truth.json"));
 }
 
+TEST_CASE("simulate records a cell run past empty and says so", "[cli][sim]") {
+    const std::string dir = clitest::temp_dir();
+    // A cell at 30 % capacity in a 400 s hover: the pack's cutoff comes after that cell is
+    // empty (its log had read 1.35 V with nothing said).
+    const auto weak = run("simulate " +
+                          q(scenario(dir, "weak", 4, {{"pack", {{"weak_cells", {{{"cell", 2}, {"capacity_factor", 0.3}}}}}},
+                                                      {"profile", {{"flight_s", 400}}}})) +
+                          " -o " + q(dir + "/weak.csv"));
+    INFO(weak.err);
+    REQUIRE(weak.exit_code == 0);
+    CHECK_THAT(weak.err, Catch::Contains("note: weak: cell 2 passed 0 % state of charge at "));
+    const auto wt = nlohmann::json::parse(clitest::read_file(dir + "/weak.truth.json"))["flight"];
+    CHECK(wt["empty_cell"] == 2);
+    CHECK(wt["lowest_cell_soc"].get<double>() < 0.0);
+    CHECK(wt["cell_empty_s"].get<double>() > wt["takeoff_s"].get<double>());
+    CHECK(wt["cell_empty_s"].get<double>() < wt["log_end_s"].get<double>());
+    // A healthy pack: nothing said, nothing empty.
+    const auto healthy = run("simulate " + q(scenario(dir, "healthy", 4)) + " -o " + q(dir + "/healthy.csv"));
+    REQUIRE(healthy.exit_code == 0);
+    CHECK(healthy.err.find("state of charge") == std::string::npos);
+    const auto ht = nlohmann::json::parse(clitest::read_file(dir + "/healthy.truth.json"))["flight"];
+    CHECK(ht["empty_cell"].is_null());
+    CHECK(ht["cell_empty_s"].is_null());
+    CHECK(ht["lowest_cell_soc"].get<double>() > 0.0);
+    CHECK(ht["lowest_cell_soc_at_cutoff"].get<double>() < ht["lowest_cell_soc"].get<double>());
+}
+
+TEST_CASE("simulate and score say when the flight draws below the take-off current", "[cli][sim]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string path = scenario(dir, "low", 4, {{"profile", {{"mean_power_w", 10}}}, {"truth", {{"max_continuation_s", 36000}}}});
+    const auto sim = run("simulate " + q(path) + " -o " + q(dir + "/low.csv"));
+    INFO(sim.err);
+    REQUIRE(sim.exit_code == 0);
+    CHECK_THAT(sim.err, Catch::Contains("note: low: the flight draws "));
+    CHECK_THAT(sim.err, Catch::Contains("below the monitor config's take-off current (monitor.min_flying_current_a"));
+    const auto score = clitest::run_json("score " + q(path) + " --columns oracle --json");
+    bool said = false;
+    for (const auto& n : score["flights"][0]["notes"]) said |= n.get<std::string>().find("the flight draws ") == 0;
+    CHECK(said);
+    // At the scenario's default power the flight reads as flight: nothing said.
+    const auto normal = run("simulate " + q(scenario(dir, "normal", 4)) + " -o " + q(dir + "/normal.csv"));
+    REQUIRE(normal.exit_code == 0);
+    CHECK(normal.err.find("the flight draws") == std::string::npos);
+}
+
 TEST_CASE("score names every flight-fraction point a short flight leaves out", "[cli][score]") {
     const std::string dir = clitest::temp_dir();
     const auto notes_of = [&](const std::string& name, double flight_s) {
@@ -147,4 +192,18 @@ TEST_CASE("score names every flight-fraction point a short flight leaves out", "
     CHECK_THAT(notes_of("f15", 15), Catch::Contains("landed before 10 % of the flight: the 10 %, 20 % and 50 % points are left out"));
     CHECK_THAT(notes_of("f90", 90), Catch::Contains("landed before 20 % of the flight: the 20 % and 50 % points are left out"));
     CHECK_THAT(notes_of("f200", 200), Catch::Contains("landed before 50 % of the flight: the 50 % point is left out"));
+}
+
+TEST_CASE("simulate says a log interval only the edgetx format uses is ignored", "[cli][sim]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string path = scenario(dir, "iv", 4, {{"log", {{"interval_s", 0.5}}}});
+    const auto raw = run("simulate " + q(path) + " -o " + q(dir + "/iv.csv"));
+    INFO(raw.err);
+    REQUIRE(raw.exit_code == 0);
+    CHECK_THAT(raw.err, Catch::Contains("note: iv: log.interval_s (0.5 s) is the edgetx radio log's interval; the raw log ignores it"));
+    CHECK_FALSE(nlohmann::json::parse(clitest::read_file(dir + "/iv.truth.json"))["scenario"]["log"].contains("interval_s"));
+    const auto radio = run("simulate " + q(path) + " --format edgetx -o " + q(dir + "/iv-radio.csv"));
+    REQUIRE(radio.exit_code == 0);
+    CHECK(radio.err.find("interval_s") == std::string::npos);
+    CHECK(nlohmann::json::parse(clitest::read_file(dir + "/iv-radio.truth.json"))["scenario"]["log"]["interval_s"] == 0.5);
 }

@@ -456,6 +456,9 @@ ScoreResult score_scenarios(const std::vector<sim::Scenario>& suite, const std::
         }
         result.flights[i] = score_flight(simr, samples, columns);
         result.flights[i].copy = copy_of[i];
+        // A flight the monitor never sees is scored all the same: said, as simulate says it.
+        const std::string unseen = sim::flight_draw_note(simr);
+        if (!unseen.empty()) result.flights[i].notes.push_back(unseen);
         if (simr.truth.sensor_stats.current_clipped > 0)
             result.flights[i].notes.push_back("the simulated current sensor clipped " +
                                               std::to_string(simr.truth.sensor_stats.current_clipped) + " of " +

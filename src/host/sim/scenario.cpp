@@ -183,6 +183,15 @@ std::string override_log_format(std::vector<Scenario>& scenarios, const std::str
     return std::string();
 }
 
+std::string log_interval_note(const Scenario& s) {
+    if (!s.log_interval_given || log_format_of(s) == SimLogFormat::Radio) return std::string();
+    std::ostringstream m;
+    m << "log.interval_s (" << s.log_interval_s << " s) is the edgetx radio log's interval; the "
+      << sim_log_format_name(log_format_of(s))
+      << " log ignores it (every sensor read is a row, or the autopilot's own rate) and the truth leaves it out";
+    return m.str();
+}
+
 SimLogFormat log_format_of(const Scenario& s) {
     SimLogFormat format;
     if (parse_sim_log_format(s.log_format, format)) return format;
@@ -391,7 +400,7 @@ Scenario scenario_from_json(const json& j, const std::string& origin, const std:
         r.string("format", s.log_format);
         const std::string problem = log_format_problem(s.log_format, s.pack.cells);
         if (!problem.empty()) r.fail("$.log.format", problem);
-        r.number("interval_s", s.log_interval_s, 0.05, 60.0);
+        s.log_interval_given = r.number("interval_s", s.log_interval_s, 0.05, 60.0);
         r.finish();
     }
     root.finish();

@@ -77,6 +77,7 @@ struct Scenario {
     double max_continuation_s = 3600.0;
     std::string log_format = "auto";  // auto (raw for 4 cells, csv otherwise), raw, csv, edgetx
     double log_interval_s = 0.2;      // edgetx: the radio's log interval
+    bool log_interval_given = false;  // $.log.interval_s set (only edgetx uses it)
 };
 
 Scenario load_scenario(const std::string& path);
@@ -111,6 +112,9 @@ SimLogFormat log_format_of(const Scenario& s);
 std::string log_format_problem(const std::string& format, int cells);
 // A command's override: every scenario's log format set to `format` (none when empty). "" when
 // all take it, else "PATH: why" for the first that cannot (and none is changed).
+// When $.log.interval_s is set but the log format is not edgetx, which ignores it (as does
+// the truth's filled-in scenario): what to say; "" otherwise.
+std::string log_interval_note(const Scenario& s);
 std::string override_log_format(std::vector<Scenario>& scenarios, const std::string& format);
 
 }  // namespace sim

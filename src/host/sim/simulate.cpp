@@ -187,6 +187,14 @@ SimulationResult simulate(const Scenario& scenario, const SimulateOptions& optio
         if (ph == Phase::Armed) power = s.profile.armed_power_w;
         if (airborne) power = flight.next(dt);
         const PlantOutput out = plant.step_power(power, dt, airborne);
+        for (int c = 0; c < s.pack.cells; ++c) {
+            const double soc = plant.state().soc[c];
+            tr.lowest_cell_soc = std::min(tr.lowest_cell_soc, soc);
+            if (soc < 0.0 && tr.empty_cell < 0) {
+                tr.empty_cell = c;
+                tr.cell_empty_s = t + dt;
+            }
+        }
         if (out.brownout && !airborne) {
             throw ScenarioError(s.source_path + ": the pack cannot deliver even the ground power (" +
                                 std::to_string(power) + " W); check the pack and profile");
@@ -205,6 +213,7 @@ SimulationResult simulate(const Scenario& scenario, const SimulateOptions& optio
                 landing = t + dt;
                 log_end = landing + s.profile.idle_after_s;
                 energy_at_cutoff = plant.state().energy_wh;
+                tr.lowest_cell_soc_at_cutoff = plant.min_soc();
             }
         }
         TrueValues tv;
@@ -260,6 +269,7 @@ SimulationResult simulate(const Scenario& scenario, const SimulateOptions& optio
                 tr.cutoff_s = t + dt;
                 tr.cutoff_by_brownout = out.brownout;
                 energy_at_cutoff = cp.state().energy_wh;
+                tr.lowest_cell_soc_at_cutoff = cp.min_soc();
                 break;
             }
         }
@@ -412,6 +422,12 @@ json truth_to_json(const SimulationResult& r) {
                    {"energy_to_cutoff_wh", round_fixed(t.energy_to_cutoff_wh, 4)},
                    {"mean_flight_power_w", round_fixed(t.mean_flight_power_w, 3)},
                    {"final_temperature_c", round_fixed(t.final_temperature_c, 2)},
+                   // Below 0 the plant ran past empty on an extrapolated OCV table: a cutoff
+                   // under the empty cell's voltage, or a cell too weak for the flight.
+                   {"lowest_cell_soc", round_fixed(t.lowest_cell_soc, 5)},
+                   {"lowest_cell_soc_at_cutoff", round_fixed(t.lowest_cell_soc_at_cutoff, 5)},
+                   {"empty_cell", t.empty_cell >= 0 ? json(t.empty_cell + 1) : json(nullptr)},
+                   {"cell_empty_s", t.cell_empty_s >= 0.0 ? json(round_fixed(t.cell_empty_s, 3)) : json(nullptr)},
                    // What a charger puts back after the log (with pack.initial_charge_drawn_ah):
                    // the ruler for a current-sensor check against the charger's count.
                    {"log_charge_ah", round_fixed(t.log_charge_ah, 6)}};
@@ -503,6 +519,40 @@ std::string ground_draw_note(const SimulationResult& r) {
                   "flight from the log's first sample that never lands. Give the scenario a smaller idle_power_w "
                   "(what the craft draws disarmed), or the config a take-off current above the idle's",
                   r.scenario.name.c_str(), idle_a, r.scenario.profile.idle_power_w, bar_a);
+    return buf;
+}
+
+std::string flight_draw_note(const SimulationResult& r) {
+    std::vector<double> flight_a;
+    for (const TruthPoint& p : r.truth.series)
+        if (p.in_flight) flight_a.push_back(p.current_a);
+    if (flight_a.empty()) return "";
+    // The median: the flight's own draw, whatever a take-off boost or a gust does.
+    std::nth_element(flight_a.begin(), flight_a.begin() + flight_a.size() / 2, flight_a.end());
+    const double flight_median_a = flight_a[flight_a.size() / 2];
+    const double bar_a = r.scenario.config.monitor.flying.min_flying_current_a;
+    if (!(flight_median_a < bar_a)) return "";
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "the flight draws %.2f A (median; profile.mean_power_w %g W), below the monitor config's "
+                  "take-off current (monitor.min_flying_current_a %.3g A): its replay does not see the take-off and "
+                  "reads the flight as ground. Give the scenario a larger mean_power_w, or the config a take-off "
+                  "current below the flight's",
+                  flight_median_a, r.scenario.profile.mean_power_w, bar_a);
+    return buf;
+}
+
+std::string empty_cell_note(const SimulationResult& r) {
+    const Truth& t = r.truth;
+    // The log only: a weak cell below 0 % by the time the truth flies on to a pack-voltage
+    // cutoff is what a series pack does (the suite's weak cells reach about −5 %).
+    if (t.empty_cell < 0) return "";
+    char buf[640];
+    std::snprintf(buf, sizeof buf,
+                  "cell %d passed 0 %% state of charge at %.1f s and reaches %.1f %% in the log (the truth's "
+                  "flight.empty_cell, cell_empty_s, lowest_cell_soc): the plant runs on past empty, where its voltages "
+                  "are extrapolated. Raise truth.cutoff_v_per_cell (%.2f V), shorten the flight or strengthen the cell",
+                  t.empty_cell + 1, t.cell_empty_s, t.lowest_cell_soc * 100.0, r.scenario.cutoff_v_per_cell);
     return buf;
 }
 

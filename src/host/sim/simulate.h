@@ -70,6 +70,12 @@ struct Truth {
     long rows = 0;
     std::vector<TruthPoint> series;
     double final_temperature_c = 0;
+    // The plant runs on below 0 % state of charge (its OCV table extrapolated) when the
+    // cutoff lets it: recorded, not prevented, so a truth past empty is seen, not trusted.
+    double lowest_cell_soc = 1.0;            // over the log
+    int empty_cell = -1;                     // the first cell below 0 % in the log (0-based), −1 none
+    double cell_empty_s = -1.0;              // when it passed 0 %, −1 never
+    double lowest_cell_soc_at_cutoff = 1.0;  // when the truth's cutoff comes (flying on past the landing)
 
     bool short_flight() const { return total_flight_time_s < 0.8 * healthy_total_flight_time_s; }
 };
@@ -112,6 +118,14 @@ nlohmann::json truth_to_json(const SimulationResult& r);
 // scenario at the default 5 W idle draws 1.2 A against make-config's 0.81 A bar). The text
 // says what to change; empty when the ground reads as ground.
 std::string ground_draw_note(const SimulationResult& r);
+// The opposite: the flight draws (median) below the take-off current, so the monitor never
+// sees the take-off. Empty when the flight reads as flight. Unlike ground_draw_note, without
+// the scenario's name (score prints its notes after the flight's).
+std::string flight_draw_note(const SimulationResult& r);
+// When a cell went below 0 % state of charge in the log (a cutoff below the empty cell's
+// voltage, a very weak cell): the truth is extrapolated there. Empty otherwise; without the
+// scenario's name.
+std::string empty_cell_note(const SimulationResult& r);
 
 // simulate -o LOG's truth file without --truth: LOG with its extension (after the last dot of
 // its file name, not of a directory's) replaced by ".truth.json".
