@@ -125,15 +125,17 @@ TEST_CASE("fit-ocv says where its table is extrapolation; logs on the ground are
 }
 
 TEST_CASE("fit-ocv says when its config is for another pack than the flights'", "[cli]") {
-    // 4S flights with a 6S config had stitched a table of 2.77 V per cell at full without a word.
+    // 4S flights with a 6S config had stitched a table of 2.77 V per cell at full without a word;
+    // then it said so in a note and wrote it (exit 0). The table is one no pack has (its empty
+    // point 791 mV below the config's minimum voltage): refused, with the note that says why.
     const std::string dir = clitest::temp_dir();
-    const auto j = clitest::run_json("fit-ocv " + q(kSource + "/logs/example-4s.csv") + " -c " +
-                                     q(kSource + "/configs/generic-6s.json") + " --json");
-    bool said = false;
-    for (const auto& n : j["notes"])
-        said = said || n.get<std::string>().find("example-4s.csv: the log has 4 cell voltages but the config 6 cells") == 0 ||
-               n.get<std::string>().find("/logs/example-4s.csv: the log has 4 cell voltages") != std::string::npos;
-    CHECK(said);
+    const clitest::Result six = run("fit-ocv " + q(kSource + "/logs/example-4s.csv") + " -c " +
+                                    q(kSource + "/configs/generic-6s.json") + " -o " + q(dir + "/six.json"));
+    CHECK(six.exit_code == 3);
+    CHECK_THAT(six.err, Catch::Contains("example-4s.csv: the log has 4 cell voltages but the config 6 cells"));
+    CHECK_THAT(six.err, Catch::Contains("example-4s.csv: the stitched OCV table is one no pack has, so it is not written"));
+    CHECK_THAT(six.err, Catch::Contains("is the config this pack's"));
+    CHECK(clitest::read_file(dir + "/six.json").empty());
     // One log both fitted and held out tests nothing: refused.
     const auto twice = run("fit-ocv " + q(kSource + "/logs/example-4s.csv") + " --test " + q(kSource + "/logs/example-4s.csv") +
                            " -c " + q(kSource + "/configs/sim-4s.json"));
@@ -225,4 +227,53 @@ TEST_CASE("fit-ocv: no held-out error without --test logs, and logs that never f
     CHECK(r.exit_code == 3);
     CHECK_THAT(r.err, Catch::Contains("in flight, under 2 % of the config's 1.55 Ah"));
     CHECK(r.out.empty());
+}
+
+TEST_CASE("fit-ocv refuses a table no pack has: a log whose clock jumps over discharges", "[cli][data]") {
+    // The Panasonic 18650PF's HPPC log leaves out the discharges between its pulse sets (its
+    // clock jumps over them): the charge counted spans 0.55-1.00 while the voltage falls to
+    // empty. The table had read 0.93 V at SOC 0 and 1.21 V from 5 to 45 %, 2.4 V from the
+    // config's curve where no sample reached, written with exit 0.
+    const std::string dir = clitest::temp_dir();
+    const clitest::Result r = run("fit-ocv " + q(kData + "/panasonic-18650pf/hppc_25c.csv") + " -c " +
+                                  q(kSource + "/configs/fitted/panasonic-18650pf-25c.json") +
+                                  " --negative-discharge -o " + q(dir + "/hppc.json") + " --report " + q(dir + "/r.json"));
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("hppc_25c.csv: the stitched OCV table is one no pack has, so it is not written"));
+    CHECK_THAT(r.err, Catch::Contains("below the config's minimum voltage 2.500 V"));
+    CHECK_THAT(r.err, Catch::Contains("which no sample reached, it lies up to"));
+    CHECK_THAT(r.err, Catch::Contains("The log's clock jumps (13 gap(s) over 60 s)"));
+    CHECK(clitest::read_file(dir + "/hppc.json").empty());
+    CHECK(clitest::read_file(dir + "/r.json").empty());
+}
+
+TEST_CASE("fit-ocv keeps the fullest start full and the empty point at its prior on full discharges", "[cli][data]") {
+    // Five constant-current discharges of one Samsung 30Q cell, each from full to 2.5 V. The
+    // joint step had let four starts pass the fullest one (1.015-1.036), so the discharges
+    // ended above SOC 0 and the table's empty point was bent to 2.225 V, below the config's
+    // 2.5 V minimum and below every voltage measured.
+    std::string logs;
+    for (const char* rate : {"C10", "1C", "2C", "3C", "4C"}) logs += " " + q(kData + "/samsung-30q/Q30_S001_" + std::string(rate) + ".csv");
+    const auto j = clitest::run_json("fit-ocv" + logs + " -c " + q(kSource + "/configs/fitted/samsung-30q-discharge.json") +
+                                     " --negative-discharge --json");
+    for (const auto& f : j["flights"]) {
+        INFO(f["log"].get<std::string>());
+        CHECK(f["start_soc"]["fitted"].get<double>() <= 1.0);
+    }
+    CHECK(j["soc_span"][1].get<double>() == Approx(1.0).margin(1e-9));
+    const double empty_v = j["ocv_cell_voltage_v"]["fitted"][0].get<double>();
+    CHECK(empty_v > 2.5);
+    CHECK(empty_v < 2.7);
+    // A make-config curve misses these discharges by half a volt, and the resistances fitted
+    // on it soak that up (-0.671 ohm ohmic, -0.899 ohm slow): said, as the fitted ones are.
+    const std::string dir = clitest::temp_dir();
+    REQUIRE(run("make-config --cells 1 --capacity-mah 3000 --cutoff-v 2.5 -o " + q(dir + "/1s.json")).exit_code == 0);
+    const auto m = clitest::run_json("fit-ocv" + logs + " -c " + q(dir + "/1s.json") + " --negative-discharge --json");
+    CHECK(m["pack_resistance_ohm"]["config_curve"]["ohmic_median"].get<double>() < 0.0);
+    bool said = false;
+    for (const auto& n : m["notes"])
+        said = said || n.get<std::string>().rfind("on the config's curve a fitted pack resistance is negative (ohmic -", 0) == 0;
+    CHECK(said);
+    // The data reach empty: there they, not the make-config curve's 3.33 V, place the table.
+    CHECK(m["ocv_cell_voltage_v"]["fitted"][0].get<double>() == Approx(2.5).margin(0.05));
 }

@@ -175,6 +175,14 @@ double robust_scale(const std::vector<Flight>& flights, const Shared& m, double 
     return std::max(1.4826 * a[a.size() / 2], 1e-3);
 }
 
+// The weight of the empty point's correction in the second difference centred on point j.
+// The empty point's prior is the user's empty voltage, not the curve's: a second difference
+// through it (sigma 5 mV against its own 10 mV) had carried the correction's slope down to it,
+// 209 mV (21 sigma) below it in the unit test's fleet. So the second difference at SOC 0.05
+// takes the empty point at its prior: it still holds the point at 0.05, and no longer moves
+// the empty one.
+double empty_coefficient(size_t j) { return j == 1 ? 0.0 : 1.0; }
+
 // The table's penalty, (t − x)ᵀP(t − x) with P = diag(1/σ²) (σ_empty at SOC 0, σ_prior
 // elsewhere) + DᵀD/σ_smooth² (D: second differences), added to normal equations over the
 // table's points (the first ones): a += P, b += P·t. `t` is the prior for a solve for the
@@ -189,7 +197,7 @@ void add_table_penalty(Eigen::MatrixXd& a, Eigen::VectorXd& b, const std::vector
     const double ws = 1.0 / (o.smooth_sigma_v * o.smooth_sigma_v);
     for (int j = 1; j + 1 < k; ++j) {
         const int idx[3] = {j - 1, j, j + 1};
-        const double c[3] = {1.0, -2.0, 1.0};
+        const double c[3] = {empty_coefficient(static_cast<size_t>(j)), -2.0, 1.0};
         double d2 = 0.0;
         for (int p = 0; p < 3; ++p) d2 += c[p] * t[static_cast<size_t>(idx[p])];
         for (int p = 0; p < 3; ++p) {
@@ -359,7 +367,7 @@ double objective(const std::vector<Flight>& flights, const std::vector<std::vect
         sum += d * d;
     }
     for (size_t j = 1; j + 1 < k; ++j) {
-        const double d2 = (m.knots[j - 1] - prior[j - 1]) - 2.0 * (m.knots[j] - prior[j]) + (m.knots[j + 1] - prior[j + 1]);
+        const double d2 = empty_coefficient(j) * (m.knots[j - 1] - prior[j - 1]) - 2.0 * (m.knots[j] - prior[j]) + (m.knots[j + 1] - prior[j + 1]);
         sum += d2 * d2 / (o.smooth_sigma_v * o.smooth_sigma_v);
     }
     return sum;
@@ -392,6 +400,10 @@ int refine_jointly(std::vector<Flight>& flights, const std::vector<double>& prio
     }
     const int pf = np, ps = np + 1, pw = np + 2;
     np += 3;
+    // The fullest start is full: no other may pass it (they had, to 1.015-1.036 on the Samsung
+    // 30Q's five full discharges, which then ended above SOC 0 and bent the table's empty
+    // point 27 sigma below its prior).
+    const double top_soc = o.fullest_is_full && fixed < flights.size() ? flights[fixed].s0 : 1.2;
     double lambda = 1e-3;
     int it = 0;
     for (; it < o.iterations; ++it) {
@@ -441,7 +453,7 @@ int refine_jointly(std::vector<Flight>& flights, const std::vector<double>& prio
             for (const Flight& f : flights) kept_flights.push_back({f.s0, f.r});
             for (int j = 0; j < k; ++j) m.knots[static_cast<size_t>(j)] += x(j);
             for (size_t f = 0; f < flights.size(); ++f) {
-                if (col_s[f] >= 0) flights[f].s0 = std::max(-0.2, std::min(1.2, flights[f].s0 + x(col_s[f])));
+                if (col_s[f] >= 0) flights[f].s0 = std::max(-0.2, std::min(top_soc, flights[f].s0 + x(col_s[f])));
                 if (col_r[f] >= 0) flights[f].r += x(col_r[f]);
             }
             m.r_fast += x(pf);
@@ -505,7 +517,7 @@ int fit(std::vector<Flight>& flights, const std::vector<double>& prior, bool fix
 }
 
 // What a user must know before trusting the table.
-void add_notes(OcvStitch& s, const std::vector<Flight>& flights) {
+void add_notes(OcvStitch& s, const std::vector<Flight>& flights, double config_resistance_ohm) {
     double lo = 1e9, hi = -1e9;
     for (const Flight& f : flights)
         if (!f.test) {
@@ -552,9 +564,114 @@ void add_notes(OcvStitch& s, const std::vector<Flight>& flights) {
                           mohm(s.fast_ohm) + ", slow " + mohm(s.slow_ohm) +
                           "): no pack has one; the flights hold too few load changes to fit them");
     }
+    // On the config's curve the resistances are only a baseline, and they soak up what the curve
+    // misses: a make-config curve 527 mV per cell off the Samsung 30Q's discharges had printed
+    // -0.671 ohm ohmic and -0.899 ohm slow without a word. Said beyond half the config's
+    // resistance below zero: a millohm either side of it is the fit's noise.
+    const double below_ohm = -0.5 * config_resistance_ohm;
+    if (s.fast_before_ohm < below_ohm || s.slow_before_ohm < below_ohm || s.resistance_before_ohm < below_ohm) {
+        auto mohm = [](double r) { return std::to_string(static_cast<int>(std::lround(r * 1000.0))) + " mOhm"; };
+        s.notes.push_back("on the config's curve a fitted pack resistance is negative (ohmic " + mohm(s.resistance_before_ohm) +
+                          ", fast " + mohm(s.fast_before_ohm) + ", slow " + mohm(s.slow_before_ohm) +
+                          "): no pack has one; they soak up what that curve misses (" + mv(s.rms_before_v) +
+                          " per cell), so the config curve's figures describe that curve, not the pack");
+    }
     if (s.soc_min < -0.02)
         s.notes.push_back("the flights span " + std::to_string(static_cast<int>(std::lround((s.soc_max - s.soc_min) * 100.0))) +
                           " % of the config's capacity: the packs hold more than it says, or the starts are misplaced");
+}
+
+// Refuses (ImplausibleTable) a table no pack has, before anyone writes it: a point far
+// outside the voltages measured and the config's curve, a fold, an empty point far below the
+// config's minimum voltage, or a point no sample reached far from the config's curve (the
+// prior that is all it has). The HPPC log of the Panasonic 18650PF, whose clock jumps over the
+// discharges between its pulse sets, had written 0.93 V at SOC 0 and 1.21 V from 5 to 45 %,
+// exit 0. `measured_*`: the fitted samples' per-cell voltage span; `clock_jumps`: per fitted
+// log with any, its gaps over 60 s (the charge drawn across one is not counted).
+void check_plausible(const OcvStitch& s, double measured_min_v, double measured_max_v, double min_cell_v,
+                     const std::vector<std::pair<std::string, int>>& clock_jumps, const std::string& file,
+                     const OcvStitchOptions& o) {
+    const size_t k = s.table_v.size();
+    if (k < 2) return;
+    const auto soc = [&](size_t j) {
+        char b[16];
+        std::snprintf(b, sizeof b, "%.2f", static_cast<double>(j) / static_cast<double>(k - 1));
+        return std::string(b);
+    };
+    const auto volts = [](double v) {
+        char b[24];
+        std::snprintf(b, sizeof b, "%.3f V", v);
+        return std::string(b);
+    };
+    auto mv = [](double v) { return std::to_string(static_cast<int>(std::lround(v * 1000.0))) + " mV"; };
+    std::vector<std::string> wrong;
+    // 3 prior sigmas past both the measured voltages and the config's curve: nothing measured
+    // or assumed puts a point there.
+    const double margin_v = 3.0 * o.prior_sigma_v;
+    const double lo_v = std::min(measured_min_v, *std::min_element(s.prior_v.begin(), s.prior_v.end())) - margin_v;
+    const double hi_v = std::max(measured_max_v, *std::max_element(s.prior_v.begin(), s.prior_v.end())) + margin_v;
+    size_t worst = k;
+    double worst_by_v = 0.0;
+    for (size_t j = 0; j < k; ++j) {
+        const double by_v = std::max(lo_v - s.table_v[j], s.table_v[j] - hi_v);
+        if (by_v > worst_by_v) {
+            worst_by_v = by_v;
+            worst = j;
+        }
+    }
+    if (worst < k)
+        wrong.push_back("at SOC " + soc(worst) + " it reads " + volts(s.table_v[worst]) + " per cell, " + mv(worst_by_v) +
+                        " outside the voltages measured (" + volts(measured_min_v) + " .. " + volts(measured_max_v) +
+                        ") and the config's curve, widened by " + mv(margin_v) + " (3 x --prior-sigma)");
+    for (size_t j = 1; j < k; ++j)
+        if (!(s.table_v[j] > s.table_v[j - 1])) {
+            wrong.push_back("it falls from " + volts(s.table_v[j - 1]) + " at SOC " + soc(j - 1) + " to " + volts(s.table_v[j]) +
+                            " at " + soc(j) + " (expected rising)");
+            break;
+        }
+    const double empty_floor_v = min_cell_v - 5.0 * o.empty_sigma_v;
+    if (s.table_v[0] < empty_floor_v)
+        wrong.push_back("its empty point (SOC 0) reads " + volts(s.table_v[0]) + " per cell, " + mv(min_cell_v - s.table_v[0]) +
+                        " below the config's minimum voltage " + volts(min_cell_v) + " (expected no more than " +
+                        mv(5.0 * o.empty_sigma_v) + " below, 5 x --empty-sigma)");
+    // Where no sample reached, the prior is all there is: a point far from it was dragged
+    // there by its neighbours (the rising constraint, the smoothness), not measured.
+    double dragged_v = 0.0, dragged_sigmas = 0.0;
+    std::string where;
+    for (size_t j = 0; j < k && j < s.support.size(); ++j) {
+        if (s.support[j] > 0.5) continue;
+        const double sigma_v = j == 0 ? o.empty_sigma_v : o.prior_sigma_v;
+        const double d = std::fabs(s.table_v[j] - s.prior_v[j]);
+        if (d <= 5.0 * sigma_v) continue;
+        if (d / sigma_v > dragged_sigmas) {
+            dragged_sigmas = d / sigma_v;
+            dragged_v = d;
+        }
+        where += (where.empty() ? "" : ", ") + soc(j);
+    }
+    if (!where.empty())
+        wrong.push_back("at SOC " + where + ", which no sample reached, it lies up to " + mv(dragged_v) + " per cell (" +
+                        std::to_string(static_cast<int>(std::lround(dragged_sigmas))) +
+                        " sigma) from the config's curve, its only prior there (expected within 5 sigma: --prior-sigma, "
+                        "--empty-sigma at SOC 0)");
+    if (wrong.empty()) return;
+    std::string what = "the stitched OCV table is one no pack has, so it is not written: ";
+    for (size_t n = 0; n < wrong.size(); ++n) what += (n ? "; " : "") + wrong[n];
+    if (!clock_jumps.empty()) {
+        what += ". The log's clock jumps (";
+        for (size_t n = 0; n < clock_jumps.size(); ++n)
+            what += (n ? ", " : "") + (clock_jumps.size() > 1 || file.empty() ? clock_jumps[n].first + ": " : std::string()) +
+                    std::to_string(clock_jumps[n].second) + " gap(s) over 60 s";
+        what += "): the charge drawn across a gap is not counted, so the samples after it sit at the wrong state of "
+                "charge; fit logs without gaps, or each session apart";
+    } else {
+        char capacity[32];
+        std::snprintf(capacity, sizeof capacity, "%.3g Ah", s.capacity_ah);
+        what += ". The samples' state of charge (the charge counted against the config's " + std::string(capacity) +
+                ") does not match their voltage: is the config this pack's (capacity, cells, minimum voltage), and "
+                "the current's sign right?";
+    }
+    throw ImplausibleTable(file, what);
 }
 
 }  // namespace
@@ -703,9 +820,36 @@ OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& 
     s.rms_v = pooled_rms(flights, after, s.capacity_ah, false);
     s.test_rms_before_v = pooled_rms(on_prior, before, s.capacity_ah, true);
     s.test_rms_v = pooled_rms(flights, after, s.capacity_ah, true);
-    add_notes(s, flights);
+    add_notes(s, flights, mc.battery.internal_resistance_ohm);
     if (notes_out)
         for (; said < s.notes.size(); ++said) *notes_out << "battsim fit-ocv: note: " << s.notes[said] << "\n";
+    {
+        double measured_min_v = 1e9, measured_max_v = -1e9;
+        for (const Flight& f : flights)
+            if (!f.test)
+                for (double v : f.rows.v) {
+                    measured_min_v = std::min(measured_min_v, v);
+                    measured_max_v = std::max(measured_max_v, v);
+                }
+        std::vector<std::pair<std::string, int>> clock_jumps;
+        for (size_t n = 0; n < traces.size(); ++n) {
+            if (is_test[n]) continue;
+            int gaps = 0;
+            double last_s = -1.0;
+            for (const TracePoint& p : traces[n].points) {
+                if (!p.valid) continue;
+                if (last_s >= 0.0 && p.time_s - last_s > 60.0) ++gaps;
+                last_s = p.time_s;
+            }
+            if (gaps > 0) clock_jumps.push_back({traces[n].path, gaps});
+        }
+        size_t fitted_logs = 0;
+        for (bool t : is_test) fitted_logs += !t;
+        std::string file;
+        for (size_t n = 0; n < traces.size() && fitted_logs == 1; ++n)
+            if (!is_test[n]) file = traces[n].path;
+        check_plausible(s, measured_min_v, measured_max_v, empty_v, clock_jumps, file, o);
+    }
     for (size_t n = 0; n < traces.size(); ++n) {
         OcvStitchFlight out;
         out.log = traces[n].path;

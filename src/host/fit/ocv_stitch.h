@@ -31,6 +31,15 @@ namespace battsim {
 namespace host {
 namespace fit {
 
+// A stitched table no pack has (far outside the voltages measured and the config's curve,
+// falling, empty far below the config's minimum voltage, or dragged far from the prior where no
+// sample reached): the data's fault, refused rather than written (an InputError, exit 3).
+// `file` is the one log fitted, empty for several.
+class ImplausibleTable : public InputError {
+public:
+    ImplausibleTable(const std::string& file, const std::string& what) : InputError(file, 0, 0, what) {}
+};
+
 struct OcvStitchOptions {
     int points = 21;                // table points, SOC 0 … 1 (2..core::kOcvTableMaxPoints)
     double fast_time_s = 3.0;       // the polarisation's two low-passes of the current
@@ -98,7 +107,8 @@ struct OcvStitchLog {
 // out all). K = 0 (not given) leaves the marks as they are.
 void hold_out_every(std::vector<OcvStitchLog>& logs, unsigned every);
 
-// Reads every log (throws InputError like replay_log) and fits. Throws std::invalid_argument
+// Reads every log (throws InputError like replay_log) and fits; throws ImplausibleTable for a
+// table no pack has (after writing the notes to `notes_out`). Throws std::invalid_argument
 // for bad options, TooLittleData (an InputError) for no fitted log of 10 valid samples. With `notes_out`, each of the notes
 // is also written there as it is found ("battsim fit-ocv: note: ..."), a log's as it is read.
 OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& config, const OcvStitchOptions& options,
