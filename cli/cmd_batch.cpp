@@ -95,7 +95,8 @@ int run(const BatchArgs& a) {
                       << " summaries <log stem>.json (logs of one stem: <path below their common directory, / as __>.json), "
                          "but these logs would share one:\n";
             for (const std::string& d : dups) std::cerr << "  " << d << "\n";
-            std::cerr << me << "give each log once, by one spelling, or rename one of the files (or its directory)\n";
+            // A log given twice by two spellings was refused before (plan_batch): these are two logs.
+            std::cerr << me << "rename one of the files (or its directory)\n";
             return kExitUsage;
         }
         // Said, the first few, so the operator finds each log's summary (and names its golden).

@@ -234,7 +234,7 @@ TEST_CASE("batch: logs no name can part are refused naming only the options give
     const std::string logs = q(dir + "/a__b/x.csv") + " " + q(dir + "/a/b/x.csv") + " -c " + q(kConfig) + " --no-progress";
     const std::string said = " summaries <log stem>.json (logs of one stem: <path below their common directory, / as __>.json), "
                              "but these logs would share one:\n  a__b__x.csv: " + dir + "/a__b/x.csv, " + dir + "/a/b/x.csv\n"
-                             "battsim batch: give each log once, by one spelling, or rename one of the files (or its directory)\n";
+                             "battsim batch: rename one of the files (or its directory)\n";
     auto r = run("batch " + logs + " --out " + q(dir + "/out"));
     CHECK(r.exit_code == 2);
     // It had said "--out and --compare name summaries" without a --compare.
