@@ -285,7 +285,11 @@ nlohmann::json replay_log(const std::string& path, const ReplayOptions& options,
         const double lo = rated_ah * (joint ? ekf.min_capacity_fraction : m.capacity.min_capacity_fraction);
         const double hi = rated_ah * (joint ? ekf.max_capacity_fraction : m.capacity.max_capacity_fraction);
         const double final_ah = body["flight"]["capacity_ah"]["final"].get<double>();
-        const bool high = final_ah >= 0.995 * hi, low = final_ah <= 1.005 * lo;
+        // The joint estimator reports the weakest cell's share of its filter's capacity: with a
+        // weak cell counted, a figure under the lower bound is that share, not the bound.
+        const nlohmann::json deficit = body["flight"].value("pack_capacity_deficit", nlohmann::json::object());
+        const bool weak_cell_counted = deficit.is_object() && deficit.value("final", 0.0) > 0.0;
+        const bool high = final_ah >= 0.995 * hi, low = final_ah <= 1.005 * lo && !(joint && weak_cell_counted);
         if (rated_ah > 0.0 && (high || low)) {
             char buf[512];
             std::snprintf(buf, sizeof buf,

@@ -568,18 +568,38 @@ Structure residual_structure(const std::vector<Trace>& traces, const std::vector
 
 namespace {
 
-// One candidate effect added to `current`, fitted on the fit blocks and scored on the
-// held-out ones; `fitted` gets the model with it.
-CandidateScore judge(const std::string& name, const std::vector<Trace>& traces, const State& current, const Eval& current_eval,
-                     const Split& split, const ResidualOptions& o, State& fitted) {
+// A candidate effect added to the current model, before its fit: whether it applies, and
+// the model with it at its data-driven start.
+struct Prepared {
+    bool applicable = false;
+    State trial;
+    std::vector<std::string> added;
+    std::string note, description;
+};
+
+Prepared prepare_candidate(const std::string& name, const std::vector<Trace>& traces, const State& current,
+                           const Eval& current_eval, const Split& split, const ResidualOptions& o) {
+    Prepared p;
+    p.trial = current;
+    p.applicable = prepare(name, traces, p.trial, current_eval, split, o.initial, p.added, p.note, p.description);
+    return p;
+}
+
+// One prepared candidate fitted on the fit blocks and scored on the held-out ones; `fitted`
+// gets the model with it.
+CandidateScore judge(const std::string& name, const Prepared& prepared, const std::vector<Trace>& traces,
+                     const State& current, const Eval& current_eval, const Split& split, const ResidualOptions& o,
+                     State& fitted) {
     CandidateScore c;
     c.name = name;
-    State trial = current;
-    std::vector<std::string> added;
-    if (!prepare(name, traces, trial, current_eval, split, o.initial, added, c.note, c.description)) {
+    c.note = prepared.note;
+    c.description = prepared.description;
+    if (!prepared.applicable) {
         c.applicable = false;
         return c;
     }
+    const State& trial = prepared.trial;
+    const std::vector<std::string>& added = prepared.added;
     std::vector<std::string> params = current.params;
     params.insert(params.end(), added.begin(), added.end());
     Eval ev;
@@ -694,22 +714,20 @@ ResidualReport analyse(const std::vector<Trace>& traces, const ModelSpec& spec, 
         // They take the threads, so each one's starts run in turn.
         ResidualOptions one_thread = o;
         one_thread.jobs = 1;
-        if (progress) {
-            // Only the candidates that apply (a log with a temperature leaves self-heating out,
-            // one whose current never reverses hysteresis): "trying" each had read as if it were.
-            for (const std::string& name : names) {
-                State trial = current;
-                std::vector<std::string> added;
-                std::string note, description;
-                if (prepare(name, traces, trial, current_eval, split, o.initial, added, note, description))
-                    *progress << "battsim residual: effect " << round + 1 << " of at most " << o.max_effects
-                              << ": trying " << name << "\n";
-            }
+        // Each candidate prepared once, in turn; the progress names only those that apply (a
+        // log with a temperature leaves self-heating out, one whose current never reverses
+        // hysteresis): "trying" each had read as if it were.
+        std::vector<Prepared> prepared;
+        for (const std::string& name : names) {
+            prepared.push_back(prepare_candidate(name, traces, current, current_eval, split, o));
+            if (progress && prepared.back().applicable)
+                *progress << "battsim residual: effect " << round + 1 << " of at most " << o.max_effects << ": trying "
+                          << name << "\n";
         }
         std::vector<CandidateScore> tried(names.size());
         std::vector<State> fitted_states(names.size());
         host::parallel_for(names.size(), o.jobs, [&](size_t i) {
-            tried[i] = judge(names[i], traces, current, current_eval, split, one_thread, fitted_states[i]);
+            tried[i] = judge(names[i], prepared[i], traces, current, current_eval, split, one_thread, fitted_states[i]);
         });
         std::vector<CandidateScore> scores;
         State best_state;
