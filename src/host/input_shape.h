@@ -33,6 +33,9 @@ struct ColumnUnits {
 
 class InputShape {
 public:
+    // An interval this long (and kGapMedians of the usual one) is a clock jump, not sampling;
+    // fit-ocv counts a log's gaps by it too.
+    static constexpr double kLongestGapS = 60.0;
     // `negated`: --negative-discharge given; `ground_a`: the take-off current (below it, the
     // craft is on the ground).
     InputShape(bool negated, double ground_a, const ShapePack& pack = ShapePack())
@@ -69,7 +72,6 @@ private:
     static constexpr long kCoarseMinSamples = 20;
     static constexpr float kHighestPackV = 200.0f;  // no drone pack's (a 48S pack rests under 202 V)
     static constexpr size_t kMaxIntervals = 65536;
-    static constexpr double kLongestGapS = 60.0;  // and kGapMedians of the usual interval
     static constexpr double kGapMedians = 100.0;
     // The scatter (σ) at which a step of hover_min_step_a is a quarter noise: at ±100 mA
     // (σ 0.058 A) on 0.2 A steps a simulated hover's capacity already read 7–10 % low.

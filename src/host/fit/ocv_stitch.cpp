@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 
 #include "core/model/ocv.h"
+#include "host/input_shape.h"
 #include "host/fit/trace.h"
 #include "host/report/summary.h"
 
@@ -838,7 +839,7 @@ OcvStitch stitch_ocv(const std::vector<OcvStitchLog>& logs, const LoadedConfig& 
             double last_s = -1.0;
             for (const TracePoint& p : traces[n].points) {
                 if (!p.valid) continue;
-                if (last_s >= 0.0 && p.time_s - last_s > 60.0) ++gaps;
+                if (last_s >= 0.0 && p.time_s - last_s > InputShape::kLongestGapS) ++gaps;
                 last_s = p.time_s;
             }
             if (gaps > 0) clock_jumps.push_back({traces[n].path, gaps});
