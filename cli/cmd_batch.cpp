@@ -202,7 +202,7 @@ std::function<int()> setup(CLI::App& sub) {
     auto a = std::make_shared<BatchArgs>();
     sub.add_option("PATHS", a->paths, "Logs: files, directories (their files, not recursive) and glob patterns");
     sub.add_option("-m,--manifest", a->manifest, "Manifest (JSON or CSV) mapping logs to packs, configs and columns");
-    sub.add_option("-j,--jobs", a->jobs, "Parallel replays (default: all cores)")->check(CLI::Range(1, 1024));
+    sub.add_option("-j,--jobs", a->jobs, "Parallel replays (default or 0: the machine's cores)")->check(CLI::Range(0, 1024));
 
     auto* output = sub.add_option("-o,--output", a->output, "Write the table here (atomically) instead of standard output");
     sub.add_option("--packs", a->packs, "Also write the per-pack table here, in --format (\"-\" = standard output)");

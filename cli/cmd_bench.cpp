@@ -162,7 +162,7 @@ std::function<int()> setup(CLI::App& sub) {
     rep->add_option("--min-time", a->min_time, "Seconds to keep replaying")->check(number_in(0.0, 3600.0))->capture_default_str();
     rep->add_option("--min-runs", a->min_runs, "Replays at least")->check(CLI::Range(1, 100000000))->capture_default_str();
     bat->add_option("PATHS", a->paths, "Logs: files, directories, patterns (or --manifest alone)");
-    bat->add_option("-j,--jobs", a->jobs, "Threads (default: all cores)")->check(CLI::Range(1, 1024));
+    bat->add_option("-j,--jobs", a->jobs, "Threads (default or 0: the machine's cores)")->check(CLI::Range(0, 1024));
     bat->add_option("--min-time", a->min_time, "Seconds to keep repeating the batch")->check(number_in(0.0, 3600.0))->capture_default_str();
     bat->add_option("--min-runs", a->min_runs, "Batches at least")->check(CLI::Range(1, 100000000))->capture_default_str();
     return [a, mon, rep]() -> int {

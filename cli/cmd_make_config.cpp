@@ -8,6 +8,7 @@
 #include "common_options.h"
 #include "host/config_json.h"
 #include "host/config_keys.h"
+#include "host/export_header.h"
 #include "host/io/atomic_file.h"
 #include "core/sample.h"
 #include "host/pack_config.h"
@@ -131,6 +132,11 @@ int run(const MakeConfigArgs& a) {
                      "own table off a slow discharge (battsim discharge LOG -c CONFIG --config-out PACK.json) or "
                      "stitch one from its flights (battsim fit-ocv), or the capacity reads high\n";
     }
+    // A pack above the reference board's reach is said here, not only when its header is
+    // exported: a 12S heavy-lift pack's config had been written without a word.
+    const std::string bus = host::reference_bus_note(host::config_from_json(j, "make-config").monitor);
+    if (!bus.empty())
+        std::cerr << me << ": note: " << bus << "; battsim replays such a pack's logs from any other monitor or autopilot\n";
     host::write_file_atomic(a.output, host::json_text(j, 2) + "\n");
     return kExitOk;
 }

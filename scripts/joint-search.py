@@ -16,8 +16,9 @@ of keys), crossing them with a grid of polarisation shapes; without it the keys 
 log-uniformly from the ranges below. --settings FILE scores those settings once (e.g. a line
 of an earlier search, on the held-out suite with --suite scenarios-holdout); keys holding an
 object (`{"verdict_filter": {"enabled": false}}`) replace that section. --copies N pools N
-copies of the suite, as `battsim score --copies` does; a key ending in `_per_rated_ohm` is given
-to each monitor config as `..._ohm` times its rated R0. The first line is always the committed
+copies of the suite, as `battsim score --copies` does; a key holding `_per_rated_ohm` is given
+to each monitor config as `_ohm` times its rated R0 (`polarisation_process_per_rated_ohm_per_sqrt_s`
+too). The first line is always the committed
 settings. The eighth session's searches (docs/estimator.md):
 
     python3 scripts/joint-search.py --no-health-filter --samples 250 --seed 1 --out one.jsonl
@@ -99,7 +100,7 @@ def reseed(suite_dir, k):
 
 
 def per_pack(settings, rated_ohm):
-    """Settings with every key ending in `_per_rated_ohm` (at any depth) turned into the key
+    """Settings with every key holding `_per_rated_ohm` (at any depth) turned into the key
     without that suffix plus `_ohm`, valued that many times the config's rated R0: one row can
     then give each pack a resistance in proportion to its own (e.g.
     `polarisation_initial_per_rated_ohm` 0.35 → `polarisation_initial_ohm` 0.007 for the 4S
@@ -108,10 +109,10 @@ def per_pack(settings, rated_ohm):
     for key, value in settings.items():
         if isinstance(value, dict):
             value = per_pack(value, rated_ohm)
-        if key.endswith("_per_rated_ohm"):
+        if "_per_rated_ohm" in key:
             if rated_ohm is None:
                 sys.exit(f"joint-search: {key} needs the config's battery.internal_resistance_ohm")
-            key, value = key[:-len("_per_rated_ohm")] + "_ohm", value * rated_ohm
+            key, value = key.replace("_per_rated_ohm", "_ohm", 1), value * rated_ohm
         out[key] = value
     return out
 

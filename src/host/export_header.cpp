@@ -147,26 +147,33 @@ std::vector<std::string> export_firmware_config(const std::string& json_path, co
     if (!estimator.empty()) source += " with --estimator " + estimator;
     write_file_atomic(out_path, firmware_config_header(config, source));
     std::vector<std::string> notes = config_notes(config.monitor);
+    for (const std::string& note : {reference_taps_note(config.monitor), reference_bus_note(config.monitor)})
+        if (!note.empty()) notes.push_back(note);
+    return notes;
+}
+
+std::string reference_taps_note(const core::MonitorConfig& config) {
     // The reference hardware has three INA3221 taps: the firmware reads 2 to 4 cells and, for
     // any other count, none (it runs on the pack alone). Said, since battsim replays a log's
     // cells for any count up to 12 and the two would otherwise seem to do the same.
-    const int n = config.monitor.cells_in_series;
-    if (n < 2 || n > 4)
-        notes.push_back("cells_in_series " + std::to_string(n) +
-                        ": the reference hardware's three cell taps read 2 to 4 cells, so the firmware measures no cell "
-                        "with this config (no weak-cell check; the pack's estimates are unaffected)");
+    const int n = config.cells_in_series;
+    if (n >= 2 && n <= 4) return std::string();
+    return "cells_in_series " + std::to_string(n) +
+           ": the reference hardware's three cell taps read 2 to 4 cells, so the firmware measures no cell "
+           "with this config (no weak-cell check; the pack's estimates are unaffected)";
+}
+
+std::string reference_bus_note(const core::MonitorConfig& config) {
     // The INA226 reads the pack on its bus input, specified for 0 to 36 V (TI SBOS547; 40 V
     // absolute maximum): a pack above that is out of the reference hardware's reach.
     constexpr float kIna226BusMaxV = 36.0f;
-    const float top_v = std::max(config.monitor.max_voltage_v, config.monitor.battery.full_voltage_v);
-    if (top_v > kIna226BusMaxV) {
-        char v[32];
-        std::snprintf(v, sizeof v, "%.2f", static_cast<double>(top_v));
-        notes.push_back(std::string("the pack reaches ") + v +
-                        " V (max_voltage_v, full_voltage_v): above the INA226's 36 V bus input range, so the reference "
-                        "hardware cannot measure this pack (and above 40 V, the chip's absolute maximum, it is damaged)");
-    }
-    return notes;
+    const float top_v = std::max(config.max_voltage_v, config.battery.full_voltage_v);
+    if (!(top_v > kIna226BusMaxV)) return std::string();
+    char v[32];
+    std::snprintf(v, sizeof v, "%.2f", static_cast<double>(top_v));
+    return std::string("the pack reaches ") + v +
+           " V (max_voltage_v, full_voltage_v): above the INA226's 36 V bus input range, so the reference "
+           "hardware cannot measure this pack (and above 40 V, the chip's absolute maximum, it is damaged)";
 }
 
 }  // namespace host

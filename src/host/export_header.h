@@ -233,5 +233,10 @@ std::string firmware_config_header(const LoadedConfig& config, const std::string
 std::vector<std::string> export_firmware_config(const std::string& json_path, const std::string& out_path,
                             const std::string& estimator = "");
 
+// What the reference hardware cannot do with a pack so configured, or empty when it can: its
+// three INA3221 taps read 2 to 4 cells; its INA226 bus, packs up to 36 V.
+std::string reference_taps_note(const core::MonitorConfig& config);
+std::string reference_bus_note(const core::MonitorConfig& config);
+
 }  // namespace host
 }  // namespace battsim

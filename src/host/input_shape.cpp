@@ -263,7 +263,7 @@ std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const La
                       "the voltage repeats the sample before's value at %ld of %ld steps of the current in flight: it is "
                       "recorded less often than the current and held between, so a current step's sag shows late and the "
                       "resistance, capacity and warnings read from it are rougher (ArduPilot's log171.bin: its capacity "
-                      "at the landing 2.24 Ah as logged, 3.58 Ah with --average-ms 150)",
+                      "at the landing 2.58 Ah as logged, 2.96 Ah with --average-ms 150)",
                       held_steps_, load_steps_);
         out.push_back(buf);
     }

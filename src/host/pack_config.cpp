@@ -65,6 +65,12 @@ double round_to(double v, double step) {
     return std::strtod(buf, nullptr);
 }
 
+// v to `digits` significant digits (values of any size, e.g. 3.666e-05), as round_to does.
+double round_significant(double v, int digits) {
+    if (!(v != 0.0) || !std::isfinite(v)) return v;
+    return round_to(v, std::pow(10.0, std::floor(std::log10(std::fabs(v))) - (digits - 1)));
+}
+
 std::string number_text(double v, const char* format) {
     char buf[64];
     std::snprintf(buf, sizeof buf, format, v);
@@ -139,7 +145,7 @@ json pack_config_json(const PackRating& r) {
         ": the reference pack (configs/sim-4s.json) scaled per cell and by capacity (capacities x capacity, resistance "
         "/ capacity unless given, the curve's current at the same C-rate; below 1.55 Ah the estimators' current "
         "thresholds too, the take-off bar no lower than 3 W of ground electronics; below 4S the filters' voltage sigma "
-        "per cell), with the simulator's LiPo rest curve as the "
+        "per cell; the filters' polarisation ohms with the pack's resistance, their spread with its square root), with the simulator's LiPo rest curve as the "
         "OCV table. Not fitted to this pack: battsim fit, fit-ocv and calibrate make it its own.";
 
     json battery = {
@@ -226,6 +232,26 @@ json pack_config_json(const PackRating& r) {
         j["joint"]["voltage_sigma_v"] = round_to(defaults.at("voltage_sigma_v").get<double>() * c, 1e-5);
         for (const char* filter : {"health_filter", "verdict_filter"})
             j["joint"][filter]["voltage_sigma_v"] = round_to(defaults.at(filter).at("voltage_sigma_v").get<double>() * c, 1e-5);
+    }
+    // The filters' polarisation (its prior, spread and drift) is in ohms, set for the reference
+    // pack's 20 mOhm. A pack's polarisation scales with its impedance (the simulator's branches
+    // are fixed fractions of R0), so the prior scales with the pack's resistance; its spread and
+    // drift by the square root, as a rating's resistance is a guess: at the full ratio the
+    // ArduPilot log underpowered.log (3S 4 Ah, rated 5.8 mOhm, sagging like 69 mOhm, its R0
+    // unmeasurable at 1 s samples) lost its filter. Left at the reference's ohms, an 8S 22 Ah
+    // pack (2.8 mOhm) read every sag as charge gone: capacity at 20 % of a flight near the
+    // rating at -25 %, 1 of 4 short flights warned (configs/scenarios-large/README.md).
+    const double reference_ohm = kCellResistanceOhm * kRefCells;
+    const double kr = resistance_ohm / reference_ohm;
+    if (std::fabs(kr - 1.0) > 1e-3) {
+        const json defaults = config_to_json(default_config())["joint"];
+        for (const char* filter : {"", "health_filter", "verdict_filter"}) {
+            const json& from = *filter ? defaults.at(filter) : defaults;
+            json& to = *filter ? j["joint"][filter] : j["joint"];
+            to["polarisation_initial_ohm"] = round_significant(from.at("polarisation_initial_ohm").get<double>() * kr, 4);
+            for (const char* key : {"polarisation_sigma0_ohm", "polarisation_process_ohm_per_sqrt_s"})
+                to[key] = round_significant(from.at(key).get<double>() * std::sqrt(kr), 4);
+        }
     }
     config_from_json(j, "make-config");  // the same checks as any config file; throws ConfigError
     return j;
@@ -316,6 +342,11 @@ LogPack log_pack(const SourceInfo& info, double resting_voltage_v, int cells_giv
         // Not guessed from the voltage instead: a 14S pack at rest reads as 12 cells at 4.2 V.
         p.declared_cells_beyond = static_cast<int>(v);
         p.ignored.push_back(from + ": more cells than battsim handles (" +
+                            std::to_string(core::kMaxCells) + ")");
+    } else if (!declared && info.cells_beyond_kept > core::kMaxCells) {
+        // Not the first twelve taken for the pack: a 14S log's config had been written as 12S.
+        p.declared_cells_beyond = info.cells_beyond_kept;
+        p.ignored.push_back("the log's " + std::to_string(info.cells_beyond_kept) + " cell voltages: more cells than battsim handles (" +
                             std::to_string(core::kMaxCells) + ")");
     } else if (declared) {
         p.cells = static_cast<int>(v);

@@ -247,7 +247,7 @@ TEST_CASE("option values found by a sweep of every command's options: refused be
         {"fit " + q(kExample) + " --per-log rr", "--per-log: unknown parameter \"rr\"; expected one of e0, r, kappa"},
         {"discharge " + q(kExample) + " -c " + q(kConfig) + " --decimate 5000",
          "--decimate 5000 averages the discharge's 3913 samples into 1 point; expected at most 1956"},
-        {"batch " + q(kExample) + " -j -1 -o " + q(dir + "/t.md"), "--jobs: Value -1 not in range 1 to 1024"}};
+        {"batch " + q(kExample) + " -j -1 -o " + q(dir + "/t.md"), "--jobs: Value -1 not in range 0 to 1024"}};
     for (const auto& [args, said] : refused) {
         INFO(args);
         const auto r = run(args);
@@ -717,4 +717,24 @@ TEST_CASE("the one-log commands refuse a bad reading option as batch does, named
     CHECK(joint["estimator"] == "joint");
     const auto reference = clitest::run_json("replay " + q(kExample) + " -c " + q(kConfig) + " --estimator reference --json");
     CHECK(reference["estimator"] == "reference");
+}
+
+TEST_CASE("a log whose time never advances is refused, not replayed as a flight of no seconds", "[cli]") {
+    // Every row at one time stamp (a frozen logger clock): 3802 samples had read as "0.3 s, no
+    // flight", exit 0, with only a note. A few shared stamps are still kept.
+    const std::string dir = clitest::temp_dir();
+    std::string frozen = "time_s,voltage_v,current_a\n";
+    int row = 0;
+    for (; row < 40; ++row) frozen += "1000," + std::to_string(16.8 - 0.01 * row) + ",12.5\n";
+    clitest::write_file(dir + "/frozen.csv", frozen);
+    auto r = run("replay " + q(dir + "/frozen.csv"));
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.err, Catch::Contains("frozen.csv:3: the time does not advance: 39 of 40 rows repeat the time stamp of the row "
+                                      "before (the first here): a frozen clock, or not the time column"));
+    std::string some = "time_s,voltage_v,current_a\n";
+    for (row = 0; row < 40; ++row) some += std::to_string(row / 2) + "," + std::to_string(16.8 - 0.01 * row) + ",12.5\n";
+    clitest::write_file(dir + "/pairs.csv", some);  // half the rows share a stamp: kept, with a note
+    r = run("replay " + q(dir + "/pairs.csv"));
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.err, Catch::Contains("20 rows repeat the time stamp of the row before (first on line 3); kept"));
 }

@@ -312,6 +312,11 @@ TEST_CASE("batch: an output that cannot be written is said before the run; one t
     CHECK_THAT(r.err, Catch::Contains("battsim batch: -o/--output: cannot write " + dir + "/none/x.md: the directory " +
                                       dir + "/none does not exist"));
     CHECK_FALSE(exists(dir + "/p.md"));
+    // A name longer than the filesystem holds had failed only at the rename, after the run.
+    const std::string long_name = dir + "/" + std::string(252, 't') + ".csv";
+    r = run("batch " + q(dir) + " -c " + q(kConfig) + " -o " + q(long_name));
+    CHECK(r.exit_code == 5);
+    CHECK_THAT(r.err, Catch::Contains("cannot write " + long_name + ": the file name is 256 bytes, longer than the 255"));
     // Known only when written (a full disk): the others are still written.
     r = run("batch " + q(dir) + " -c " + q(kConfig) + " -o /dev/full --packs " + q(dir + "/p.md"));
     CHECK(r.exit_code == 5);
@@ -334,6 +339,24 @@ TEST_CASE("batch: output is byte-identical for any --jobs", "[cli][batch]") {
         CHECK(read_file(dir + "/t4." + format) == one.out);
         CHECK(four.out.empty());
     }
+}
+
+TEST_CASE("batch: a killed run's temporaries in the log directory are not read as logs; -j0 is every core",
+          "[cli][batch]") {
+    const std::string dir = fleet_dir(2, false);
+    const std::string args = "batch " + q(dir) + " -c " + q(kConfig) + " --no-progress --out " + q(dir) + " --format csv";
+    const auto first = run(args + " -o " + q(dir + "/table.csv"));
+    REQUIRE(first.exit_code == 0);
+    const std::string table = read_file(dir + "/table.csv");
+    // What SIGKILL leaves mid-write: a summary's and a copy of a log's temporaries (the PIDs
+    // are no process's), which the next nightly run had read as two more logs and failed.
+    clitest::write_file(dir + "/g1.json.tmp.999999.0", read_file(dir + "/g1.json"));
+    clitest::write_file(dir + "/g3.csv.tmp.999998.4", read_file(dir + "/g1.csv"));
+    const auto second = run(args + " -j0 -o " + q(dir + "/table.csv"));
+    INFO(second.err);
+    CHECK(second.exit_code == 0);
+    CHECK(second.err.find("tmp.99999") == std::string::npos);
+    CHECK(read_file(dir + "/table.csv") == table);
 }
 
 TEST_CASE("batch: shards merged give exactly the single run's table", "[cli][batch]") {

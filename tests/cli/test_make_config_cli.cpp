@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <fstream>
 #include <string>
 
@@ -200,3 +201,49 @@ TEST_CASE("battsim make-config --board: a calibrated monitor's settings carried 
     CHECK_FALSE(std::ifstream(dir + "/never.json").good());
 }
 
+
+TEST_CASE("battsim make-config: a large pack's polarisation in its own ohms, its voltage and its cell count", "[cli][make_config]") {
+    const std::string dir = clitest::temp_dir();
+    // 8S 22 Ah: R = 5 mOhm per cell x 8 / (22 / 1.55) = 2.818 mOhm, written 0.00282 Ohm; the
+    // filters' polarisation prior (set for the reference pack's 0.02 Ohm) scales by 0.141,
+    // its spread and drift by the square root, 0.3755.
+    const clitest::Result big = clitest::run("make-config --cells 8 --capacity-mah 22000 -o " + q(dir + "/8s.json"));
+    INFO(big.err);
+    REQUIRE(big.exit_code == 0);
+    CHECK(big.err.empty());  // 8 x 4.2 = 33.6 V: within the reference board's 36 V
+    const json made = json::parse(clitest::read_file(dir + "/8s.json"));
+    CHECK(made["battery"]["internal_resistance_ohm"].get<double>() == Approx(0.00282));
+    const json& joint = made["joint"];
+    CHECK(joint["polarisation_initial_ohm"].get<double>() == Approx(0.0053 * 0.141).epsilon(1e-4));
+    CHECK(joint["polarisation_sigma0_ohm"].get<double>() == Approx(0.022 * 0.3755).epsilon(1e-3));
+    CHECK(joint["polarisation_process_ohm_per_sqrt_s"].get<double>() == Approx(2.6e-4 * 0.3755).epsilon(1e-3));
+    for (const char* filter : {"health_filter", "verdict_filter"}) {
+        CHECK(joint[filter]["polarisation_initial_ohm"].get<double>() == Approx(0.0045 * 0.141).epsilon(1e-4));
+        CHECK(joint[filter]["polarisation_sigma0_ohm"].get<double>() == Approx(0.013 * 0.3755).epsilon(1e-3));
+        CHECK(joint[filter]["polarisation_process_ohm_per_sqrt_s"].get<double>() == Approx(1.4e-4 * 0.3755).epsilon(1e-3));
+    }
+    // The reference rating keeps the core's values (nothing written).
+    const clitest::Result ref = clitest::run("make-config --cells 4 --capacity-mah 1550 -o " + q(dir + "/4s.json"));
+    REQUIRE(ref.exit_code == 0);
+    CHECK_FALSE(json::parse(clitest::read_file(dir + "/4s.json"))["joint"].contains("polarisation_initial_ohm"));
+
+    // 12S reaches 50.4 V: beyond the reference board's INA226, said when the config is made.
+    const clitest::Result twelve = clitest::run("make-config --cells 12 --capacity-mah 22000 -o " + q(dir + "/12s.json"));
+    CHECK(twelve.exit_code == 0);
+    CHECK_THAT(twelve.err, Catch::Contains("the pack reaches 50.40 V") && Catch::Contains("36 V bus input range"));
+
+    // A log with 14 cell columns is a 14S pack: refused, not written as 12S from its first twelve.
+    std::string header = "time_s,voltage_v,current_a";
+    std::string row0 = "0,58.8,0.2", row1 = "1,58.7,20";
+    for (int c = 1; c <= 14; ++c) {
+        header += ",cell" + std::to_string(c) + "_v";
+        row0 += ",4.2";
+        row1 += ",4.19";
+    }
+    clitest::write_file(dir + "/14s.csv", header + "\n" + row0 + "\n" + row1 + "\n");
+    const clitest::Result fourteen = clitest::run("make-config --from-log " + q(dir + "/14s.csv") + " --capacity-mah 16000 -o " +
+                                                  q(dir + "/14s.json"));
+    CHECK(fourteen.exit_code == 2);
+    CHECK_THAT(fourteen.err, Catch::Contains("the log's pack has 14 cells in series; battsim handles at most 12"));
+    CHECK_FALSE(std::filesystem::exists(dir + "/14s.json"));
+}

@@ -1153,7 +1153,7 @@ TEST_CASE("replay says when the current scatters enough to pull the hover resist
 
 TEST_CASE("replay says when a log holds its voltage between slower updates than the current's", "[cli][data]") {
     // ArduPilot's log171.bin: CURR.Volt moves about every 8 rows while Curr moves every 2; its
-    // capacity at the landing reads 2.24 Ah as logged and 3.58 Ah with --average-ms 150,
+    // capacity at the landing reads 2.58 Ah as logged and 2.96 Ah with --average-ms 150,
     // which nothing had said. A log whose voltage follows its current is not noted.
     const std::string source = BATTSIM_SOURCE_DIR;
     const std::string log = std::string(BATTSIM_DATA_DIR) + "/ardupilot/log171.bin";

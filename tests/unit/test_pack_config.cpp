@@ -126,8 +126,36 @@ TEST_CASE("make-config: below 4S the filters' voltage sigma is per cell", "[pack
         r.cells = cells;
         j = pack_config_json(r);
         CHECK_FALSE(j["joint"].contains("voltage_sigma_v"));
-        CHECK_FALSE(j["joint"].contains("health_filter"));
+        CHECK_FALSE(j["joint"]["health_filter"].contains("voltage_sigma_v"));
     }
+}
+
+TEST_CASE("make-config: the filters' polarisation follows the pack's resistance", "[pack_config]") {
+    PackRating r;
+    r.cells = 6;
+    r.capacity_ah = 2.0;
+    // R = 5 mOhm x 6 / (2.0 / 1.55) = 23.25 mOhm: 1.1625 x the reference's 20 mOhm. The prior
+    // scales by that, its spread and drift by its square root (1.07819), to 4 digits.
+    const json j = pack_config_json(r);
+    CHECK(j["battery"]["internal_resistance_ohm"].get<double>() == Approx(0.02325));
+    CHECK(j["joint"]["polarisation_initial_ohm"].get<double>() == Approx(0.006161));       // 0.0053 x 1.1625
+    CHECK(j["joint"]["polarisation_sigma0_ohm"].get<double>() == Approx(0.02372));         // 0.022 x 1.07819
+    CHECK(j["joint"]["polarisation_process_ohm_per_sqrt_s"].get<double>() == Approx(2.803e-4));  // 2.6e-4 x 1.07819
+    for (const char* filter : {"health_filter", "verdict_filter"}) {
+        CHECK(j["joint"][filter]["polarisation_initial_ohm"].get<double>() == Approx(0.005231));   // 0.0045 x 1.1625
+        CHECK(j["joint"][filter]["polarisation_sigma0_ohm"].get<double>() == Approx(0.01402));     // 0.013 x 1.07819
+        CHECK(j["joint"][filter]["polarisation_process_ohm_per_sqrt_s"].get<double>() == Approx(1.509e-4));
+    }
+    // A resistance given is the one scaled by: 40 mOhm, twice the reference.
+    r.resistance_ohm = 0.04;
+    const LoadedConfig c = config_from_json(pack_config_json(r), "test");
+    CHECK(c.monitor.joint.ekf.polarisation_initial_ohm == Approx(0.0106f));
+    CHECK(c.monitor.joint.health.ekf.polarisation_sigma0_ohm == Approx(0.01838f).epsilon(1e-3));  // 0.013 x 1.41421
+    // The reference pack's own rating keeps the core's values, unwritten.
+    r.cells = 4;
+    r.capacity_ah = 1.55;
+    r.resistance_ohm = NAN;
+    CHECK_FALSE(pack_config_json(r)["joint"].contains("polarisation_initial_ohm"));
 }
 
 TEST_CASE("make-config: a rating out of range is refused with what was expected", "[pack_config]") {

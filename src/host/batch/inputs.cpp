@@ -13,6 +13,8 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "host/io/atomic_file.h"
+
 namespace battsim {
 namespace host {
 
@@ -56,7 +58,9 @@ bool is_battsim_output_name(const std::string& name) {
             if (std::tolower(static_cast<unsigned char>(name[name.size() - e.size() + k])) != e[k]) return false;
         return true;
     };
-    return ends_with(".json") || ends_with(".md");
+    // ... or a temporary of one that a killed run left (SIGKILL, a power cut): the next
+    // nightly run had read `3.json.tmp.15663.2` as a log and failed it.
+    return ends_with(".json") || ends_with(".md") || is_temporary_name(name);
 }
 
 // Regular (or symlinked-to-regular) files directly in `dir`, hidden ones skipped, sorted.

@@ -87,6 +87,15 @@ pid_t temp_tail(const std::string& entry, size_t& prefix_size) {
     return static_cast<pid_t>(pid);
 }
 
+}  // namespace
+
+bool is_temporary_name(const std::string& name) {
+    size_t prefix_size = 0;
+    return temp_tail(name, prefix_size) != 0;
+}
+
+namespace {
+
 // The PID in `entry` when it is one of temp_name()'s temporaries for the target named
 // `name` (the last component of its path); 0 if not.
 pid_t temp_owner(const std::string& entry, const std::string& name) {

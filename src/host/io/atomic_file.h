@@ -8,6 +8,10 @@
 namespace battsim {
 namespace host {
 
+// Whether `name` (a file name, no directory) is shaped like the temporaries AtomicFile writes
+// (<target>.tmp.<pid>.<n>): one a killed writer left behind, a half-written output.
+bool is_temporary_name(const std::string& name);
+
 class AtomicFile {
 public:
     // A symlink is followed: the temporary goes beside the file it points to, which the commit

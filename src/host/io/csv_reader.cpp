@@ -301,6 +301,17 @@ public:
             failed_.reset(new InputError(e));
             throw;
         }
+        // A clock that does not move: most rows at the time stamp of the row before (a frozen
+        // logger clock, or another column taken for time) had replayed 3802 samples as "0.3 s,
+        // no flight", exit 0. A few shared stamps are kept (a note says how many).
+        if (rows_ >= 20 && dup_count_ * 2 > rows_) {
+            failed_.reset(new InputError(info_.path, first_dup_line_, 0,
+                                         "the time does not advance: " + std::to_string(dup_count_) + " of " +
+                                             std::to_string(rows_) +
+                                             " rows repeat the time stamp of the row before (the first here): a frozen "
+                                             "clock, or not the time column"));
+            throw *failed_;
+        }
         finish();
         return false;
     }
@@ -1005,6 +1016,7 @@ private:
             }
         }
         if (cells.size() > static_cast<std::size_t>(core::kMaxCells)) {
+            info_.cells_beyond_kept = static_cast<int>(cells.size());
             info_.notes.push_back("columns " + cell_names[core::kMaxCells] + ".." + cell_names.back() +
                                   " dropped: at most " + std::to_string(core::kMaxCells) +
                                   " cell voltages are supported");

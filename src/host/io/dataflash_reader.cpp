@@ -1137,6 +1137,7 @@ private:
             std::copy(cells, cells + core::kMaxCells, cells_);
             cells_stamp_us_ = own_stamp_us(f, r);
             if (beyond) ++beyond_cells_;
+            if (beyond) info_.cells_beyond_kept = std::max(info_.cells_beyond_kept, core::kMaxCells + beyond);
             return false;
         }
         if (f.role != Role::Battery || f.name != plan_.battery) return false;

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <filesystem>
 #include <map>
 #include <stdexcept>
@@ -104,6 +105,14 @@ std::string unwritable_reason(const std::string& path) {
     if (!S_ISDIR(st.st_mode)) return dir + " is not a directory";
     // The temporary beside the file is created there, then renamed over it.
     if (::access(dir.c_str(), W_OK | X_OK) != 0) return "no permission to write in " + dir;
+    // A name the filesystem cannot hold fails only at the rename, after the work (the
+    // temporary's own name is cut to fit): a whole fleet's batch had been lost to it.
+    const std::string name = fs::path(resolved).filename().string();
+    errno = 0;
+    const long name_max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
+    if (name_max > 0 && static_cast<long>(name.size()) > name_max)
+        return "the file name is " + std::to_string(name.size()) + " bytes, longer than the " + std::to_string(name_max) +
+               " its directory's filesystem allows";
     return "";
 }
 

@@ -102,6 +102,9 @@ struct SourceInfo {
     std::string path;
     LogFormat format = LogFormat::Auto;
     int cell_count = 0;
+    // Cells the log carries when more than battsim keeps (core::kMaxCells; then cell_count is
+    // that bound and the rest are dropped with a note), else 0.
+    int cells_beyond_kept = 0;
     bool has_temperature = false;
     std::vector<std::string> notes;  // repairs and skipped lines, human readable, with line numbers
     // Parameters the autopilot recorded (ArduPilot PARM Name/Value, PX4 ULog parameter

@@ -757,6 +757,7 @@ private:
         int beyond = 0;
         out.cell_count = synthetic_cells_ ? 0 : static_cast<uint8_t>(record_cells(r, out.cell_voltage_v, beyond));
         if (synthetic_cells_) std::fill(std::begin(out.cell_voltage_v), std::end(out.cell_voltage_v), 0.0f);
+        if (beyond > 0) info_.cells_beyond_kept = std::max(info_.cells_beyond_kept, core::kMaxCells + beyond);
         if (beyond > 0)
             notes_.add("cells", where + ": battery_status reports " + std::to_string(core::kMaxCells + beyond) +
                                     " cells; cells beyond " + std::to_string(core::kMaxCells) + " are dropped");
