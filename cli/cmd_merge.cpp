@@ -30,6 +30,13 @@ int run(const MergeArgs& a) {
         std::cerr << me << e.what() << "\n";
         return kExitUsage;
     }
+    // Each table is read whole from its file (standard input would hold only one, and "-"
+    // had read as a missing file named "-").
+    for (const std::string& path : a.tables)
+        if (path == "-") {
+            std::cerr << me << "the tables are read from files, not standard input: give each shard's path\n";
+            return kExitUsage;
+        }
     std::vector<host::NamedPath> inputs;
     add_named(inputs, "a table", a.tables);
     if (int rc = check_outputs("battsim merge", inputs,

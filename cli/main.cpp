@@ -110,9 +110,19 @@ int main(int argc, char** argv) {
     for (const std::string& s : args) arg_ptrs.push_back(s.c_str());
     try {
         app.parse(static_cast<int>(arg_ptrs.size()), arg_ptrs.data());
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e) == 0 ? kExitOk : kExitUsage;
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e) == 0 ? kExitOk : kExitUsage;
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e) == 0 ? kExitOk : kExitUsage;
     } catch (const CLI::ParseError& e) {
-        int code = app.exit(e);
-        return code == 0 ? kExitOk : kExitUsage;
+        // Named by the command, as every other message is ("battsim replay: ..."): a script
+        // reading standard error had no prefix to tell a usage error by.
+        std::string who = "battsim";
+        for (const CLI::App* sub : app.get_subcommands()) who += " " + sub->get_name();
+        std::cerr << who << ": " << e.what() << "\n(" << who << " --help)\n";
+        return kExitUsage;
     }
     for (auto& a : actions) {
         if (a.first->parsed()) {

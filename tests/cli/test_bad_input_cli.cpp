@@ -316,6 +316,11 @@ TEST_CASE("option typos are refused with the range in plain figures", "[cli]") {
         {"discharge " + q(kExample) + " -c " + q(kConfig) + " --alpha nan", "--alpha: expected a number in (0, 1]"},
         {"discharge " + q(kExample) + " -c " + q(kConfig) + " --min-voltage nan", "--min-voltage: expected a number in (0, 200], found nan"},
         {"fit-ocv " + q(kExample) + " --prior-sigma nan", "--prior-sigma: expected a number in [1e-06, 1e+06]"},
+        // The parser's own messages are named by the command, as every other one is.
+        {"replay", "battsim replay: LOG is required\n(battsim replay --help)"},
+        {"batch -j x", "battsim batch: --jobs: expected a whole number, found x"},
+        {"", "battsim: A subcommand is required"},
+        {"merge -", "battsim merge: the tables are read from files, not standard input"},
     };
     for (const Case& c : cases) {
         INFO(c.args);
