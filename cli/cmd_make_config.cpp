@@ -28,6 +28,7 @@ struct MakeConfigArgs {
     double cutoff_v = NAN;
     double cutoff_delay_s = NAN;
     std::string name;
+    std::string chemistry = "lipo";
     std::string output = "-";
     bool list_keys = false;
     bool json = false;
@@ -49,7 +50,7 @@ int run(const MakeConfigArgs& a) {
     if (int rc = check_outputs(me, {{"--from-log", a.from_log}, {"--board", a.board}}, {text_output("-o/--output", a.output)})) return rc;
     if (a.list_keys) {
         if (!a.from_log.empty() || !a.board.empty() || a.cells > 0 || std::isfinite(a.capacity_mah) || std::isfinite(a.resistance_mohm) ||
-            std::isfinite(a.cutoff_v) || std::isfinite(a.cutoff_delay_s) || !a.name.empty()) {
+            std::isfinite(a.cutoff_v) || std::isfinite(a.cutoff_delay_s) || !a.name.empty() || a.chemistry != "lipo") {
             std::cerr << me << ": --list-keys lists the keys of any config; it takes no pack options\n";
             return kExitUsage;
         }
@@ -71,6 +72,7 @@ int run(const MakeConfigArgs& a) {
     }
     host::PackRating given;
     given.name = a.name;
+    given.chemistry = a.chemistry;
     given.cells = a.cells;
     given.capacity_ah = a.capacity_mah / 1000.0;
     given.resistance_ohm = a.resistance_mohm / 1000.0;
@@ -124,13 +126,13 @@ int run(const MakeConfigArgs& a) {
     // table the Panasonic 2.9 Ah cell had ended at 5.76 Ah without a word.
     const nlohmann::json& table = j["joint"]["ocv_cell_voltage_v"];
     const double cutoff_per_cell_v = j["monitor"]["min_flight_voltage_v"].get<double>() / r.cells;
-    if (table.is_array() && !table.empty() && cutoff_per_cell_v < kLiIonCutoffBelowVPerCell) {
+    if (a.chemistry == "lipo" && table.is_array() && !table.empty() && cutoff_per_cell_v < kLiIonCutoffBelowVPerCell) {
         std::cerr << me << ": note: the cutoff, " << host::fixed_text(cutoff_per_cell_v, 3)
                   << " V per cell, lies below the empty point of the config's OCV table ("
                   << host::fixed_text(table[0].get<double>(), 3)
-                  << " V per cell), a lithium-polymer pack's: for a Li-ion cell, whose curve lies lower, read its "
-                     "own table off a slow discharge (battsim discharge LOG -c CONFIG --config-out PACK.json) or "
-                     "stitch one from its flights (battsim fit-ocv), or the capacity reads high\n";
+                  << " V per cell), a lithium-polymer pack's: for a Li-ion pack give --chemistry li-ion (an 18650 "
+                     "cell's curve), or read its own table off a slow discharge (battsim discharge LOG -c CONFIG "
+                     "--config-out PACK.json); with the LiPo curve its capacity and warnings are wrong\n";
     }
     // A pack above the reference board's reach is said here, not only when its header is
     // exported: a 12S heavy-lift pack's config had been written without a word.
@@ -157,11 +159,17 @@ std::function<int()> setup(CLI::App& sub) {
     sub.add_option("--resistance-mohm", a->resistance_mohm,
                    "Pack internal resistance (mOhm; default: the reference pack's per cell, scaled by capacity)")
         ->check(number_in(0.0, 1.0e4, true));
-    sub.add_option("--cutoff-v", a->cutoff_v, "Loaded pack voltage the remaining time runs to (V; default 3.325 V per cell)")
+    sub.add_option("--cutoff-v", a->cutoff_v,
+                   "Loaded pack voltage the remaining time runs to (V; default 3.325 V per cell, Li-ion 3.0)")
         ->check(number_in(0.0, 1.0e4, true));
     sub.add_option("--cutoff-delay-s", a->cutoff_delay_s,
                    "How long the flight goes on below the cutoff before the failsafe acts (s; default 5)")
         ->check(number_in(0.0, 600.0));
+    sub.add_option("--chemistry", a->chemistry,
+                   "lipo, or li-ion: an 18650/21700 pack's lower, longer curve (the Samsung 30Q's, read off its C/10 "
+                   "discharge), ten times the resistance per Ah, and a 3.0 V per cell cutoff")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"lipo", "li-ion"}));
     sub.add_option("--name", a->name, "Config name (default pack-<cells>s-<mAh>)");
     sub.add_option("-o,--output", a->output, "Config JSON to write (\"-\" = standard output)")->capture_default_str();
     sub.add_flag("--list-keys", a->list_keys,

@@ -44,6 +44,20 @@ constexpr CurrentKey kJointCurrentKeys[] = {
 // discharge by scripts/suite-ocv-tables.py; normalised to the rated capacity).
 constexpr double kOcvCellV[] = {3.3271, 3.5607, 3.6542, 3.6925, 3.7166, 3.7358, 3.7506, 3.7655, 3.7803, 3.7952, 3.8105,
                                 3.8302, 3.8503, 3.8749, 3.9009, 3.9296, 3.9605, 3.9951, 4.035,  4.0898, 4.1999};
+// A Li-ion cell, per cell and per rated amp-hour: the Samsung INR18650-30Q of the shared lab
+// data, its curve read off the C/10 discharge (`battsim discharge
+// ../shared/data/samsung-30q/Q30_S001_C10.csv --negative-discharge -c ONE_CELL.json
+// --config-out X.json`, ONE_CELL from `make-config --cells 1 --capacity-mah 3000 --cutoff-v
+// 2.5`: 2.969 Ah, I*R added back) and its resistance from `battsim fit` (29.2 mOhm at 3.04 Ah,
+// configs/fitted/samsung-30q.json). Empty at 2.5 V, where the discharges stop; flown to 3.0 V
+// per cell under load by default, where long-range pilots land.
+constexpr double kLiIonOcvCellV[] = {2.5082, 2.9791, 3.1627, 3.3006, 3.4072, 3.4637, 3.5169, 3.5774, 3.6159, 3.6544, 3.6996,
+                                     3.7442, 3.788,  3.8336, 3.8791, 3.9255, 3.9832, 4.0334, 4.0516, 4.07,   4.1417};
+constexpr double kLiIonFullV = 4.1419, kLiIonExponentialV = 4.0877, kLiIonNominalZoneV = 3.4108, kLiIonNominalV = 3.6;
+constexpr double kLiIonExponentialShare = 0.0211, kLiIonNominalZoneShare = 0.7955;  // of the capacity
+constexpr double kLiIonEmptyV = 2.5, kLiIonCutoffV = 3.0;
+constexpr double kLiIonCellOhmAh = 0.0885;  // 29.2 mOhm x 3.036 Ah
+constexpr double kLiIonCurveCRate = 0.1;
 // A per-cell cutoff outside this is not one anybody flies to: a typo or another unit.
 constexpr double kCutoffMinV = 2.5, kCutoffMaxV = 3.9;
 // Below this per cell a cutoff is a Li-ion pack's, not the LiPo's the config describes (whose
@@ -129,13 +143,18 @@ json pack_config_json(const PackRating& r) {
     if (std::isfinite(r.cutoff_delay_s) && !(r.cutoff_delay_s >= 0.0 && r.cutoff_delay_s <= 600.0))
         throw std::invalid_argument("cutoff delay: expected 0..600 s, found " + number_text(r.cutoff_delay_s, "%g s"));
 
+    if (r.chemistry != "lipo" && r.chemistry != "li-ion")
+        throw std::invalid_argument("chemistry: expected lipo or li-ion, found \"" + r.chemistry + "\"");
+    const bool li_ion = r.chemistry == "li-ion";
     const double k = r.capacity_ah / kRefCapacityAh;
     const double resistance_ohm =
-        std::isfinite(r.resistance_ohm) ? r.resistance_ohm : round_to(kCellResistanceOhm * n / k, 1e-5);
-    const double cutoff_v = std::isfinite(r.cutoff_voltage_v) ? r.cutoff_voltage_v : kMinV * n;
+        std::isfinite(r.resistance_ohm) ? r.resistance_ohm
+        : li_ion                        ? round_to(kLiIonCellOhmAh * n / r.capacity_ah, 1e-5)
+                                        : round_to(kCellResistanceOhm * n / k, 1e-5);
+    const double cutoff_v = std::isfinite(r.cutoff_voltage_v) ? r.cutoff_voltage_v : (li_ion ? kLiIonCutoffV : kMinV) * n;
     const long mah = std::lround(r.capacity_ah * 1000.0);
     std::string description = std::to_string(r.cells) + "S " + std::to_string(mah) +
-                              " mAh lithium polymer pack, written by battsim make-config";
+                              (li_ion ? " mAh lithium-ion pack" : " mAh lithium polymer pack") + ", written by battsim make-config";
     if (!r.sources.empty()) {
         description += " (";
         for (size_t i = 0; i < r.sources.size(); ++i) description += (i ? "; " : "") + r.sources[i];
@@ -145,10 +164,27 @@ json pack_config_json(const PackRating& r) {
         ": the reference pack (configs/sim-4s.json) scaled per cell and by capacity (capacities x capacity, resistance "
         "/ capacity unless given, the curve's current at the same C-rate; below 1.55 Ah the estimators' current "
         "thresholds too, the take-off bar no lower than 3 W of ground electronics; below 4S the filters' voltage sigma "
-        "per cell; the filters' polarisation ohms with the pack's resistance, their spread with its square root), with the simulator's LiPo rest curve as the "
-        "OCV table. Not fitted to this pack: battsim fit, fit-ocv and calibrate make it its own.";
+        "per cell; the filters' polarisation ohms with the pack's resistance, their spread with its square root), ";
+    description += li_ion ? "with a Li-ion cell's curve, OCV table and resistance per Ah (88.5 mOhm Ah per cell): the Samsung "
+                            "INR18650-30Q's, read off its C/10 discharge to 2.5 V; cutoff 3.0 V per cell. Another cell's "
+                            "curve lies tens of mV away: read your own off a slow discharge (battsim discharge)."
+                          : "with the simulator's LiPo rest curve as the OCV table.";
+    description += " Not fitted to this pack: battsim fit, fit-ocv and calibrate make it its own.";
 
-    json battery = {
+    json battery = li_ion ? json{
+        {"cells_in_series", r.cells},
+        {"full_voltage_v", round_to(kLiIonFullV * n, 1e-4)},
+        {"exponential_voltage_v", round_to(kLiIonExponentialV * n, 1e-4)},
+        {"exponential_capacity_ah", round_to(kLiIonExponentialShare * r.capacity_ah, 1e-4)},
+        {"nominal_zone_voltage_v", round_to(kLiIonNominalZoneV * n, 1e-4)},
+        {"nominal_zone_capacity_ah", round_to(kLiIonNominalZoneShare * r.capacity_ah, 1e-4)},
+        {"capacity_ah", round_to(r.capacity_ah, 1e-4)},
+        {"internal_resistance_ohm", resistance_ohm},
+        {"curve_current_a", round_to(kLiIonCurveCRate * r.capacity_ah, 1e-3)},
+        {"nominal_voltage_v", round_to(kLiIonNominalV * n, 1e-4)},
+        {"max_voltage_v", round_to(kFullV * n, 1e-4)},
+        {"min_voltage_v", round_to(std::min(kLiIonEmptyV * n, cutoff_v), 1e-4)},
+    } : json{
         {"cells_in_series", r.cells},
         {"full_voltage_v", round_to(kFullV * n, 1e-4)},
         {"exponential_voltage_v", round_to(kExponentialV * n, 1e-4)},
@@ -195,7 +231,7 @@ json pack_config_json(const PackRating& r) {
         {"joint",
          {{"first_cell_includes_lead", true},
           {"cutoff_delay_s", std::isfinite(r.cutoff_delay_s) ? r.cutoff_delay_s : kCutoffDelayS},
-          {"ocv_cell_voltage_v", kOcvCellV}}},
+          {"ocv_cell_voltage_v", li_ion ? json(kLiIonOcvCellV) : json(kOcvCellV)}}},
     };
     // A pack smaller than the reference flies a smaller drone at the same C-rates: the
     // estimators' current thresholds shrink with it. With the reference's 3 A as the ground's
@@ -305,6 +341,7 @@ std::string per_cell_resistance_note(const PackRating& r) {
 PackRating merge_rating(const PackRating& given, const LogPack& log) {
     PackRating r;
     r.name = given.name;
+    r.chemistry = given.chemistry;
     if (given.cells > 0) {
         r.cells = given.cells;
         r.sources.push_back("cells given");

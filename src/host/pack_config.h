@@ -25,12 +25,16 @@ struct PackRating {
     double cutoff_voltage_v = NAN;  // loaded pack voltage the remaining time runs to; NaN = 3.325 V per cell
     double cutoff_delay_s = NAN;    // how long the flight goes on past it (joint.cutoff_delay_s); NaN = 5 s
     std::string name;               // empty: "pack-<cells>s-<mAh>"
+    // "lipo" (the reference pack's curve) or "li-ion" (an 18650 cell's, read off its C/10
+    // discharge: lower and longer, empty at 2.5 V, and ten times the resistance per Ah).
+    std::string chemistry = "lipo";
     std::vector<std::string> sources;  // where the values came from, for the description
 };
 
 // The reference pack (configs/sim-4s.json: the dissertation's hand-modified Tremblay
 // parameters and the simulator's LiPo rest curve) scaled per cell and by capacity as
-// configs/generic-3s.json and sim-4s-1800.json were by hand. Checked by config_from_json.
+// configs/generic-3s.json and sim-4s-1800.json were by hand; for "li-ion", the Samsung
+// INR18650-30Q's curve and resistance scaled alike. Checked by config_from_json.
 // Throws std::invalid_argument naming the value out of range.
 nlohmann::json pack_config_json(const PackRating& rating);
 // The settings that belong to the monitor board and its wiring rather than to the pack

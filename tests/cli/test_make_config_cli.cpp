@@ -247,3 +247,33 @@ TEST_CASE("battsim make-config: a large pack's polarisation in its own ohms, its
     CHECK_THAT(fourteen.err, Catch::Contains("the log's pack has 14 cells in series; battsim handles at most 12"));
     CHECK_FALSE(std::filesystem::exists(dir + "/14s.json"));
 }
+
+TEST_CASE("battsim make-config --chemistry li-ion: a Li-ion cell read with its own curve", "[cli][make_config][data]") {
+    // The Samsung 30Q's 3C discharge drew 2.925 Ah to 2.5 V (data README). With the LiPo curve
+    // the joint estimator read 2.29 Ah and warned of a short flight; with the Li-ion curve
+    // (read off the same cell's C/10 discharge) 3.03 Ah and no warning. scripts/li-ion-check.py
+    // has the other rates and the 6S2P pack.
+    const std::string dir = clitest::temp_dir();
+    const std::string log = kData + "/samsung-30q/Q30_S001_3C.csv";
+    for (const char* chemistry : {"lipo", "li-ion"}) {
+        const std::string cfg = dir + "/" + chemistry + ".json";
+        const clitest::Result made = clitest::run("make-config --cells 1 --capacity-mah 3000 --cutoff-v 2.5 --chemistry " +
+                                                  std::string(chemistry) + " -o " + q(cfg));
+        INFO(made.err);
+        REQUIRE(made.exit_code == 0);
+        // The LiPo config is told it may be a Li-ion pack's, and how to say so.
+        CHECK((made.err.find("give --chemistry li-ion") != std::string::npos) == (std::string(chemistry) == "lipo"));
+        const json s = clitest::run_json("replay " + q(log) + " -c " + q(cfg) + " --negative-discharge --estimator joint --json");
+        const double capacity = s["flight"]["capacity_ah"]["final"].get<double>();
+        bool short_warned = false;
+        for (const json& w : s["warnings"]) short_warned = short_warned || w["name"] == "short_flight";
+        if (std::string(chemistry) == "li-ion") {
+            CHECK(capacity == Approx(2.925).epsilon(0.05));
+            CHECK_FALSE(short_warned);
+        } else {
+            CHECK(capacity < 0.85 * 2.925);
+            CHECK(short_warned);
+        }
+    }
+    CHECK(clitest::run("make-config --cells 1 --capacity-mah 3000 --chemistry nimh").exit_code == 2);
+}

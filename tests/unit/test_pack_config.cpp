@@ -130,6 +130,26 @@ TEST_CASE("make-config: below 4S the filters' voltage sigma is per cell", "[pack
     }
 }
 
+TEST_CASE("make-config: a Li-ion pack's curve, resistance and cutoff", "[pack_config]") {
+    PackRating r;
+    r.cells = 6;
+    r.capacity_ah = 8.4;  // 6S2P of 4.2 Ah cells: the pack's capacity
+    r.chemistry = "li-ion";
+    const json j = pack_config_json(r);
+    // 88.5 mOhm Ah per cell x 6 / 8.4 Ah = 63.21 mOhm; cutoff 3.0 V per cell; empty at 2.5 V.
+    CHECK(j["battery"]["internal_resistance_ohm"].get<double>() == Approx(0.06321));
+    CHECK(j["monitor"]["min_flight_voltage_v"].get<double>() == Approx(18.0));
+    CHECK(j["battery"]["min_voltage_v"].get<double>() == Approx(15.0));
+    CHECK(j["battery"]["full_voltage_v"].get<double>() == Approx(24.8514));  // 4.1419 x 6
+    CHECK(j["battery"]["nominal_zone_capacity_ah"].get<double>() == Approx(6.6822));  // 0.7955 x 8.4
+    CHECK(j["battery"]["curve_current_a"].get<double>() == Approx(0.84));  // C/10
+    CHECK(j["joint"]["ocv_cell_voltage_v"][0].get<double>() == Approx(2.5082));
+    CHECK(j["joint"]["ocv_cell_voltage_v"][20].get<double>() == Approx(4.1417));
+    CHECK(j["description"].get<std::string>().find("lithium-ion pack") != std::string::npos);
+    r.chemistry = "nimh";
+    CHECK_THROWS_WITH(pack_config_json(r), Catch::Contains("chemistry: expected lipo or li-ion, found \"nimh\""));
+}
+
 TEST_CASE("make-config: the filters' polarisation follows the pack's resistance", "[pack_config]") {
     PackRating r;
     r.cells = 6;
