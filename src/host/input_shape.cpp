@@ -263,7 +263,7 @@ std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const La
                       "the voltage repeats the sample before's value at %ld of %ld steps of the current in flight: it is "
                       "recorded less often than the current and held between, so a current step's sag shows late and the "
                       "resistance, capacity and warnings read from it are rougher (ArduPilot's log171.bin: its capacity "
-                      "at the landing 2.58 Ah as logged, 2.96 Ah with --average-ms 150)",
+                      "at the landing 3.02 Ah as logged, 3.55 Ah with --average-ms 150)",
                       held_steps_, load_steps_);
         out.push_back(buf);
     }
@@ -328,7 +328,8 @@ std::vector<std::string> InputShape::notes(bool flew, double takeoff_a, const La
                       "the samples are %.3g s apart (median): the joint estimator's resistance pairs samples at "
                       "most %.3g s apart, so it measures few or none and keeps the config's %.3g mOhm: a pack of "
                       "higher resistance is not seen as one (no high-resistance warning; its short flight is "
-                      "missed or put down to capacity)",
+                      "missed or put down to capacity): give the pack's measured resistance (battery."
+                      "internal_resistance_ohm; make-config --resistance-mohm, a charger's reading)",
                       dt_s, lags.slowest_s, lags.prior_ohm * 1e3);
         out.push_back(buf);
     }

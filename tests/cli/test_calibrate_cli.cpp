@@ -68,15 +68,17 @@ TEST_CASE("calibrate keeps the share of a pack the health filter already fits", 
 }
 
 TEST_CASE("calibrate says when no share explains the rests", "[cli][data]") {
-    // The aged pack 29 with the shares tried kept above the 0.15 it needs: the best of them
-    // (the configured 0.2, at the edge) still misses the rests' capacity, and that is said.
-    const std::string log = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/29.csv";
+    // The new pack 32 with the shares tried kept above the configured 0.2: the best of them
+    // (0.2, at the edge) still misses the rests' capacity, and that is said. (Until the
+    // fiftieth session's minute-long R0 under the polarisation this was the aged pack 29, which
+    // the configured share now fits within 1.4 %.)
+    const std::string log = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/32.csv";
     const auto r = run("calibrate " + q(log) + " -c " + q(kConfig) + " --shares 0.5,0.6 --json");
     REQUIRE(r.exit_code == 0);
     const auto j = nlohmann::json::parse(r.out);
     REQUIRE(j["notes"].size() == 1);
     CHECK_THAT(j["notes"][0].get<std::string>(),
-               Catch::Contains("0.2 (the edge of the shares tried), still misses the rests' capacities by 7.3 %"));
+               Catch::Contains("0.2 (the edge of the shares tried), still misses the rests' capacities by 5.7 %"));
     CHECK_THAT(r.err, Catch::Contains("battsim calibrate: note: the best share"));
     // A config without an OCV table is refused: its capacity is off by more than any share
     // moves it (flight 30 with the dissertation's config: 76 % at the best share), and a

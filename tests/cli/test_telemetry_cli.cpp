@@ -182,14 +182,18 @@ TEST_CASE("replay --said: the aged pack's short flight that cleared is withdrawn
     for (const json& w : summary["warnings"])
         if (w["name"] == "short_flight") short_flight = w;
     REQUIRE(short_flight.is_object());
-    REQUIRE(short_flight["spell_count"] == 1);  // on for 3.3 s, then off to the end
+    // On for 1.9 s 13.5 s into the flight (for its resistance), off, and on again as it lands
+    // (for its capacity); until the fiftieth session's minute-long R0 under the polarisation
+    // one spell of 3.3 s, for its capacity, and "not short now".
+    REQUIRE(short_flight["spell_count"] == 2);
     const double off_s = short_flight["spells"][0]["to_s"].get<double>();
     const json& said = summary["said"];
-    REQUIRE(said.size() == 2);
+    REQUIRE(said.size() == 3);
     CHECK(said[0]["severity"] == "warning");
     CHECK(said[0]["text"].get<std::string>().rfind("battsim: flight ", 0) == 0);
     CHECK(said[1]["severity"] == "notice");
-    CHECK(said[1]["text"] == "battsim: short flight cleared, not short now");
+    CHECK(said[1]["text"] == "battsim: short flight cleared, 3% short now");
+    CHECK(said[2]["severity"] == "warning");
     // After telemetry.clear_hold_s (5 s) of it off (and its reading clear of the bar).
     CHECK(said[1]["time_s"].get<double>() >= off_s + 5.0);
     CHECK(said[1]["flight_time_s"].is_number());

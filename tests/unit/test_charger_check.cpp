@@ -2,6 +2,8 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cstdio>
+#include <fstream>
 #include <sstream>
 
 #include "host/report/brief.h"
@@ -112,4 +114,25 @@ TEST_CASE("The charger check's line for people says the verdict and the gain", "
     std::ostringstream none;
     battsim::host::print_charger_check(c, none);
     CHECK(none.str() == "  charger check: counted 1.400 Ah against 1.500 Ah charged (x0.9333): no verdict\n");
+}
+
+TEST_CASE("brief: a battery state that began on the landing sample says so", "[brief]") {
+    // Flight 29's summary (the committed joint golden) with LOW put on its landing sample:
+    // "145.1 s into the flight" of a 145.1 s flight had read as a state flown in.
+    std::ifstream in(std::string(BATTSIM_SOURCE_DIR) + "/tests/golden/predictive-bms-joint/29.json");
+    REQUIRE(in.good());
+    json s = json::parse(in);
+    s["flight"]["remaining_time_s"]["low_from_s"] = s["flight"]["end_s"];
+    s["flight"]["remaining_time_s"]["low_spells"] = 1;
+    std::ostringstream out;
+    battsim::host::print_brief(s, out);
+    const double end_s = s["flight"]["end_s"].get<double>();
+    char expected[64];
+    std::snprintf(expected, sizeof expected, "LOW from %.1f s (at the landing)", end_s);
+    CHECK_THAT(out.str(), Catch::Contains(expected));
+    // One sample earlier it is a state flown in.
+    s["flight"]["remaining_time_s"]["low_from_s"] = end_s - 0.5;
+    std::ostringstream before;
+    battsim::host::print_brief(s, before);
+    CHECK_THAT(before.str(), Catch::Contains("s into the flight)") && !Catch::Contains("(at the landing)"));
 }

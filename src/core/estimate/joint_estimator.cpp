@@ -27,6 +27,7 @@ void JointEstimator::configure(const Config& config, const TremblayParams& rated
     config_ = config;
     rated_ = rated;
     cells_ = cells_in_series > 0 ? cells_in_series : 1;
+    follow_r0_.configure({60.0f});
     ocv_.configure(config.ocv, cells_in_series, rated);
     solver_.set_cutoff_delay_s(config.cutoff_delay_s);
     // A monitor configured again (a new pack without a restart) starts as a new one: a solve
@@ -194,7 +195,8 @@ void JointEstimator::update(uint64_t time_us, float voltage_v, float current_a, 
     if (first_r0) polarisation_ref_ohm_ = r0;
     const float dr_ohm = r0 - rated_.internal_resistance_ohm;
     const bool before_learning = flying && !ground && !learn;
-    const float follow = polarisation_ref_ohm_ > 0.0f ? r0 / polarisation_ref_ohm_ : 1.0f;
+    if (first_r0) follow_r0_.reset(r0);
+    const float follow = polarisation_ref_ohm_ > 0.0f ? follow_r0_.update(r0, dt_s) / polarisation_ref_ohm_ : 1.0f;
     const float r0_var_v2 = (r_sigma * true_a) * (r_sigma * true_a);
     const bool learn_offset = (ground && !taken_off_) || (flying && config_.learn_offset_in_flight);
     // The tracking, health and verdict filters: one step, each on its own settings.

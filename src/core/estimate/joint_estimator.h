@@ -297,6 +297,11 @@ private:
     float weakest_deficit_ = 0.0f;
     int cells_ = 1;
     float polarisation_ref_ohm_ = 0.0f;  // R0 when capacity and polarisation learning began (0: not yet)
+    // R0 as the polarisation follows it: a minute's mean. The pack's R0 moves with its
+    // temperature, over minutes; what the estimate moves by in seconds is noise (a hover's
+    // few steps read in 10 mV: a 4S 22 Ah pack's 1.4 mOhm jumped 6 % in 3 s, and its
+    // capacity fell to the filter's floor).
+    LowPassFilter follow_r0_;
     float start_soc_ = 1.0f;             // from the first resting voltage
     float charge_total_ah_ = 0.0f;       // offset-corrected, since start
     float ground_s_ = 0.0f;              // on the ground (not flying), since
