@@ -735,7 +735,7 @@ TEST_CASE("a log whose time never advances is refused, not replayed as a flight 
     auto r = run("replay " + q(dir + "/frozen.csv"));
     CHECK(r.exit_code == 3);
     CHECK_THAT(r.err, Catch::Contains("frozen.csv:3: the time does not advance: 39 of 40 rows repeat the time stamp of the row "
-                                      "before (the first here): a frozen clock, or not the time column"));
+                                      "before (the first here): a frozen clock, stamps coarser than the rows"));
     std::string some = "time_s,voltage_v,current_a\n";
     for (row = 0; row < 40; ++row) some += std::to_string(row / 2) + "," + std::to_string(16.8 - 0.01 * row) + ",12.5\n";
     clitest::write_file(dir + "/pairs.csv", some);  // half the rows share a stamp: kept, with a note

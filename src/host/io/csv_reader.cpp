@@ -309,7 +309,8 @@ public:
                                          "the time does not advance: " + std::to_string(dup_count_) + " of " +
                                              std::to_string(rows_) +
                                              " rows repeat the time stamp of the row before (the first here): a frozen "
-                                             "clock, or not the time column"));
+                                             "clock, stamps coarser than the rows (whole seconds at several rows a "
+                                             "second), or not the time column"));
             throw *failed_;
         }
         finish();

@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <filesystem>
 #include <map>
 #include <stdexcept>
@@ -108,7 +107,6 @@ std::string unwritable_reason(const std::string& path) {
     // A name the filesystem cannot hold fails only at the rename, after the work (the
     // temporary's own name is cut to fit): a whole fleet's batch had been lost to it.
     const std::string name = fs::path(resolved).filename().string();
-    errno = 0;
     const long name_max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
     if (name_max > 0 && static_cast<long>(name.size()) > name_max)
         return "the file name is " + std::to_string(name.size()) + " bytes, longer than the " + std::to_string(name_max) +
