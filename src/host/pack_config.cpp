@@ -273,7 +273,7 @@ json pack_config_json(const PackRating& r) {
     // pack's 20 mOhm. A pack's polarisation scales with its impedance (the simulator's branches
     // are fixed fractions of R0), so the prior scales with the pack's resistance; its spread and
     // drift by the square root, as a rating's resistance is a guess: at the full ratio the
-    // ArduPilot log underpowered.log (3S 4 Ah, rated 5.8 mOhm, sagging like 69 mOhm, its R0
+    // ArduPilot log underpowered.log (3S 4 Ah, rated 5.8 mOhm, sagging like 61 mOhm, its R0
     // unmeasurable at 1 s samples) lost its filter. Left at the reference's ohms, an 8S 22 Ah
     // pack (2.8 mOhm) read every sag as charge gone: capacity at 20 % of a flight near the
     // rating at -25 %, 1 of 4 short flights warned (configs/scenarios-large/README.md).
