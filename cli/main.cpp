@@ -110,13 +110,8 @@ int main(int argc, char** argv) {
     for (const std::string& s : args) arg_ptrs.push_back(s.c_str());
     try {
         app.parse(static_cast<int>(arg_ptrs.size()), arg_ptrs.data());
-    } catch (const CLI::CallForHelp& e) {
-        return app.exit(e) == 0 ? kExitOk : kExitUsage;
-    } catch (const CLI::CallForAllHelp& e) {
-        return app.exit(e) == 0 ? kExitOk : kExitUsage;
-    } catch (const CLI::CallForVersion& e) {
-        return app.exit(e) == 0 ? kExitOk : kExitUsage;
     } catch (const CLI::ParseError& e) {
+        if (e.get_exit_code() == 0) return app.exit(e) == 0 ? kExitOk : kExitUsage;  // --help, --version
         // Named by the command, as every other message is ("battsim replay: ..."): a script
         // reading standard error had no prefix to tell a usage error by.
         std::string who = "battsim";
