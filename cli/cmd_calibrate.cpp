@@ -1,11 +1,13 @@
 // battsim calibrate LOG... -c CFG [-o OUT.json]: the health filter's slow polarisation share
-// for a pack, from its own flights (the in-flight capacity against the rests').
+// for a pack, from its own flights (the in-flight capacity against the rests'); with
+// --cell-leads, the monitor's lead cells' share of their resistance, from healthy packs' flights.
 #include <iomanip>
 #include <iostream>
 #include <sstream>
 
 #include "command.h"
 #include "common_options.h"
+#include "host/fit/lead_calibration.h"
 #include "host/fit/shape_calibration.h"
 #include "host/io/atomic_file.h"
 #include "host/io/number_text.h"
@@ -18,6 +20,7 @@ struct CalibrateArgs {
     std::vector<std::string> logs;
     std::string output;
     bool json = false;
+    bool cell_leads = false;
     host::ShapeCalibrationOptions options;
     std::vector<std::string> shares;  // as typed; empty = the options' own
     InputArgs input;
@@ -38,23 +41,77 @@ void print_table(const host::ShapeCalibration& c, std::ostream& os) {
     for (const std::string& f : c.logs_without_rest) os << "  no rest after a flight, not used: " << f << "\n";
 }
 
+void print_leads(const host::LeadCalibration& c, std::ostream& os) {
+    os << "battsim calibrate --cell-leads: " << c.flights.size() << " flight(s); each lead cell's resistance over the "
+       << "others' median, less one\n";
+    for (const host::LeadCalibrationFlight& f : c.flights) {
+        os << "  " << f.log << " (" << f.source << "):";
+        for (double r : f.cell_resistance_ohm) os << " " << std::fixed << std::setprecision(2) << 1000.0 * r;
+        os << " mOhm";
+        if (f.has_first) os << "; cell 1 " << std::showpos << std::setprecision(3) << f.first_excess << std::noshowpos;
+        if (c.last_lead) os << "; last cell " << std::showpos << std::setprecision(3) << f.last_excess << std::noshowpos;
+        os << "\n";
+    }
+    const auto line = [&](const char* key, double excess, double spread) {
+        if (excess < 0.0) return;
+        os << "  joint." << key << " " << std::setprecision(3) << excess << " (spread " << spread << ")\n";
+    };
+    os << "  pooled: " << c.flights_used << " flight(s) read by the " << c.source << "\n";
+    line("first_cell_lead_excess", c.first_excess, c.first_spread);
+    line("last_cell_lead_excess", c.last_excess, c.last_spread);
+    if (c.first_excess >= 0.0 || c.last_excess >= 0.0)
+        os << "  joint.cell_lead_excess_sigma " << std::setprecision(3) << c.sigma << "\n";
+    for (const std::string& f : c.logs_without_cells) os << "  no per-cell resistance, not used: " << f << "\n";
+}
+
+// --cell-leads: replay, pool, write the config with the keys set.
+int run_cell_leads(const CalibrateArgs& a, host::ReplayOptions& opt, const std::vector<host::NamedPath>& outputs) {
+    const char* const command = "battsim calibrate --cell-leads";
+    host::LeadCalibration c;
+    if (int rc = run_job(command, [&] { c = host::calibrate_cell_leads(a.logs, opt); })) return rc;
+    for (const std::string& note : c.notes) std::cerr << command << ": note: " << note << "\n";
+    if (c.flights.empty()) {
+        std::cerr << command << ": no log has per-cell resistances to calibrate from (" << a.logs.size()
+                  << " given; they need a flight with three or more cell columns)\n";
+        return kExitFailure;
+    }
+    if (!a.output.empty()) {
+        host::LoadedConfig out = opt.config;
+        host::apply_lead_calibration(c, out);
+        select_joint_estimator(out, command);
+        out.description += (out.description.empty() ? "" : "; ") + std::string("lead cells calibrated on ") +
+                           std::to_string(c.flights.size()) + " flight(s) by battsim calibrate --cell-leads";
+        if (int rc = run_job(command, [&] { host::write_file_atomic(a.output, host::json_text(host::config_to_json(out), 2) + "\n"); }))
+            return rc;
+    }
+    if (a.json) std::cout << host::json_text(host::to_json(c), 2) << "\n";
+    else print_leads(c, people_out(outputs));
+    return kExitOk;
+}
+
 std::function<int()> setup(CLI::App& sub) {
     auto a = std::make_shared<CalibrateArgs>();
-    sub.add_option("LOG", a->logs, "Logs of one pack (each with a rest after its flight)")->required();
+    sub.add_option("LOG", a->logs, "Logs of one pack (each with a rest after its flight); with --cell-leads, flights of healthy packs on one monitor")->required();
     sub.add_option("-o,--output", a->output, "Write the config with the calibrated share here (JSON)");
     sub.add_flag("--json", a->json, "Print the calibration JSON on standard output");
     std::ostringstream defaults;
     for (size_t i = 0; i < a->options.slow_shares.size(); ++i) defaults << (i ? "," : "") << a->options.slow_shares[i];
     const CLI::Validator share = number_in(0.0, 1.0);
-    add_list_option(sub, "--shares", a->shares, "Candidate slow shares (0..1), comma-separated [" + defaults.str() + "]",
+    CLI::Option* shares = add_list_option(sub, "--shares", a->shares, "Candidate slow shares (0..1), comma-separated [" + defaults.str() + "]",
                     [share](const std::string& item) {
                         std::string text = item;
                         return share(text);
                     });
-    sub.add_option("--tolerance", a->options.tolerance,
-                   "Keep the configured share while its mean |final/rest - 1| is within this")
-        ->check(number_in(0.0, 1.0))
-        ->capture_default_str();
+    CLI::Option* tolerance = sub.add_option("--tolerance", a->options.tolerance,
+                                            "Keep the configured share while its mean |final/rest - 1| is within this")
+                                 ->check(number_in(0.0, 1.0))
+                                 ->capture_default_str();
+    sub.add_flag("--cell-leads", a->cell_leads,
+                 "Calibrate the monitor's lead cells instead (joint.first_cell_includes_lead, last_cell_includes_lead): "
+                 "what the wiring adds to their resistance over the other cells' median, so that they are judged for "
+                 "resistance too; from flights of healthy packs flown with this monitor")
+        ->excludes(tolerance)
+        ->excludes(shares);
     add_input_options(sub, a->input);
     return [a]() -> int {
         if (a->input.estimator == "reference") {
@@ -85,6 +142,7 @@ std::function<int()> setup(CLI::App& sub) {
                 for (const std::string& log : a->logs) host::open_reader(log, opt.reader);
             }))
             return rc;
+        if (a->cell_leads) return run_cell_leads(*a, opt, outputs);
         // Without a table the joint estimator's capacity is off by far more than any
         // polarisation shape moves it: the best share would be a fit to that error (on flight
         // 30 with the built-in config: 76 % off the rests' capacity at the edge of the shares).
@@ -117,7 +175,9 @@ std::function<int()> setup(CLI::App& sub) {
     };
 }
 
-const RegisterCommand reg{{"calibrate", "Calibrate a pack's polarisation shape from its flights' rests", setup}};
+const RegisterCommand reg{{"calibrate",
+                           "Calibrate a pack's polarisation shape from its flights' rests, or (--cell-leads) a monitor's lead cells",
+                           setup}};
 
 }  // namespace
 }  // namespace cli

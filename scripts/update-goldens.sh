@@ -22,11 +22,11 @@ for f in 29 30 32 34; do
       --summary "$out/$f.json")
 done
 # The scoreboards: every column on both simulated suites, the last-cell set, the
-# rest-polarisation stress suite, the small and the large craft and the tuning suite through a radio log, an ArduPilot and a
+# rest-polarisation stress suite, the small and the large craft, the lead-cell set and the tuning suite through a radio log, an ArduPilot and a
 # PX4 log (scenario paths
 # are relative to the repo).
 mkdir -p "$root/tests/golden/score"
-for suite in scenarios scenarios-holdout scenarios-last-cell scenarios-rest-polarisation scenarios-small scenarios-large; do
+for suite in scenarios scenarios-holdout scenarios-last-cell scenarios-rest-polarisation scenarios-small scenarios-large scenarios-lead-cells; do
   (cd "$root" && "$bin" score --json -j2 "configs/$suite" -o "tests/golden/score/$suite.json")
 done
 for format in edgetx dataflash ulog; do

@@ -232,6 +232,7 @@ const MonitorStatus& Monitor::update(const Sample& sample) {
             status_.cell_capacity_deficit_sigma[c] = ca.capacity_deficit_sigma[c];
         }
         status_.pack_capacity_deficit = ca.pack_capacity_deficit;
+        status_.cell_resistance_from_differences = ca.resistance_from_differences;
     }
 
     const PiaoCellScorer::Status& cs = cells_.status();

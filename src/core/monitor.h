@@ -95,6 +95,7 @@ struct MonitorStatus {
     int8_t outlier_cell = -1;  // the cell named by kWarnCellOutlier: 0-based (cell 1 = 0), −1 = none
     uint8_t cell_finding = 0;  // joint estimator: CellAnalyzer::Finding of outlier_cell
     float cell_resistance_ohm[kMaxCells] = {};
+    bool cell_resistance_from_differences = false;  // false: the big steps' values (CellAnalyzer::Status)
     float cell_capacity_deficit[kMaxCells] = {};
     float cell_capacity_deficit_sigma[kMaxCells] = {};  // its standard error (the naming bar is in these)
     float pack_capacity_deficit = 0.0f;  // what the pack's capacity counts of its weakest cell (CellAnalyzer::Status)

@@ -274,6 +274,10 @@ LoadedConfig config_from_json(const json& j, const std::string& origin) {
         r.number("cell_tap_artifact_ratio", ca.tap_artifact_ratio, 0, 100);
         r.boolean("last_cell_includes_lead", ca.last_cell_includes_lead);
         r.boolean("first_cell_includes_lead", ca.first_cell_includes_lead);
+        // −1 (or any negative): not calibrated, the lead cell is not judged for resistance.
+        r.number("last_cell_lead_excess", ca.last_lead_excess, -1, 100);
+        r.number("first_cell_lead_excess", ca.first_lead_excess, -1, 100);
+        r.number("cell_lead_excess_sigma", ca.lead_excess_sigma, 0, 100);
         r.number("cell_step_min_a", ca.step.min_step_a, 0, kBig);
         r.number("cell_step_band_a", ca.step.steady_band_a, 0, kBig);
         r.number("cell_step_band_fraction", ca.step.steady_band_fraction, 0, 1);
@@ -458,6 +462,9 @@ json config_to_json(const LoadedConfig& c) {
             {"cell_tap_artifact_ratio", m.cell_analysis.tap_artifact_ratio},
             {"last_cell_includes_lead", m.cell_analysis.last_cell_includes_lead},
             {"first_cell_includes_lead", m.cell_analysis.first_cell_includes_lead},
+            {"last_cell_lead_excess", m.cell_analysis.last_lead_excess},
+            {"first_cell_lead_excess", m.cell_analysis.first_lead_excess},
+            {"cell_lead_excess_sigma", m.cell_analysis.lead_excess_sigma},
             {"cell_step_min_a", m.cell_analysis.step.min_step_a},
             {"cell_step_band_a", m.cell_analysis.step.steady_band_a},
             {"cell_step_band_fraction", m.cell_analysis.step.steady_band_fraction},

@@ -188,6 +188,9 @@ void visit_monitor_config(Config& c, F&& f) {
     f("cell_analysis.pack_deficit_sigmas", c.cell_analysis.pack_deficit_sigmas);
     f("cell_analysis.last_cell_includes_lead", c.cell_analysis.last_cell_includes_lead);
     f("cell_analysis.first_cell_includes_lead", c.cell_analysis.first_cell_includes_lead);
+    f("cell_analysis.last_lead_excess", c.cell_analysis.last_lead_excess);
+    f("cell_analysis.first_lead_excess", c.cell_analysis.first_lead_excess);
+    f("cell_analysis.lead_excess_sigma", c.cell_analysis.lead_excess_sigma);
     f("cell_analysis.step.min_step_a", c.cell_analysis.step.min_step_a);
     f("cell_analysis.step.steady_band_a", c.cell_analysis.step.steady_band_a);
     f("cell_analysis.step.steady_band_fraction", c.cell_analysis.step.steady_band_fraction);

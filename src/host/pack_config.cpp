@@ -293,14 +293,18 @@ json pack_config_json(const PackRating& r) {
     return j;
 }
 
-const char* const kBoardKeys[8] = {"/sensor/shunt_offset_ma",
-                                   "/sensor/shunt_scale_mv_per_10a",
-                                   "/sensor/max_current_a",
-                                   "/sensor/min_current_a",
-                                   "/battery/extensions/current_sensor",
-                                   "/joint/first_cell_includes_lead",
-                                   "/joint/last_cell_includes_lead",
-                                   "/telemetry"};
+// The lead calibration belongs to the monitor's wiring, not to the pack.
+const char* const kBoardKeys[11] = {"/sensor/shunt_offset_ma",
+                                    "/sensor/shunt_scale_mv_per_10a",
+                                    "/sensor/max_current_a",
+                                    "/sensor/min_current_a",
+                                    "/battery/extensions/current_sensor",
+                                    "/joint/first_cell_includes_lead",
+                                    "/joint/last_cell_includes_lead",
+                                    "/joint/first_cell_lead_excess",
+                                    "/joint/last_cell_lead_excess",
+                                    "/joint/cell_lead_excess_sigma",
+                                    "/telemetry"};
 
 std::vector<std::string> apply_board(json& config, const LoadedConfig& board) {
     // Effective values on both sides: a config that leaves a key out means its default.

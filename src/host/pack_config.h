@@ -41,7 +41,7 @@ nlohmann::json pack_config_json(const PackRating& rating);
 // (JSON pointers): the shunt calibration, the current sensor's range and correction, which
 // cells' readings carry a lead, and the MAVLink output. A fleet flies one board with many
 // packs; a config made for a new pack had carried the dissertation board's calibration.
-extern const char* const kBoardKeys[8];
+extern const char* const kBoardKeys[11];
 // Sets `config`'s board settings to `board`'s (a config written for the same monitor, e.g.
 // by `replay --config-out` after a charger check), as their effective values: a key `board`
 // leaves at its default is set to the default. Returns the keys that changed, dotted

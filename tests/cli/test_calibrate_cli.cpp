@@ -141,3 +141,82 @@ TEST_CASE("calibrate's config selects the joint estimator it tunes", "[cli]") {
     CHECK_THAT(r.err, Catch::Contains("the written config selects the joint estimator"));
     CHECK(nlohmann::json::parse(clitest::read_file(dir + "/c.json"))["estimator"] == "joint");
 }
+
+TEST_CASE("calibrate --cell-leads measures the dissertation logger's lead cells, and the calibrated check blames none",
+          "[cli][data]") {
+    // The logger reads cell 4 as INA226 bus − INA3221 channel 3: its short-lag resistance is
+    // 2.1–2.3 × the others' on new and aged packs alike (the charger measured it as the others).
+    const std::string data = std::string(BATTSIM_DATA_DIR) + "/predictive-bms/flights/";
+    std::string logs;
+    for (const char* f : {"29", "30", "32", "34"}) logs += " " + q(data + f + ".csv");
+    const std::string dir = clitest::temp_dir();
+    const std::string out = dir + "/leads.json";
+    const auto j = clitest::run_json("calibrate --cell-leads" + logs + " -c " + q(kConfig) + " -o " + q(out) + " --json");
+    CHECK(j["schema"] == "battsim.lead_calibration");
+    CHECK(j["source"] == "differences");
+    CHECK(j["flights_used"] == 4);
+    REQUIRE(j["flights"].size() == 4);
+    for (const auto& f : j["flights"]) {
+        CHECK(f["cell_resistance_source"] == "differences");
+        CHECK(f["last_cell_excess"].get<double>() > 1.0);
+    }
+    // Flight 30 by hand: 6.869 / median(2.956, 2.991, 2.770) − 1 = 6.869 / 2.956 − 1 = 1.324.
+    CHECK(j["flights"][1]["last_cell_excess"].get<double>() == Approx(6.869 / 2.956 - 1.0).margin(0.002));
+    CHECK(j["last_cell_lead_excess"].get<double>() == Approx(1.324).margin(0.002));
+    CHECK(j["first_cell_lead_excess"].get<double>() == Approx(0.078).margin(0.002));
+    CHECK(j["cell_lead_excess_sigma"].get<double>() == Approx(0.106).margin(0.002));
+    const auto cfg = nlohmann::json::parse(clitest::read_file(out));
+    CHECK(cfg["joint"]["last_cell_lead_excess"].get<double>() == Approx(j["last_cell_lead_excess"].get<double>()).epsilon(5e-4));
+    CHECK(cfg["estimator"] == "joint");
+    // The calibrated config blames no cell on the aged pack of flight 34; told the lead adds
+    // nothing, it blames cell 4 for the lead.
+    const auto calibrated = clitest::run_json("replay " + q(data + "34.csv") + " -c " + q(out) + " --summary -");
+    for (const auto& w : calibrated["warnings"]) CHECK(w["name"] != "cell_outlier");
+    auto naive = cfg;
+    naive["joint"]["last_cell_lead_excess"] = 0.0;
+    clitest::write_file(dir + "/naive.json", naive.dump());
+    const auto blamed = clitest::run_json("replay " + q(data + "34.csv") + " -c " + q(dir + "/naive.json") + " --summary -");
+    bool cell4 = false;
+    for (const auto& w : blamed["warnings"]) cell4 = cell4 || (w["name"] == "cell_outlier" && w["cell"] == 4);
+    CHECK(cell4);
+}
+
+TEST_CASE("calibrate --cell-leads on simulated healthy flights; the calibrated check names a weak last cell", "[cli]") {
+    // The lead-cell suite's INA3221 averages 105.6 ms: the taps lag the bus, and the last cell
+    // reads about 2.4 × the others on a healthy pack.
+    const std::string dir = clitest::temp_dir();
+    std::string logs;
+    for (const char* s : {"lcr-4s-racing-healthy-a", "lcr-4s-racing-healthy-b", "lcr-4s-hover-healthy"})
+        logs += " " + q(simulate(dir, std::string("scenarios-lead-cells/") + s));
+    const std::string out = dir + "/leads.json";
+    const auto r = run("calibrate --cell-leads" + logs + " -c " + q(kConfig) + " -o " + q(out) + " --json");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const auto j = nlohmann::json::parse(r.out);
+    CHECK(j["flights_used"] == 2);  // the hover is read by its steps alone, and left out (said)
+    CHECK_THAT(r.err, Catch::Contains("1 flight(s) read by the big steps alone"));
+    CHECK_THAT(r.err, Catch::Contains("fewer than three flights"));
+    CHECK(j["last_cell_lead_excess"].get<double>() == Approx(1.4).margin(0.15));
+    const std::string weak = simulate(dir, "scenarios-lead-cells/lcr-4s-racing-cell4-resistance-160");
+    const auto s = clitest::run_json("replay " + q(weak) + " -c " + q(out) + " --summary -");
+    bool named = false;
+    for (const auto& w : s["warnings"])
+        named = named || (w["name"] == "cell_outlier" && w["cell"] == 4 && w["finding"] == "high_resistance");
+    CHECK(named);
+}
+
+TEST_CASE("calibrate --cell-leads refuses the shape options and logs without cells", "[cli]") {
+    const std::string dir = clitest::temp_dir();
+    const std::string log = kSource + "/logs/example-4s.csv";
+    CHECK(run("calibrate --cell-leads " + q(log) + " -c " + q(kConfig) + " --shares 0.3").exit_code == 2);
+    CHECK(run("calibrate --cell-leads " + q(log) + " -c " + q(kConfig) + " --tolerance 0.1").exit_code == 2);
+    // A pack log without cell columns.
+    std::string s;
+    long t = 630;
+    for (int k = 0; k < 300; ++k, t += 100) s += std::to_string(t) + "," + (k < 100 ? "16.5,0.3" : "15.5,20.0") + "\n";
+    clitest::write_file(dir + "/pack.csv", "time_ms,voltage_v,current_a\n" + s);
+    const auto r = run("calibrate --cell-leads " + q(dir + "/pack.csv") + " -c " + q(kConfig) + " -o " + q(dir + "/c.json"));
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.err, Catch::Contains("no log has per-cell resistances to calibrate from"));
+    CHECK_FALSE(std::filesystem::exists(dir + "/c.json"));
+}

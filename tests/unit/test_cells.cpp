@@ -370,7 +370,10 @@ TEST_CASE("Cell check: a hover names a high-resistance cell from its take-off st
 namespace {
 // Racing throttle for the short-lag differences: a new current in 10–40 A every 0.2 s, 67 ms
 // samples through 1 mV taps with 4 mV of noise, steps off. Returns the final status.
-CellAnalyzer::Status race(const float resistance_factor[4], float seconds, CellAnalyzer::Config config = CellAnalyzer::Config{}) {
+// last_lead_ohm / first_lead_ohm: wiring read into cell 4 / cell 1 (their voltage sags by it
+// times the current, as across a main lead or a ground path).
+CellAnalyzer::Status race(const float resistance_factor[4], float seconds, CellAnalyzer::Config config = CellAnalyzer::Config{},
+                          float last_lead_ohm = 0.0f, float first_lead_ohm = 0.0f) {
     FourCells pack(resistance_factor);
     config.step.min_step_a = 0.0f;
     CellAnalyzer a;
@@ -383,7 +386,10 @@ CellAnalyzer::Status race(const float resistance_factor[4], float seconds, CellA
         ip += (i - ip) * dt / 5.0f;
         charge += i * dt / 3600.0f;
         float v[4];
-        for (int c = 0; c < 4; ++c) v[c] = std::round((pack.cell[c].step(i, dt) + 0.004f * rng.next()) / 0.001f) * 0.001f;
+        for (int c = 0; c < 4; ++c) {
+            const float lead_v = c == 3 ? i * last_lead_ohm : c == 0 ? i * first_lead_ohm : 0.0f;
+            v[c] = std::round((pack.cell[c].step(i, dt) - lead_v + 0.004f * rng.next()) / 0.001f) * 0.001f;
+        }
         a.update(static_cast<uint64_t>(n * dt * 1.0e6f), v, 4, i, ip, charge, pack.cell[0].soc, pack.pack_ocv);
     }
     return a.status();
@@ -435,4 +441,44 @@ TEST_CASE("Cell check: a first cell read against the monitor's ground is never n
         CHECK(hover(cell1_hover, 120.0f, lead).first == -1);
         CHECK(hover(cell2_hover, 120.0f, lead).first == 1);
     }
+}
+
+TEST_CASE("Cell check: a lead cell is judged for resistance once its lead's share is calibrated", "[cells][truth]") {
+    // Cell 4 read across 5.2 mΩ of lead, 1.3 × a cell's 4 mΩ R0: its short-lag resistance reads
+    // about (4 + 5.2) / 4 = 2.3 × the others' (the dissertation's logger: 2.1–2.3 ×).
+    const float healthy[4] = {1.0f, 1.0f, 1.0f, 1.0f};
+    const float weak4[4] = {1.0f, 1.0f, 1.0f, 1.6f};
+    const float slight4[4] = {1.0f, 1.0f, 1.0f, 1.1f};
+    const CellAnalyzer::Status h = race(healthy, 120.0f, CellAnalyzer::Config{}, 0.0052f);
+    REQUIRE(h.resistance_from_differences);
+    const float others = h.resistance_ohm[1];  // the median of cells 1–3
+    const float ratio = h.resistance_ohm[3] / others;
+    CHECK(ratio == Approx(2.3f).margin(0.1f));
+    CHECK(h.flagged_cell == -1);                                       // not calibrated: never judged
+    CHECK(race(weak4, 120.0f, CellAnalyzer::Config{}, 0.0052f).flagged_cell == -1);
+
+    CellAnalyzer::Config calibrated;
+    calibrated.last_lead_excess = ratio - 1.0f;  // what `battsim calibrate --cell-leads` measures on healthy packs
+    calibrated.lead_excess_sigma = 0.05f;
+    CHECK(race(healthy, 120.0f, calibrated, 0.0052f).flagged_cell == -1);
+    // (6.4 + 5.2) / 4 = 2.9 ×: less the 1.3 share, +60 % over the others, past 10 % + 3 × 5 %.
+    const CellAnalyzer::Status w = race(weak4, 120.0f, calibrated, 0.0052f);
+    CHECK(w.flagged_cell == 3);
+    CHECK(w.finding == CellAnalyzer::kHighResistance);
+    // +10 % less the share is at the bar, not 3 × the calibration's spread beyond it.
+    CHECK(race(slight4, 120.0f, calibrated, 0.0052f).flagged_cell == -1);
+    // A share of 0 (a lead taken for none) names the healthy lead cell: the lead read as the cell.
+    CellAnalyzer::Config none;
+    none.last_lead_excess = 0.0f;
+    CHECK(race(healthy, 120.0f, none, 0.0052f).flagged_cell == 3);
+
+    // Cell 1 across a 2 mΩ ground path: 1.5 × the others, judged less that share.
+    CellAnalyzer::Config first;
+    first.first_cell_includes_lead = true;
+    const float weak1[4] = {1.6f, 1.0f, 1.0f, 1.0f};
+    CHECK(race(weak1, 120.0f, first, 0.0f, 0.002f).flagged_cell == -1);  // not calibrated
+    first.first_lead_excess = 0.5f;
+    first.lead_excess_sigma = 0.05f;
+    CHECK(race(healthy, 120.0f, first, 0.0f, 0.002f).flagged_cell == -1);
+    CHECK(race(weak1, 120.0f, first, 0.0f, 0.002f).flagged_cell == 0);
 }

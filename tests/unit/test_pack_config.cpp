@@ -435,17 +435,19 @@ TEST_CASE("make-config --board: the board's settings, not the reference logger's
     board.monitor.shunt.scale_mv_per_10a = 3.75f;
     board.monitor.extensions.current_sensor.gain = 1.03f;
     board.monitor.cell_analysis.first_cell_includes_lead = false;  // a monitor with its own supply
+    board.monitor.cell_analysis.last_lead_excess = 1.25f;          // its lead calibrated
     board.telemetry.system_id = 3;
     board.monitor.sensor.max_pack_voltage_v = 99.0f;  // the pack's, not the board's: not taken
     const std::vector<std::string> changed = apply_board(made, board);
     CHECK(changed == std::vector<std::string>{"sensor.shunt_offset_ma", "sensor.shunt_scale_mv_per_10a",
                                               "battery.extensions.current_sensor", "joint.first_cell_includes_lead",
-                                              "telemetry"});
+                                              "joint.last_cell_lead_excess", "telemetry"});
     CHECK(made["sensor"]["shunt_offset_ma"] == 12.5);
     CHECK(made["sensor"]["shunt_scale_mv_per_10a"] == 3.75);
     CHECK(made["sensor"]["max_pack_voltage_v"] == 31.5);  // 5.25 V per cell on 6S, as made
     CHECK(made["battery"]["extensions"]["current_sensor"]["gain"] == 1.03);
     CHECK(made["joint"]["first_cell_includes_lead"] == false);
+    CHECK(made["joint"]["last_cell_lead_excess"] == 1.25);
     CHECK(made["telemetry"]["system_id"] == 3);
     CHECK(made["battery"]["capacity_ah"] == 5.0);
     const LoadedConfig read = config_from_json(made, "test");

@@ -22,7 +22,7 @@ void setup() {
     battsim::fw::radio_off();
     g_bus.begin();
     // Shunt calibration and cell count come from the same exported config as the monitor
-    // (the two fields as constants: the whole MonitorConfig is 928 B of stack).
+    // (the two fields as constants: the whole MonitorConfig is 940 B of stack).
     constexpr int kCells = battsim_generated::monitor_config().cells_in_series;
     constexpr battsim::core::ShuntCalibration kShunt = battsim_generated::monitor_config().shunt;
     battsim::fw::LoggerAppConfig config;

@@ -149,6 +149,7 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     if (++since_verdict_ < kVerdictEvery) return;
     since_verdict_ = 0;
     const bool r_ready = sxx_ >= config_.min_excitation_a2 && n_r_ >= config_.min_pairs;
+    status_.resistance_from_differences = r_ready;
     float sigma_r[kMaxCells] = {};
     if (!r_ready) {
         // Reported until the short-lag differences take over: the steps' (which carry the
@@ -168,20 +169,21 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     float worst = 0.0f;
     // A resistance verdict needs at least two other cells to take a median of: against a
     // single other cell, ordinary cell-to-cell spread reads as an outlier. A first cell read
-    // against the monitor's ground (first_cell_includes_lead) is never named for resistance,
-    // but stays among the others: its ground path can only raise their median, so it costs
-    // sensitivity, never a false alarm, and a 4S pack keeps two others per judged cell.
+    // against the monitor's ground (first_cell_includes_lead) is not named for resistance
+    // unless its lead is calibrated, but stays among the others: its ground path can only
+    // raise their median, so it costs sensitivity, never a false alarm, and a 4S pack keeps
+    // two others per judged cell.
     const int first_lead = config_.first_cell_includes_lead && lead_cell != 0 ? 0 : -1;
     const int compared = cells - 1 - (lead_cell >= 0 ? 1 : 0);
-    if (compared >= 2) step_verdict(cells, lead_cell, first_lead, compared, &worst);
-    if (r_ready && compared >= 2) {
+    step_verdict(cells, lead_cell, first_lead, compared, &worst);
+    if (r_ready) {
+        // The last cell has every other cell to compare with (a 3S pack's too); the others,
+        // all but it.
         for (int c = 0; c < cells; ++c) {
-            if (c == lead_cell || c == first_lead) continue;
-            const float med = median_excluding(status_.resistance_ohm, cells, c, lead_cell);
-            if (!(med > 0.0f)) continue;
-            const float excess = status_.resistance_ohm[c] / med - 1.0f;
-            const float margin_ohm = status_.resistance_ohm[c] - config_.resistance_ratio * med;
-            if (margin_ohm > config_.significance_sigmas * sigma_r[c] && excess > worst) {
+            float excess = 0.0f;
+            if ((c == lead_cell || compared >= 2) &&
+                over_resistance_bar(status_.resistance_ohm, cells, c, lead_cell, first_lead, sigma_r[c] * sigma_r[c], 0.0f, &excess) &&
+                excess > worst) {
                 worst = excess;
                 status_.flagged_cell = static_cast<int8_t>(c);
                 status_.finding = kHighResistance;
@@ -269,6 +271,24 @@ void CellAnalyzer::update(uint64_t time_us, const float* cell_v, int cells, floa
     if (status_.finding == kLowCapacity) status_.pack_capacity_deficit = worst;
 }
 
+bool CellAnalyzer::over_resistance_bar(const float* resistance_ohm, int cells, int c, int lead_cell, int first_lead,
+                                       float own_var, float median_var, float* excess) const {
+    // A lead cell is judged once its lead's share is calibrated: less that share, with the
+    // calibration's spread beside the standard errors. The steps are read with the short-lag
+    // fit's share, which under-reads a lead cell where the taps lag the bus (the steps see
+    // settled voltages): it costs sensitivity, never a false alarm.
+    const bool on_lead = c == lead_cell || c == first_lead;
+    const float lead = c == lead_cell ? config_.last_lead_excess : c == first_lead ? config_.first_lead_excess : 0.0f;
+    if (lead < 0.0f) return false;
+    const float med = median_excluding(resistance_ohm, cells, c, lead_cell);
+    if (!(med > 0.0f)) return false;
+    const float bar = config_.resistance_ratio + lead;
+    const float lead_sigma_ohm = on_lead ? config_.lead_excess_sigma * med : 0.0f;
+    const float sigma = sqrtf(own_var + lead_sigma_ohm * lead_sigma_ohm + bar * bar * median_var);
+    *excess = resistance_ohm[c] / med - 1.0f - lead;
+    return resistance_ohm[c] - bar * med > config_.significance_sigmas * sigma;
+}
+
 void CellAnalyzer::step_verdict(int cells, int lead_cell, int first_lead, int others, float* worst) {
     const CellStepResistance::Status& st = steps_.status();
     if (st.steps == 0) return;
@@ -278,17 +298,15 @@ void CellAnalyzer::step_verdict(int cells, int lead_cell, int first_lead, int ot
         step_cell_ = -1;
         step_excess_ = 0.0f;
         for (int c = 0; c < cells; ++c) {
-            if (c == lead_cell || c == first_lead) continue;
-            const float med = median_excluding(st.resistance_ohm, cells, c, lead_cell);
-            if (!(med > 0.0f)) continue;
+            if (c != lead_cell && others < 2) continue;
             float others_var = 0.0f;  // the median's variance, taken as the noisiest other's over their count
             for (int k = 0; k < cells; ++k)
                 if (k != c && k != lead_cell) others_var = maxf(others_var, st.sigma_ohm[k] * st.sigma_ohm[k]);
-            const float ratio = config_.resistance_ratio;
-            const float sigma =
-                sqrtf(st.sigma_ohm[c] * st.sigma_ohm[c] + ratio * ratio * others_var / static_cast<float>(others));
-            const float excess = st.resistance_ohm[c] / med - 1.0f;
-            if (st.resistance_ohm[c] - ratio * med > config_.significance_sigmas * sigma && excess > step_excess_) {
+            const float median_var = others_var / static_cast<float>(c == lead_cell ? others + 1 : others);
+            float excess = 0.0f;
+            if (over_resistance_bar(st.resistance_ohm, cells, c, lead_cell, first_lead, st.sigma_ohm[c] * st.sigma_ohm[c],
+                                    median_var, &excess) &&
+                excess > step_excess_) {
                 step_excess_ = excess;
                 step_cell_ = static_cast<int8_t>(c);
             }

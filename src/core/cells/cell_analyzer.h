@@ -19,7 +19,8 @@
 // resistance, but it is judged for capacity against them, always at the higher bar
 // (capacity_significance_sigmas): the lead is ohmic, which the current regressors take,
 // and the mismatch widens its own standard error. With
-// `first_cell_includes_lead` the first cell is never named for resistance (see Config).
+// `first_cell_includes_lead` the first cell is never named for resistance (see Config),
+// unless the lead's share is calibrated (`last_lead_excess`, `first_lead_excess`).
 #pragma once
 #include <stdint.h>
 
@@ -92,6 +93,17 @@ public:
         // capacity drift is unaffected (the current regressors absorb an ohmic path) and
         // still judged.
         bool first_cell_includes_lead = false;
+        // What the wiring adds to a lead cell's short-lag resistance, as a fraction of the
+        // others' median (`battsim calibrate --cell-leads`, from flights of healthy packs on
+        // the same monitor): with it known (≥ 0) the lead cell is judged for resistance too,
+        // less this, by the usual bar widened by `lead_excess_sigma` (the calibration's
+        // flight-to-flight spread, as the same fraction). < 0: not known, never judged. On
+        // the dissertation's logger the last cell reads 2.1–2.3 × the others on new and aged
+        // packs alike (the charger measured it as the others): a calibrated last cell 60 %
+        // worse reads about 1.6 × that, and nothing short of a calibration tells them apart.
+        float last_lead_excess = -1.0f;
+        float first_lead_excess = -1.0f;
+        float lead_excess_sigma = 0.1f;
         // The resistance verdict also rests on the big steps, beside the short-lag
         // differences (and alone in a hover, which never readies those).
         CellStepResistance::Config step;
@@ -100,6 +112,7 @@ public:
     struct Status {
         uint8_t cell_count = 0;
         float resistance_ohm[kMaxCells] = {};
+        bool resistance_from_differences = false;  // false: resistance_ohm is the steps' (or none)
         float capacity_deficit[kMaxCells] = {};  // fraction below the others (+ = weaker)
         float capacity_deficit_sigma[kMaxCells] = {};
         int8_t flagged_cell = -1;                // 0-based, −1 = none
@@ -128,6 +141,11 @@ public:
 private:
     // others: the compared cells besides the judged one.
     void step_verdict(int cells, int lead_cell, int first_lead, int others, float* worst);
+    // Cell c's resistance against the others' median, less a calibrated lead's share: true when
+    // over the bar by significance_sigmas (own_var: its variance; median_var: the median's);
+    // *excess: how far over the median, less the share.
+    bool over_resistance_bar(const float* resistance_ohm, int cells, int c, int lead_cell, int first_lead, float own_var,
+                             float median_var, float* excess) const;
 
     static constexpr int kHistory = 8;
     CellStepResistance steps_;

@@ -345,6 +345,9 @@ json SummaryAccumulator::to_json(int cells, bool cell_scores) const {
                 ds.push_back(sigma > 0.0f ? json(round_sig(sigma, 3)) : json(nullptr));
             }
             flight["cell_resistance_ohm"] = r;
+            // The short-lag fit's values, or until it is ready the big steps' (which carry
+            // the first half second's polarisation too): a lead calibration reads the former.
+            flight["cell_resistance_source"] = last_flying_.cell_resistance_from_differences ? "differences" : "steps";
             flight["cell_capacity_deficit"] = d;
             flight["cell_capacity_deficit_sigma"] = ds;
             flight["pack_capacity_deficit"] = {{"final", round_sig(last_flying_.pack_capacity_deficit, 3)},
