@@ -42,10 +42,10 @@ void print_table(const host::ShapeCalibration& c, std::ostream& os) {
 }
 
 void print_leads(const host::LeadCalibration& c, std::ostream& os) {
-    os << "battsim calibrate --cell-leads: " << c.flights.size() << " flight(s); each lead cell's resistance over the "
-       << "others' median, less one\n";
+    os << "battsim calibrate --cell-leads: " << c.flights.size() << " flight(s); each lead cell's short-lag resistance "
+       << "over the others' median, less one (1.3: the wiring reads 130 % of a cell on top of the cell)\n";
     for (const host::LeadCalibrationFlight& f : c.flights) {
-        os << "  " << f.log << " (" << f.source << "):";
+        os << "  " << f.log << " (" << f.source << (f.used ? "" : ", left out") << "):";
         for (double r : f.cell_resistance_ohm) os << " " << std::fixed << std::setprecision(2) << 1000.0 * r;
         os << " mOhm";
         if (f.has_first) os << "; cell 1 " << std::showpos << std::setprecision(3) << f.first_excess << std::noshowpos;
@@ -56,7 +56,7 @@ void print_leads(const host::LeadCalibration& c, std::ostream& os) {
         if (excess < 0.0) return;
         os << "  joint." << key << " " << std::setprecision(3) << excess << " (spread " << spread << ")\n";
     };
-    os << "  pooled: " << c.flights_used << " flight(s) read by the " << c.source << "\n";
+    os << "  pooled: " << c.flights_used << " flight(s) read by the short-lag fit\n";
     line("first_cell_lead_excess", c.first_excess, c.first_spread);
     line("last_cell_lead_excess", c.last_excess, c.last_spread);
     if (c.first_excess >= 0.0 || c.last_excess >= 0.0)
@@ -71,16 +71,33 @@ int run_cell_leads(const CalibrateArgs& a, host::ReplayOptions& opt, const std::
     if (int rc = run_job(command, [&] { c = host::calibrate_cell_leads(a.logs, opt); })) return rc;
     for (const std::string& note : c.notes) std::cerr << command << ": note: " << note << "\n";
     if (c.flights.empty()) {
-        std::cerr << command << ": no log has per-cell resistances to calibrate from (" << a.logs.size()
-                  << " given; they need a flight with three or more cell columns)\n";
+        std::cerr << command << ": no log gave per-cell resistances to calibrate from (" << a.logs.size()
+                  << " given; each needs three or more cell columns, as many as the config's cells, and a flight the "
+                  << "cell check measured)\n";
+        return kExitFailure;
+    }
+    if (c.steps_only) {
+        if (!a.json) print_leads(c, std::cerr);
+        std::cerr << command << ": every flight was read by the big current steps alone (a hover's throttle never "
+                  << "readies the short-lag fit), which see less of the wiring than the short-lag fit the check judges "
+                  << "by: a share from them would blame healthy cells. Calibrate on flights with throttle changes "
+                  << "(racing, aggressive climbs)\n";
         return kExitFailure;
     }
     if (!a.output.empty()) {
         host::LoadedConfig out = opt.config;
         host::apply_lead_calibration(c, out);
         select_joint_estimator(out, command);
-        out.description += (out.description.empty() ? "" : "; ") + std::string("lead cells calibrated on ") +
-                           std::to_string(c.flights.size()) + " flight(s) by battsim calibrate --cell-leads";
+        // Calibrated again: the last calibration's words replaced, not appended to.
+        static const std::string kSaid = "lead cells calibrated on ";
+        const size_t said = out.description.find(kSaid);
+        if (said != std::string::npos) {
+            const size_t end = out.description.find("--cell-leads", said);
+            const size_t from = said >= 2 && out.description.compare(said - 2, 2, "; ") == 0 ? said - 2 : said;
+            out.description.erase(from, end == std::string::npos ? std::string::npos : end + 12 - from);
+        }
+        out.description += (out.description.empty() ? "" : "; ") + kSaid + std::to_string(c.flights_used) +
+                           " flight(s) by battsim calibrate --cell-leads";
         if (int rc = run_job(command, [&] { host::write_file_atomic(a.output, host::json_text(host::config_to_json(out), 2) + "\n"); }))
             return rc;
     }
@@ -115,7 +132,8 @@ std::function<int()> setup(CLI::App& sub) {
     add_input_options(sub, a->input);
     return [a]() -> int {
         if (a->input.estimator == "reference") {
-            std::cerr << "battsim calibrate: --estimator: the calibration is of the joint estimator's health filter\n";
+            std::cerr << "battsim calibrate: --estimator: the calibration is of the joint estimator's "
+                      << (a->cell_leads ? "cell check" : "health filter") << "\n";
             return kExitUsage;
         }
         const char* const command = "battsim calibrate";
@@ -142,7 +160,16 @@ std::function<int()> setup(CLI::App& sub) {
                 for (const std::string& log : a->logs) host::open_reader(log, opt.reader);
             }))
             return rc;
-        if (a->cell_leads) return run_cell_leads(*a, opt, outputs);
+        if (a->cell_leads) {
+            const core::CellAnalyzer::Config& ca = opt.config.monitor.cell_analysis;
+            if (!ca.first_cell_includes_lead && !ca.last_cell_includes_lead) {
+                std::cerr << command << " --cell-leads: the config reads no cell across a lead "
+                          << "(joint.first_cell_includes_lead and last_cell_includes_lead are false): every cell is "
+                          << "judged as it is, and there is nothing to calibrate\n";
+                return kExitFailure;
+            }
+            return run_cell_leads(*a, opt, outputs);
+        }
         // Without a table the joint estimator's capacity is off by far more than any
         // polarisation shape moves it: the best share would be a fit to that error (on flight
         // 30 with the built-in config: 76 % off the rests' capacity at the edge of the shares).

@@ -111,7 +111,16 @@ int run(const MakeConfigArgs& a) {
     if (!a.board.empty()) {
         // Read before anything is written: a bad board config exits 4 with its position.
         const host::LoadedConfig board = host::load_config_file(a.board);
-        const std::vector<std::string> changed = host::apply_board(j, board);
+        std::vector<std::string> left;
+        const std::vector<std::string> changed = host::apply_board(j, board, &left);
+        if (!left.empty()) {
+            std::string list;
+            for (const std::string& key : left) list += (list.empty() ? "" : ", ") + key;
+            std::cerr << me << ": note: not taken from " << a.board << ": " << list << " (measured on "
+                      << board.monitor.cells_in_series << "-cell packs; the share depends on the cell count: "
+                      << "calibrate this monitor on " << j["battery"]["cells_in_series"].get<int>()
+                      << "-cell packs, battsim calibrate --cell-leads)\n";
+        }
         if (changed.empty()) {
             std::cerr << me << ": note: " << a.board << " has the reference logger's board settings; nothing to take\n";
         } else {

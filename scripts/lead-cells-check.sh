@@ -7,7 +7,9 @@
 # simulated INA3221 averages 105.6 ms as the logger's appears to; three seeds of their own,
 # seed + 1,001,000 … 1,003,000, none a scored flight), and scores that suite.
 # With --write, the real flights' calibration is written into sim-4s.json and its 1300/1800 mAh
-# siblings (the same monitor; only the three keys change).
+# siblings (the same logger; only the three keys change). The reference-*.json configs stay the
+# dissertation's own settings (reference-modified.json is the built-in config, which make-config
+# scales to packs of any cell count), without it.
 #
 #   sh scripts/lead-cells-check.sh [--write]
 set -eu

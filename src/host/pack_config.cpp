@@ -306,13 +306,26 @@ const char* const kBoardKeys[11] = {"/sensor/shunt_offset_ma",
                                     "/joint/cell_lead_excess_sigma",
                                     "/telemetry"};
 
-std::vector<std::string> apply_board(json& config, const LoadedConfig& board) {
+std::vector<std::string> apply_board(json& config, const LoadedConfig& board, std::vector<std::string>* left) {
     // Effective values on both sides: a config that leaves a key out means its default.
     const json from = config_to_json(board);
     const json was = config_to_json(config_from_json(config, "make-config"));
+    // A lead cell's share is measured at one cell count: where the taps lag the bus it grows
+    // with the cells below the last (a 4S calibration of 1.32 on a 6S pack whose share was
+    // 2.11 named healthy last cells), so it is not carried to another.
+    const bool other_cells = from.value(json::json_pointer("/battery/cells_in_series"), 0) !=
+                             was.value(json::json_pointer("/battery/cells_in_series"), 0);
     std::vector<std::string> changed;
     for (const char* key : kBoardKeys) {
         const json::json_pointer at(key);
+        std::string dotted = std::string(key).substr(1);
+        std::replace(dotted.begin(), dotted.end(), '/', '.');
+        if (other_cells && dotted.find("_lead_excess") != std::string::npos) {
+            const bool share = dotted.find("sigma") == std::string::npos;
+            if (share && left && from.contains(at) && from.at(at).is_number() && from.at(at).get<double>() >= 0.0)
+                left->push_back(dotted);
+            continue;
+        }
         const bool has = from.contains(at);
         if (has == was.contains(at) && (!has || from.at(at) == was.at(at))) continue;
         if (has) {
@@ -320,8 +333,6 @@ std::vector<std::string> apply_board(json& config, const LoadedConfig& board) {
         } else if (config.contains(at)) {  // an optional section the board's config goes without
             config[at.parent_pointer()].erase(at.back());
         }
-        std::string dotted = std::string(key).substr(1);
-        std::replace(dotted.begin(), dotted.end(), '/', '.');
         changed.push_back(dotted);
     }
     config_from_json(config, "make-config");  // still a valid config; throws ConfigError

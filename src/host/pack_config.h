@@ -45,9 +45,11 @@ extern const char* const kBoardKeys[11];
 // Sets `config`'s board settings to `board`'s (a config written for the same monitor, e.g.
 // by `replay --config-out` after a charger check), as their effective values: a key `board`
 // leaves at its default is set to the default. Returns the keys that changed, dotted
-// ("sensor.shunt_offset_ma"), in kBoardKeys' order. Throws ConfigError if the result is no
-// valid config.
-std::vector<std::string> apply_board(nlohmann::json& config, const LoadedConfig& board);
+// ("sensor.shunt_offset_ma"), in kBoardKeys' order. A lead cell's calibrated share is not
+// taken to a pack of another cell count (it depends on it): those keys go to `left`, if given.
+// Throws ConfigError if the result is no valid config.
+std::vector<std::string> apply_board(nlohmann::json& config, const LoadedConfig& board,
+                                     std::vector<std::string>* left = nullptr);
 
 // A note when a given pack resistance looks like one cell's (a charger shows each cell's
 // internal resistance, and --resistance-mohm is the whole pack's); empty otherwise.

@@ -153,11 +153,11 @@ TEST_CASE("calibrate --cell-leads measures the dissertation logger's lead cells,
     const std::string out = dir + "/leads.json";
     const auto j = clitest::run_json("calibrate --cell-leads" + logs + " -c " + q(kConfig) + " -o " + q(out) + " --json");
     CHECK(j["schema"] == "battsim.lead_calibration");
-    CHECK(j["source"] == "differences");
     CHECK(j["flights_used"] == 4);
     REQUIRE(j["flights"].size() == 4);
     for (const auto& f : j["flights"]) {
         CHECK(f["cell_resistance_source"] == "differences");
+        CHECK(f["used"] == true);
         CHECK(f["last_cell_excess"].get<double>() > 1.0);
     }
     // Flight 30 by hand: 6.869 / median(2.956, 2.991, 2.770) − 1 = 6.869 / 2.956 − 1 = 1.324.
@@ -179,6 +179,19 @@ TEST_CASE("calibrate --cell-leads measures the dissertation logger's lead cells,
     bool cell4 = false;
     for (const auto& w : blamed["warnings"]) cell4 = cell4 || (w["name"] == "cell_outlier" && w["cell"] == 4);
     CHECK(cell4);
+    // Calibrated again into its own output: the description says it once.
+    const auto again = run("calibrate --cell-leads" + logs + " -c " + q(out) + " -o " + q(out));
+    REQUIRE(again.exit_code == 0);
+    const std::string description = nlohmann::json::parse(clitest::read_file(out))["description"];
+    CHECK(description.find("lead cells calibrated on") == description.rfind("lead cells calibrated on"));
+    // A byte copy under another name is one flight, not two (it had halved the spread).
+    const std::string copy = dir + "/30-copy.csv";
+    clitest::write_file(copy, clitest::read_file(data + "30.csv"));
+    const auto twice = run("calibrate --cell-leads " + q(data + "30.csv") + " " + q(data + "32.csv") + " " + q(copy) + " -c " +
+                           q(kConfig) + " --json");
+    REQUIRE(twice.exit_code == 0);
+    CHECK(nlohmann::json::parse(twice.out)["flights_used"] == 2);
+    CHECK_THAT(twice.err, Catch::Contains("30-copy.csv: the same per-cell resistances as a flight before it"));
 }
 
 TEST_CASE("calibrate --cell-leads on simulated healthy flights; the calibrated check names a weak last cell", "[cli]") {
@@ -205,9 +218,29 @@ TEST_CASE("calibrate --cell-leads on simulated healthy flights; the calibrated c
     CHECK(named);
 }
 
-TEST_CASE("calibrate --cell-leads refuses the shape options and logs without cells", "[cli]") {
+TEST_CASE("calibrate --cell-leads refuses hovers alone, a config without leads, the shape options, logs without cells",
+          "[cli]") {
     const std::string dir = clitest::temp_dir();
     const std::string log = kSource + "/logs/example-4s.csv";
+    // A hover's steps see less of the slow taps than the short-lag fit: a share from them
+    // (0.2 against 1.4) named the last cell on every healthy racing flight.
+    const std::string hover = simulate(dir, "scenarios-lead-cells/lcr-4s-hover-healthy");
+    auto h = run("calibrate --cell-leads " + q(hover) + " -c " + q(kConfig) + " -o " + q(dir + "/h.json"));
+    CHECK(h.exit_code == 1);
+    CHECK_THAT(h.err, Catch::Contains("every flight was read by the big current steps alone"));
+    CHECK_FALSE(std::filesystem::exists(dir + "/h.json"));
+    // Nothing read across a lead: nothing to calibrate, nothing written.
+    auto plain = nlohmann::json::parse(clitest::read_file(kConfig));
+    plain["joint"]["first_cell_includes_lead"] = false;
+    plain["joint"]["last_cell_includes_lead"] = false;
+    clitest::write_file(dir + "/plain.json", plain.dump());
+    h = run("calibrate --cell-leads " + q(log) + " -c " + q(dir + "/plain.json") + " -o " + q(dir + "/p.json"));
+    CHECK(h.exit_code == 1);
+    CHECK_THAT(h.err, Catch::Contains("nothing to calibrate"));
+    CHECK_FALSE(std::filesystem::exists(dir + "/p.json"));
+    h = run("calibrate --cell-leads " + q(log) + " -c " + q(kConfig) + " --estimator reference");
+    CHECK(h.exit_code == 2);
+    CHECK_THAT(h.err, Catch::Contains("the joint estimator's cell check"));
     CHECK(run("calibrate --cell-leads " + q(log) + " -c " + q(kConfig) + " --shares 0.3").exit_code == 2);
     CHECK(run("calibrate --cell-leads " + q(log) + " -c " + q(kConfig) + " --tolerance 0.1").exit_code == 2);
     // A pack log without cell columns.
@@ -217,6 +250,6 @@ TEST_CASE("calibrate --cell-leads refuses the shape options and logs without cel
     clitest::write_file(dir + "/pack.csv", "time_ms,voltage_v,current_a\n" + s);
     const auto r = run("calibrate --cell-leads " + q(dir + "/pack.csv") + " -c " + q(kConfig) + " -o " + q(dir + "/c.json"));
     CHECK(r.exit_code == 1);
-    CHECK_THAT(r.err, Catch::Contains("no log has per-cell resistances to calibrate from"));
+    CHECK_THAT(r.err, Catch::Contains("no log gave per-cell resistances to calibrate from"));
     CHECK_FALSE(std::filesystem::exists(dir + "/c.json"));
 }

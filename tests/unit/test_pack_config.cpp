@@ -1,5 +1,6 @@
 // make-config's library: a config scaled from the reference pack, what a log's autopilot
 // parameters say about its pack, and the notes replay gives when a config does not match.
+#include <algorithm>
 #include <catch2/catch.hpp>
 
 #include "host/config_json.h"
@@ -435,19 +436,22 @@ TEST_CASE("make-config --board: the board's settings, not the reference logger's
     board.monitor.shunt.scale_mv_per_10a = 3.75f;
     board.monitor.extensions.current_sensor.gain = 1.03f;
     board.monitor.cell_analysis.first_cell_includes_lead = false;  // a monitor with its own supply
-    board.monitor.cell_analysis.last_lead_excess = 1.25f;          // its lead calibrated
+    board.monitor.cell_analysis.last_lead_excess = 1.25f;          // its lead calibrated, on 4S packs
     board.telemetry.system_id = 3;
     board.monitor.sensor.max_pack_voltage_v = 99.0f;  // the pack's, not the board's: not taken
-    const std::vector<std::string> changed = apply_board(made, board);
+    std::vector<std::string> left;
+    const std::vector<std::string> changed = apply_board(made, board, &left);
     CHECK(changed == std::vector<std::string>{"sensor.shunt_offset_ma", "sensor.shunt_scale_mv_per_10a",
                                               "battery.extensions.current_sensor", "joint.first_cell_includes_lead",
-                                              "joint.last_cell_lead_excess", "telemetry"});
+                                              "telemetry"});
+    // A lead's share depends on the cell count: a 4S board's is not taken to this 6S pack.
+    CHECK(left == std::vector<std::string>{"joint.last_cell_lead_excess"});
+    CHECK_FALSE(made["joint"].contains("last_cell_lead_excess"));
     CHECK(made["sensor"]["shunt_offset_ma"] == 12.5);
     CHECK(made["sensor"]["shunt_scale_mv_per_10a"] == 3.75);
     CHECK(made["sensor"]["max_pack_voltage_v"] == 31.5);  // 5.25 V per cell on 6S, as made
     CHECK(made["battery"]["extensions"]["current_sensor"]["gain"] == 1.03);
     CHECK(made["joint"]["first_cell_includes_lead"] == false);
-    CHECK(made["joint"]["last_cell_lead_excess"] == 1.25);
     CHECK(made["telemetry"]["system_id"] == 3);
     CHECK(made["battery"]["capacity_ah"] == 5.0);
     const LoadedConfig read = config_from_json(made, "test");
@@ -461,4 +465,13 @@ TEST_CASE("make-config --board: the board's settings, not the reference logger's
     CHECK_FALSE(made["battery"]["extensions"].contains("current_sensor"));
     CHECK_FALSE(made.contains("telemetry"));
     CHECK(made["joint"]["first_cell_includes_lead"] == true);
+
+    // On a pack of the board's own cell count the share is taken.
+    PackRating r4;
+    r4.cells = 4;
+    r4.capacity_ah = 1.5;
+    json made4 = pack_config_json(r4);
+    const std::vector<std::string> changed4 = apply_board(made4, board);
+    CHECK(std::find(changed4.begin(), changed4.end(), "joint.last_cell_lead_excess") != changed4.end());
+    CHECK(made4["joint"]["last_cell_lead_excess"] == 1.25);
 }

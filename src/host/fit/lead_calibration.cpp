@@ -40,11 +40,8 @@ LeadCalibration calibrate_cell_leads(const std::vector<std::string>& logs, const
     const core::CellAnalyzer::Config& ca = opt.config.monitor.cell_analysis;
     out.first_lead = ca.first_cell_includes_lead;
     out.last_lead = ca.last_cell_includes_lead;
-    // Per source: the short-lag fit's values and the big steps' differ where the taps convert
-    // slower than the bus (the steps, between steady windows, see the settled voltages; the
-    // short-lag pairs see the taps lag: on the lead-cell suite's healthy hovers the last cell
-    // reads +0.1…+0.4 by the steps, on its racing flights +1.3…+1.6 by the differences).
-    std::vector<double> first[2], last[2];
+    std::vector<double> first, last;  // the flights pooled: read by the short-lag fit
+    bool three_cell_said = false;
     for (const std::string& log : logs) {
         const nlohmann::json summary = replay_log(log, opt);
         for (const std::string& note : log_notes(summary)) out.notes.push_back(log + ": " + note);
@@ -72,6 +69,19 @@ LeadCalibration calibrate_cell_leads(const std::vector<std::string>& logs, const
             out.logs_without_cells.push_back(log);
             continue;
         }
+        // A log for another cell count than the config's was read against the wrong pack.
+        if (static_cast<int>(f.cell_resistance_ohm.size()) != opt.config.monitor.cells_in_series) {
+            out.notes.push_back(log + ": " + std::to_string(f.cell_resistance_ohm.size()) + " cells, the config's " +
+                                std::to_string(opt.config.monitor.cells_in_series) + ": left out");
+            continue;
+        }
+        // A flight given twice (a byte copy under another name) would halve the spread.
+        bool twice = false;
+        for (const LeadCalibrationFlight& g : out.flights) twice = twice || g.cell_resistance_ohm == f.cell_resistance_ohm;
+        if (twice) {
+            out.notes.push_back(log + ": the same per-cell resistances as a flight before it (a copy?): left out");
+            continue;
+        }
         const std::vector<double>& cr = f.cell_resistance_ohm;
         const size_t n = cr.size();
         // As the cell check compares: the last cell with every other cell, cell 1 with the
@@ -80,35 +90,43 @@ LeadCalibration calibrate_cell_leads(const std::vector<std::string>& logs, const
         const size_t inner_end = out.last_lead ? n - 1 : n;
         f.has_first = out.first_lead && inner_end >= 3;
         if (f.has_first) f.first_excess = cr[0] / median_of(std::vector<double>(cr.begin() + 1, cr.begin() + inner_end)) - 1.0;
-        const int src = f.source == "differences" ? 0 : 1;
-        if (out.last_lead) last[src].push_back(f.last_excess);
-        if (f.has_first) first[src].push_back(f.first_excess);
+        if (out.first_lead && !f.has_first && !three_cell_said) {
+            out.notes.push_back("cell 1 has a single cell between the leads to be compared with: its share is not "
+                                "calibrated, and it is not judged for resistance");
+            three_cell_said = true;
+        }
         out.flights.push_back(f);
     }
-    // The cell check judges by the short-lag fit once it is ready (a racing flight's first
-    // minute): its flights decide, the steps' only where no flight readied it.
-    const int use = last[0].empty() && first[0].empty() ? 1 : 0;
-    out.source = use == 0 ? "differences" : "steps";
-    const size_t left_out = last[1 - use].size() + (last[1 - use].empty() ? first[1 - use].size() : 0);
-    if (left_out > 0 && use == 0)
+    // The short-lag fit's values and the big steps' differ where the taps convert slower than
+    // the bus: the steps, between steady windows, see settled voltages, the short-lag pairs the
+    // taps' lag (the lead-cell suite's healthy last cell: +0.1…+0.4 by a hover's steps, +1.3…+1.6
+    // by racing differences). A share read off the steps would be taken off the short-lag
+    // values too: hovers alone calibrated at 0.21, and the check then named the last cell on
+    // every healthy racing flight. So only the short-lag fit's flights are pooled, and with
+    // none the calibration fails (`steps_only`).
+    size_t left_out = 0;
+    for (LeadCalibrationFlight& f : out.flights) {
+        f.used = f.source == "differences";
+        left_out += f.used ? 0 : 1;
+        if (!f.used) continue;
+        if (out.last_lead) last.push_back(f.last_excess);
+        if (f.has_first) first.push_back(f.first_excess);
+    }
+    out.steps_only = !out.flights.empty() && left_out == out.flights.size();
+    if (left_out > 0 && !out.steps_only)
         out.notes.push_back(std::to_string(left_out) + " flight(s) read by the big steps alone (too little excitation for "
                             "the short-lag fit, as in a hover) left out: the cell check judges by the short-lag fit");
-    const std::vector<double>& last_used = last[use];
-    const std::vector<double>& first_used = first[use];
-    if (!last_used.empty()) pool(last_used, out.last_excess, out.last_spread);
-    if (!first_used.empty()) pool(first_used, out.first_excess, out.first_spread);
+    if (!last.empty()) pool(last, out.last_excess, out.last_spread);
+    if (!first.empty()) pool(first, out.first_excess, out.first_spread);
     // A share cannot be negative (wiring adds resistance); a median below zero is the cells'
     // own spread, and zero is what is taken off.
-    out.last_excess = out.last_lead && !last_used.empty() ? std::max(0.0, out.last_excess) : -1.0;
-    out.first_excess = out.first_lead && !first_used.empty() ? std::max(0.0, out.first_excess) : -1.0;
+    out.last_excess = out.last_lead && !last.empty() ? std::max(0.0, out.last_excess) : -1.0;
+    out.first_excess = out.first_lead && !first.empty() ? std::max(0.0, out.first_excess) : -1.0;
     out.sigma = std::max({LeadCalibration::kMinSigma, out.last_spread, out.first_spread});
-    out.flights_used = std::max(last_used.size(), first_used.size());
+    out.flights_used = std::max(last.size(), first.size());
     if (out.flights_used > 0 && out.flights_used < 3)
-        out.notes.push_back("fewer than three flights: their spread is no measure, and 0.1 of the others' median "
-                            "stands in for it; more flights, of several packs, give a tighter bar");
-    if (!out.first_lead && !out.last_lead)
-        out.notes.push_back("the config reads no cell across a lead (joint.first_cell_includes_lead and "
-                            "last_cell_includes_lead are false): every cell is judged as it is, nothing to calibrate");
+        out.notes.push_back("fewer than three flights: their spread is no measure, and at least 0.1 of the others' "
+                            "median stands in for it; more flights, of several packs, give a tighter bar");
     return out;
 }
 
@@ -127,6 +145,7 @@ nlohmann::json to_json(const LeadCalibration& c) {
         for (double v : f.cell_resistance_ohm) r.push_back(round_sig(v, 4));
         flights.push_back({{"log", f.log},
                            {"cell_resistance_source", f.source},
+                           {"used", f.used},
                            {"cell_resistance_ohm", r},
                            {"first_cell_excess", f.has_first ? json(round_sig(f.first_excess, 4)) : json(nullptr)},
                            {"last_cell_excess", c.last_lead ? json(round_sig(f.last_excess, 4)) : json(nullptr)}});
@@ -138,7 +157,6 @@ nlohmann::json to_json(const LeadCalibration& c) {
             {"first_cell_includes_lead", c.first_lead},
             {"last_cell_includes_lead", c.last_lead},
             {"flights", flights},
-            {"source", c.source},
             {"flights_used", c.flights_used},
             {"logs_without_cells", c.logs_without_cells},
             {"first_cell_lead_excess", value(c.first_excess)},

@@ -27,6 +27,7 @@ struct LeadCalibrationFlight {
     double first_excess = 0.0;              // cell 1 over the median of the cells between the leads, − 1
     double last_excess = 0.0;               // the last cell over the median of all the others, − 1
     bool has_first = false;                 // cell 1 is a lead cell and has two cells to compare with
+    bool used = false;                      // pooled: read by the short-lag fit
 };
 
 struct LeadCalibration {
@@ -34,15 +35,17 @@ struct LeadCalibration {
     bool last_lead = false;
     std::vector<LeadCalibrationFlight> flights;
     std::vector<std::string> logs_without_cells;  // no per-cell resistance (no cells, or no flight)
-    // Medians over the flights and their spreads (sample standard deviation; with fewer than
-    // three flights the floor below, at least 0.1). −1: not measured.
+    // Medians over the flights read by the short-lag fit, and their spreads (sample standard
+    // deviation; with fewer than three flights at least 0.1). −1: not measured.
     double first_excess = -1.0, first_spread = 0.0;
     double last_excess = -1.0, last_spread = 0.0;
     double sigma = 0.0;  // what the config gets: the larger spread, at least kMinSigma
-    std::string source;  // the flights pooled: "differences" where any flight has them, else "steps"
     size_t flights_used = 0;
+    bool steps_only = false;  // every flight read by the steps alone: nothing to calibrate from
     std::vector<std::string> notes;
-    static constexpr double kMinSigma = 0.05;
+    // The core's default allowance: a spread measured on a few flights of like packs had been
+    // 0.05 on new packs alone, and cell 1 of an aged pack then read 0.13–0.23 over them.
+    static constexpr double kMinSigma = 0.1;
 };
 
 // Replays each log with the joint estimator, whatever `base.config` selects. Throws InputError
