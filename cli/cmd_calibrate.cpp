@@ -9,7 +9,6 @@
 #include "common_options.h"
 #include "host/fit/lead_calibration.h"
 #include "host/fit/shape_calibration.h"
-#include "host/io/atomic_file.h"
 #include "host/io/number_text.h"
 
 namespace battsim {
@@ -87,7 +86,6 @@ int run_cell_leads(const CalibrateArgs& a, host::ReplayOptions& opt, const std::
     if (!a.output.empty()) {
         host::LoadedConfig out = opt.config;
         host::apply_lead_calibration(c, out);
-        select_joint_estimator(out, command);
         // Calibrated again: the last calibration's words replaced, not appended to.
         static const std::string kSaid = "lead cells calibrated on ";
         const size_t said = out.description.find(kSaid);
@@ -98,8 +96,7 @@ int run_cell_leads(const CalibrateArgs& a, host::ReplayOptions& opt, const std::
         }
         out.description += (out.description.empty() ? "" : "; ") + kSaid + std::to_string(c.flights_used) +
                            " flight(s) by battsim calibrate --cell-leads";
-        if (int rc = run_job(command, [&] { host::write_file_atomic(a.output, host::json_text(host::config_to_json(out), 2) + "\n"); }))
-            return rc;
+        if (int rc = write_tuned_config(out, a.output, command)) return rc;
     }
     if (a.json) std::cout << host::json_text(host::to_json(c), 2) << "\n";
     else print_leads(c, people_out(outputs));
@@ -189,12 +186,10 @@ std::function<int()> setup(CLI::App& sub) {
         if (!a->output.empty()) {
             host::LoadedConfig out = opt.config;
             out.monitor.joint.health.polarisation_slow_share = static_cast<float>(c.chosen_share);
-            select_joint_estimator(out, command);
             out.description += (out.description.empty() ? "" : "; ") + std::string("health filter's slow share ") +
                                (c.changed ? "calibrated" : "checked") + " on " + std::to_string(c.logs.size()) +
                                " flight(s) by battsim calibrate";
-            if (int rc = run_job(command, [&] { host::write_file_atomic(a->output, host::json_text(host::config_to_json(out), 2) + "\n"); }))
-                return rc;
+            if (int rc = write_tuned_config(out, a->output, command)) return rc;
         }
         if (a->json) std::cout << host::json_text(host::to_json(c), 2) << "\n";
         else print_table(c, people_out(outputs));

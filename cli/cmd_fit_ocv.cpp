@@ -8,7 +8,6 @@
 #include "common_options.h"
 #include "host/batch/batch.h"
 #include "host/fit/ocv_stitch.h"
-#include "host/io/atomic_file.h"
 #include "host/plot/plot.h"
 
 namespace battsim {
@@ -160,13 +159,11 @@ std::function<int()> setup(CLI::App& sub) {
         if (int rc = run_job(command, [&] { s = host::fit::stitch_ocv(logs, config, a->options, &std::cerr); })) return rc;
         if (!a->output.empty()) {
             host::LoadedConfig out = host::fit::with_stitched_table(config, s);
-            select_joint_estimator(out, command);
             size_t fitted = 0;
             for (const host::fit::OcvStitchFlight& f : s.flights) fitted += !f.test;
             out.description += (out.description.empty() ? "" : "; ") + std::string("joint OCV table fitted by battsim fit-ocv on ") +
                                std::to_string(fitted) + " flight(s)";
-            if (int rc = run_job(command, [&] { host::write_file_atomic(a->output, host::json_text(host::config_to_json(out), 2) + "\n"); }))
-                return rc;
+            if (int rc = write_tuned_config(out, a->output, command)) return rc;
         }
         if (!a->plot.empty())
             if (int rc = run_job(command, [&] { host::plot::plot_ocv_stitch(s, "battsim fit-ocv", a->plot); })) return rc;

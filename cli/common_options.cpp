@@ -284,11 +284,15 @@ void add_named(std::vector<host::NamedPath>& to, const std::string& what, const 
     for (const std::string& p : paths) to.push_back({what, p});
 }
 
-void select_joint_estimator(host::LoadedConfig& config, const char* command) {
-    if (config.monitor.estimator == core::EstimatorKind::Joint) return;
+int write_tuned_config(host::LoadedConfig config, const std::string& path, const char* command) {
+    const bool switched = config.monitor.estimator != core::EstimatorKind::Joint;
     config.monitor.estimator = core::EstimatorKind::Joint;
-    std::cerr << command << ": note: the written config selects the joint estimator (\"estimator\": \"joint\"), "
-              << "whose settings this tunes; the config given ran the reference one\n";
+    if (int rc = run_job(command, [&] { host::write_file_atomic(path, host::json_text(host::config_to_json(config), 2) + "\n"); }))
+        return rc;
+    if (switched)
+        std::cerr << command << ": note: the written config selects the joint estimator (\"estimator\": \"joint\"), "
+                  << "whose settings this tunes; the config given ran the reference one\n";
+    return kExitOk;
 }
 
 }  // namespace cli

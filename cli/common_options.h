@@ -101,9 +101,11 @@ host::NamedPath printed_output(const std::string& flag, bool given);
 std::ostream& people_out(const std::vector<host::NamedPath>& outputs);
 // Appends `paths` to `to`, each named `what` in check_outputs' messages ("a log").
 void add_named(std::vector<host::NamedPath>& to, const std::string& what, const std::vector<std::string>& paths);
-// A config written by a command that tunes the joint estimator (calibrate, fit-ocv) selects
-// it: one left on the reference estimator changed nothing a replay or the firmware ran. Says so.
-void select_joint_estimator(host::LoadedConfig& config, const char* command);
+// Writes a config a command tuned the joint estimator in (calibrate, fit-ocv) to `path`,
+// atomically, selecting that estimator: one left on the reference estimator changed nothing a
+// replay or the firmware ran. Says so once written (not before a write that fails). Returns
+// the exit code.
+int write_tuned_config(host::LoadedConfig config, const std::string& path, const char* command);
 
 }  // namespace cli
 }  // namespace battsim

@@ -140,6 +140,11 @@ TEST_CASE("calibrate's config selects the joint estimator it tunes", "[cli]") {
     REQUIRE(r.exit_code == 0);
     CHECK_THAT(r.err, Catch::Contains("the written config selects the joint estimator"));
     CHECK(nlohmann::json::parse(clitest::read_file(dir + "/c.json"))["estimator"] == "joint");
+    // Said once written: not before a write that fails (it had read as if a config were there).
+    const auto failed = run("calibrate " + q(kSource + "/logs/example-4s.csv") + " -c " + q(kConfig) + " -o " +
+                            q(dir + "/no-such-dir/c.json"));
+    CHECK(failed.exit_code == 5);
+    CHECK(failed.err.find("selects the joint estimator") == std::string::npos);
 }
 
 TEST_CASE("calibrate --cell-leads measures the dissertation logger's lead cells, and the calibrated check blames none",

@@ -15,12 +15,13 @@
 // Measurement topology matters: on the reference logger the last cell is read as
 // pack − last balance tap, so it carries the main lead and connector resistance; with
 // `last_cell_includes_lead` it stays out of the others' mean and median (its resistance
-// carries the lead, its drift the two converters' gain mismatch) and is never named for
-// resistance, but it is judged for capacity against them, always at the higher bar
+// carries the lead, its drift the two converters' gain mismatch) and is named for
+// resistance only once the lead's share is calibrated, but it is judged for capacity
+// against them, always at the higher bar
 // (capacity_significance_sigmas): the lead is ohmic, which the current regressors take,
 // and the mismatch widens its own standard error. With
-// `first_cell_includes_lead` the first cell is never named for resistance (see Config),
-// unless the lead's share is calibrated (`last_lead_excess`, `first_lead_excess`).
+// `first_cell_includes_lead` the first cell is not named for resistance either, until
+// calibrated (`last_lead_excess`, `first_lead_excess` in Config).
 #pragma once
 #include <stdint.h>
 
@@ -99,8 +100,9 @@ public:
         // less this, by the usual bar widened by `lead_excess_sigma` (the calibration's
         // flight-to-flight spread, as the same fraction). < 0: not known, never judged. On
         // the dissertation's logger the last cell reads 2.1–2.3 × the others on new and aged
-        // packs alike (the charger measured it as the others): a calibrated last cell 60 %
-        // worse reads about 1.6 × that, and nothing short of a calibration tells them apart.
+        // packs alike (the charger measured it as the others); on simulated flights with the
+        // logger's slow taps one 60 % worse reads about 3.3 ×, and nothing short of a
+        // calibration tells the two apart.
         float last_lead_excess = -1.0f;
         float first_lead_excess = -1.0f;
         float lead_excess_sigma = 0.1f;

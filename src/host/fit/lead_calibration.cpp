@@ -18,7 +18,7 @@ double median_of(std::vector<double> v) {
 }
 
 // Median and sample standard deviation; with fewer than three values the spread cannot be
-// told, and 0.1 (the core's default allowance) stands in for it.
+// told, and at least 0.1 (the core's default allowance) stands in for it.
 void pool(const std::vector<double>& v, double& centre, double& spread) {
     centre = median_of(v);
     double mean = 0.0;
