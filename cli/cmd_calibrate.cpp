@@ -42,7 +42,7 @@ void print_table(const host::ShapeCalibration& c, std::ostream& os) {
 
 void print_leads(const host::LeadCalibration& c, std::ostream& os) {
     os << "battsim calibrate --cell-leads: " << c.flights.size() << " flight(s); each lead cell's short-lag resistance "
-       << "over the others' median, less one (1.3: the wiring reads 130 % of a cell on top of the cell)\n";
+       << "over the others' median, less one (1.3: it reads 2.3 x the others)\n";
     for (const host::LeadCalibrationFlight& f : c.flights) {
         os << "  " << f.log << " (" << f.source << (f.used ? "" : ", left out") << "):";
         for (double r : f.cell_resistance_ohm) os << " " << std::fixed << std::setprecision(2) << 1000.0 * r;
@@ -86,17 +86,9 @@ int run_cell_leads(const CalibrateArgs& a, host::ReplayOptions& opt, const std::
     if (!a.output.empty()) {
         host::LoadedConfig out = opt.config;
         host::apply_lead_calibration(c, out);
-        // Calibrated again: the last calibration's words replaced, not appended to.
-        static const std::string kSaid = "lead cells calibrated on ";
-        const size_t said = out.description.find(kSaid);
-        if (said != std::string::npos) {
-            const size_t end = out.description.find("--cell-leads", said);
-            const size_t from = said >= 2 && out.description.compare(said - 2, 2, "; ") == 0 ? said - 2 : said;
-            out.description.erase(from, end == std::string::npos ? std::string::npos : end + 12 - from);
-        }
-        out.description += (out.description.empty() ? "" : "; ") + kSaid + std::to_string(c.flights_used) +
-                           " flight(s) by battsim calibrate --cell-leads";
-        if (int rc = write_tuned_config(out, a.output, command)) return rc;
+        if (int rc = write_tuned_config(out, a.output, command, "lead cells calibrated on ",
+                                        std::to_string(c.flights_used) + " flight(s) by battsim calibrate --cell-leads"))
+            return rc;
     }
     if (a.json) std::cout << host::json_text(host::to_json(c), 2) << "\n";
     else print_leads(c, people_out(outputs));
@@ -186,10 +178,10 @@ std::function<int()> setup(CLI::App& sub) {
         if (!a->output.empty()) {
             host::LoadedConfig out = opt.config;
             out.monitor.joint.health.polarisation_slow_share = static_cast<float>(c.chosen_share);
-            out.description += (out.description.empty() ? "" : "; ") + std::string("health filter's slow share ") +
-                               (c.changed ? "calibrated" : "checked") + " on " + std::to_string(c.logs.size()) +
-                               " flight(s) by battsim calibrate";
-            if (int rc = write_tuned_config(out, a->output, command)) return rc;
+            if (int rc = write_tuned_config(out, a->output, command, "health filter's slow share ",
+                                            std::string(c.changed ? "calibrated" : "checked") + " on " +
+                                                std::to_string(c.logs.size()) + " flight(s) by battsim calibrate"))
+                return rc;
         }
         if (a->json) std::cout << host::json_text(host::to_json(c), 2) << "\n";
         else print_table(c, people_out(outputs));

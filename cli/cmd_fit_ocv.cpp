@@ -161,9 +161,9 @@ std::function<int()> setup(CLI::App& sub) {
             host::LoadedConfig out = host::fit::with_stitched_table(config, s);
             size_t fitted = 0;
             for (const host::fit::OcvStitchFlight& f : s.flights) fitted += !f.test;
-            out.description += (out.description.empty() ? "" : "; ") + std::string("joint OCV table fitted by battsim fit-ocv on ") +
-                               std::to_string(fitted) + " flight(s)";
-            if (int rc = write_tuned_config(out, a->output, command)) return rc;
+            if (int rc = write_tuned_config(out, a->output, command, "joint OCV table fitted by battsim fit-ocv on ",
+                                            std::to_string(fitted) + " flight(s)"))
+                return rc;
         }
         if (!a->plot.empty())
             if (int rc = run_job(command, [&] { host::plot::plot_ocv_stitch(s, "battsim fit-ocv", a->plot); })) return rc;

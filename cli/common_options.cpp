@@ -284,7 +284,16 @@ void add_named(std::vector<host::NamedPath>& to, const std::string& what, const 
     for (const std::string& p : paths) to.push_back({what, p});
 }
 
-int write_tuned_config(host::LoadedConfig config, const std::string& path, const char* command) {
+int write_tuned_config(host::LoadedConfig config, const std::string& path, const char* command, const std::string& marker,
+                       const std::string& rest) {
+    std::string& d = config.description;
+    const size_t at = d.find(marker);
+    if (at != std::string::npos) {  // the notes are joined by "; " and hold none themselves
+        const size_t end = d.find("; ", at);
+        const size_t from = at >= 2 && d.compare(at - 2, 2, "; ") == 0 ? at - 2 : at;
+        d.erase(from, end == std::string::npos ? std::string::npos : (from == at ? end + 2 : end) - from);
+    }
+    d += (d.empty() ? "" : "; ") + marker + rest;
     const bool switched = config.monitor.estimator != core::EstimatorKind::Joint;
     config.monitor.estimator = core::EstimatorKind::Joint;
     if (int rc = run_job(command, [&] { host::write_file_atomic(path, host::json_text(host::config_to_json(config), 2) + "\n"); }))

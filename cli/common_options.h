@@ -103,9 +103,11 @@ std::ostream& people_out(const std::vector<host::NamedPath>& outputs);
 void add_named(std::vector<host::NamedPath>& to, const std::string& what, const std::vector<std::string>& paths);
 // Writes a config a command tuned the joint estimator in (calibrate, fit-ocv) to `path`,
 // atomically, selecting that estimator: one left on the reference estimator changed nothing a
-// replay or the firmware ran. Says so once written (not before a write that fails). Returns
-// the exit code.
-int write_tuned_config(host::LoadedConfig config, const std::string& path, const char* command);
+// replay or the firmware ran. Says so once written (not before a write that fails). The
+// description gets `marker` + `rest` in place of an earlier note with the same marker (tuned
+// again into its own file, it had said so twice). Returns the exit code.
+int write_tuned_config(host::LoadedConfig config, const std::string& path, const char* command, const std::string& marker,
+                       const std::string& rest);
 
 }  // namespace cli
 }  // namespace battsim

@@ -311,8 +311,7 @@ std::vector<std::string> apply_board(json& config, const LoadedConfig& board, st
     const json from = config_to_json(board);
     const json was = config_to_json(config_from_json(config, "make-config"));
     // A lead cell's share is measured at one cell count: where the taps lag the bus it grows
-    // with the cells below the last (a 4S calibration of 1.32 on a 6S pack whose share was
-    // 2.11 named healthy last cells), so it is not carried to another.
+    // with the cells below the last, so it is not carried to another.
     const bool other_cells = from.value(json::json_pointer("/battery/cells_in_series"), 0) !=
                              was.value(json::json_pointer("/battery/cells_in_series"), 0);
     std::vector<std::string> changed;

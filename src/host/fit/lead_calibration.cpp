@@ -101,9 +101,8 @@ LeadCalibration calibrate_cell_leads(const std::vector<std::string>& logs, const
     // the bus: the steps, between steady windows, see settled voltages, the short-lag pairs the
     // taps' lag (the lead-cell suite's healthy last cell: +0.1…+0.4 by a hover's steps, +1.3…+1.6
     // by racing differences). A share read off the steps would be taken off the short-lag
-    // values too: hovers alone calibrated at 0.21, and the check then named the last cell on
-    // every healthy racing flight. So only the short-lag fit's flights are pooled, and with
-    // none the calibration fails (`steps_only`).
+    // values too, and would blame healthy last cells on racing flights. So only the short-lag
+    // fit's flights are pooled, and with none the calibration fails (`steps_only`).
     size_t left_out = 0;
     for (LeadCalibrationFlight& f : out.flights) {
         f.used = f.source == "differences";
