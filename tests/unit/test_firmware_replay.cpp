@@ -251,12 +251,12 @@ TEST_CASE("firmware built with a fitted config runs its model extensions as batt
 TEST_CASE("firmware built with the joint estimator runs it, cell check included, as battsim replay does, byte for byte",
           "[firmware][replay][joint][data]") {
     // configs/sim-4s.json exported with --estimator joint, on flights 30 and 34 and on a
-    // simulated flight in the logger's raw format whose cell 2 holds 10 % less charge: the
+    // simulated flight in the logger's raw format whose cell 3 holds 30 % less charge: the
     // cell check names it, so the cell check's output is in that series too.
     const std::string dir = fwtest::temp_dir("fwjoint");
-    const std::string weak = dir + "/weak-cell2.csv";
+    const std::string weak = dir + "/weak-cell3.csv";
     const fwtest::Run sim = fwtest::run(
-        BATTSIM_BINARY, "simulate " + fwtest::q(std::string(BATTSIM_SOURCE_DIR) + "/configs/scenarios/4s-racing-weak-cell2-capacity-90.json") +
+        BATTSIM_BINARY, "simulate " + fwtest::q(std::string(BATTSIM_SOURCE_DIR) + "/configs/scenarios/4s-racing-weak-cell3-capacity-70.json") +
                             " --format raw -o " + fwtest::q(weak));
     INFO(sim.err);
     REQUIRE(sim.exit_code == 0);
@@ -304,15 +304,14 @@ TEST_CASE("firmware built with the joint estimator runs it, cell check included,
         // Flight 34's cell 1 reads 23 % more resistance than cells 2 and 3; with the logger's
         // ground path declared it is not blamed.
         CHECK(cell_outlier == (log == weak));
-        // The device's MAVLink equals replay's, and a ground station is told of the weak cell
-        // (named for resistance: the simulated spread also puts its R0 10.8 % above the others').
+        // The device's MAVLink equals replay's, and a ground station is told of the weak cell.
         const std::string mav = fwtest::read_file(fw_mavlink);
         REQUIRE(mav == fwtest::read_file(replay_mavlink));
         const mavtest::Stream stream = mavtest::decode(mav, false);
         REQUIRE(stream.error.empty());
         bool texted = false;
         for (const mavtest::Frame& f : stream.frames) {
-            if (f.msgid == 253 && mavtest::text(f).rfind("battsim: cell 2 weak", 0) == 0) texted = true;
+            if (f.msgid == 253 && mavtest::text(f).rfind("battsim: cell 3 weak", 0) == 0) texted = true;
         }
         CHECK(texted == (log == weak));
     }

@@ -109,6 +109,7 @@ void SensorChain::configure(const SensorParams& params, int cells, uint64_t seed
     timing_rng_ = Rng::stream(seed, 11);
     noise_rng_ = Rng::stream(seed, 12);
     fault_rng_ = Rng::stream(seed, 13);
+    tap_noise_rng_ = Rng::stream(seed, 15);
     Rng unit_rng = Rng::stream(seed, 14);
     if (p_.unit_given) {
         unit_ = p_.unit;
@@ -156,7 +157,7 @@ void SensorChain::finish_ina3221() {
     if (acc3221_.span_s <= 0.0) return;
     for (int k = 0; k + 1 < cells_; ++k) {
         const double v = acc3221_.taps_v_s[k] / acc3221_.span_s * (1.0 + unit_.tap_gain_error[k]) + unit_.tap_offset_v[k] +
-                         noise_rng_.normal(0.0, p_.tap_noise_v);
+                         tap_noise_rng_.normal(0.0, p_.tap_noise_v);
         tap_count_[k] = quantise(v, kTapLsbV, -4096, 4095);  // 13-bit signed register
     }
     have3221_ = true;
