@@ -12,6 +12,7 @@
 #include <string>
 
 #include "command.h"
+#include "json_errors.h"
 #include "run_guarded.h"
 #include "host/io/atomic_file.h"
 
@@ -24,7 +25,8 @@ std::vector<Command>& command_registry() {
 }  // namespace cli
 }  // namespace battsim
 
-int main(int argc, char** argv) {
+namespace {
+int run_main(int argc, char** argv) {
     using namespace battsim::cli;
     // Ctrl-C during a long replay must not leave *.tmp.PID.N files beside the outputs.
     battsim::host::install_temp_cleanup_on_signals();
@@ -136,4 +138,27 @@ int main(int argc, char** argv) {
         }
     }
     return kExitUsage;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+    using namespace battsim::cli;
+    const std::vector<std::string> args(argv, argv + argc);
+    if (!json_requested(args)) return run_main(argc, argv);
+    // Both streams pass through as before; they are restored before returning, so nothing
+    // written after main (a static's destructor) reaches a buffer that is gone.
+    RecordingBuf out(std::cout.rdbuf(), 0), err(std::cerr.rdbuf(), 64 * 1024);
+    std::streambuf* const cout_buf = std::cout.rdbuf(&out);
+    std::streambuf* const cerr_buf = std::cerr.rdbuf(&err);
+    const int code = run_main(argc, argv);
+    std::cout.flush();
+    std::cerr.flush();
+    std::cout.rdbuf(cout_buf);
+    std::cerr.rdbuf(cerr_buf);
+    if (writes_error_object(code, out.bytes())) {
+        const std::string command = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
+        std::cout << error_json(command, code, err.text(), BATTSIM_VERSION).dump(2) << "\n";
+        std::cout.flush();
+    }
+    return code;
 }

@@ -40,4 +40,10 @@ inline nlohmann::json run_json(const std::string& args) {
     return nlohmann::json::parse(r.out);
 }
 
+// True when `out` is the object a failed --json run writes (cli/json_errors.h) and no more.
+inline bool is_error_object(const std::string& out) {
+    const nlohmann::json j = nlohmann::json::parse(out, nullptr, false);
+    return j.is_object() && j.value("schema", std::string()) == "battsim.error";
+}
+
 }  // namespace clitest

@@ -683,7 +683,10 @@ TEST_CASE("a time or current unit of the other quantity is refused, as a manifes
             const auto r = run(std::string(command) + " " + q(log) + cols + " " + c.units + " --json");
             CHECK(r.exit_code == 2);
             CHECK_THAT(r.err, Catch::Contains(c.says));
-            CHECK(r.out.empty());
+            // --json: standard output holds the reason as JSON, and no summary.
+            const nlohmann::json e = nlohmann::json::parse(r.out);
+            CHECK(e["schema"] == "battsim.error");
+            CHECK_THAT(e["message"].get<std::string>(), Catch::Contains(c.says));
         }
     }
     // The units of each quantity still read as they did.

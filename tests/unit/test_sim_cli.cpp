@@ -116,7 +116,8 @@ TEST_CASE("battsim score --logs refuses a log its scenario does not simulate now
     REQUIRE(run("simulate " + q(d.at("a.json")) + " --seed 777 --out-dir " + q(out.path)).exit_code == 0);
     const auto other = run("score " + q(d.at("a.json")) + " --logs " + q(out.path) + " --columns oracle --json");
     CHECK(other.exit_code == 3);
-    CHECK(other.out.empty());
+    // No scoreboard: standard output holds the error object (--json) and nothing else.
+    CHECK(nlohmann::json::parse(other.out)["schema"] == "battsim.error");
     CHECK_THAT(other.err, Catch::Contains(out.at("a.csv") + ": not the log scenario a (" + d.at("a.json") +
                                           ") simulates as it is now"));
     CHECK_THAT(other.err, Catch::Contains("re-simulate it"));

@@ -1,0 +1,78 @@
+// The pieces of --json's error object (cli/json_errors.h): which command lines ask for JSON,
+// the reason picked out of standard error, and a stream passed through unchanged.
+#include <catch2/catch.hpp>
+
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "json_errors.h"
+
+using battsim::cli::error_json;
+using battsim::cli::json_requested;
+using battsim::cli::RecordingBuf;
+using battsim::cli::writes_error_object;
+
+TEST_CASE("the error object is written for a failure (exit 2 and above) that printed nothing", "[exit][json]") {
+    CHECK_FALSE(writes_error_object(0, 0));
+    CHECK_FALSE(writes_error_object(1, 0));  // a finding: batch's failed rows are in its table
+    CHECK(writes_error_object(2, 0));
+    CHECK(writes_error_object(3, 0));
+    CHECK(writes_error_object(70, 0));
+    CHECK_FALSE(writes_error_object(3, 10));  // something was printed: left as it is
+}
+
+TEST_CASE("--json asks for JSON; after -- it is a file's name; batch's --format json does too", "[exit][json]") {
+    CHECK(json_requested({"battsim", "replay", "log.csv", "--json"}));
+    CHECK_FALSE(json_requested({"battsim", "replay", "log.csv"}));
+    CHECK_FALSE(json_requested({"battsim", "replay", "--", "--json"}));
+    CHECK(json_requested({"battsim", "batch", "-m", "f.csv", "--format", "json"}));
+    CHECK(json_requested({"battsim", "batch", "-m", "f.csv", "--format=json"}));
+    CHECK_FALSE(json_requested({"battsim", "batch", "-m", "f.csv", "--format", "csv"}));
+    CHECK_FALSE(json_requested({"battsim", "replay", "--format", "json"}));  // replay's --format is the log's
+    CHECK_FALSE(json_requested({"battsim"}));
+}
+
+TEST_CASE("the error object's message is the last line that is neither a note nor the help hint", "[exit][json]") {
+    const std::string err =
+        "battsim replay: note: the log has 4 cell voltages but the config 6 cells in series\n"
+        "battsim replay: x.csv:3:2: expected a number, found \"abc\"\n"
+        "battsim replay: note: nothing written\n";
+    const nlohmann::json j = error_json("replay", 3, err, "9.9");
+    CHECK(j["schema"] == "battsim.error");
+    CHECK(j["schema_version"] == 1);
+    CHECK(j["battsim_version"] == "9.9");
+    CHECK(j["command"] == "replay");
+    CHECK(j["exit_code"] == 3);
+    CHECK(j["message"] == "battsim replay: x.csv:3:2: expected a number, found \"abc\"");
+    CHECK(j["stderr"].size() == 3);
+    const nlohmann::json usage = error_json("fit", 2, "battsim fit: --starts: expected a whole number\n(battsim fit --help)\n", "1");
+    CHECK(usage["message"] == "battsim fit: --starts: expected a whole number");
+    const nlohmann::json notes = error_json("fit", 5, "battsim fit: note: a\n", "1");
+    CHECK(notes["message"] == "battsim fit: note: a");  // nothing else said: the last line
+    CHECK(error_json("fit", 70, "", "1")["message"] == "");
+}
+
+TEST_CASE("the recording stream passes everything on, counts it, keeps the first bytes, and takes threads", "[exit][json]") {
+    std::ostringstream target;
+    RecordingBuf buf(target.rdbuf(), 10);
+    std::ostream out(&buf);
+    out << "hello " << 42 << '\n';
+    out.flush();
+    CHECK(target.str() == "hello 42\n");
+    CHECK(buf.bytes() == 9);
+    out << "and more text";
+    out.flush();
+    CHECK(buf.text() == "hello 42\na");  // the first 10 bytes
+    CHECK(buf.bytes() == 22);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t)
+        threads.emplace_back([&out] {
+            for (int k = 0; k < 1000; ++k) out.write("xy", 2);
+        });
+    for (std::thread& t : threads) t.join();
+    out.flush();
+    CHECK(buf.bytes() == 22 + 8000);
+    CHECK(target.str().size() == 22 + 8000);
+}
