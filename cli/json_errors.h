@@ -6,6 +6,7 @@
 // outputs (batch's rows that failed are in its table, which may be a file).
 // Header-only so the unit tests check the pieces without running the binary.
 #pragma once
+#include <algorithm>
 #include <cstddef>
 #include <mutex>
 #include <sstream>
@@ -80,9 +81,10 @@ inline bool writes_error_object(int exit_code, size_t stdout_bytes) {
 }
 
 // The object written for a failed run: `message` is the last line on standard error that is
-// not a note (the reason), `stderr` every line.
+// not a note (the reason), `stderr` every line kept (`stderr_truncated` when more was said
+// than kept). Print it with dump_error_json: a file's name in a message may not be UTF-8.
 inline nlohmann::json error_json(const std::string& command, int exit_code, const std::string& stderr_text,
-                                 const std::string& version) {
+                                 const std::string& version, bool stderr_truncated = false) {
     nlohmann::json lines = nlohmann::json::array();
     std::istringstream in(stderr_text);
     std::string message;
@@ -98,7 +100,13 @@ inline nlohmann::json error_json(const std::string& command, int exit_code, cons
             {"command", command},
             {"exit_code", exit_code},
             {"message", message},
-            {"stderr", lines}};
+            {"stderr", lines},
+            {"stderr_truncated", stderr_truncated}};
+}
+
+// Bytes that are not UTF-8 (a Latin-1 file name) become U+FFFD rather than an exception.
+inline std::string dump_error_json(const nlohmann::json& j) {
+    return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 }  // namespace cli

@@ -157,7 +157,8 @@ int main(int argc, char** argv) {
     std::cerr.rdbuf(cerr_buf);
     if (writes_error_object(code, out.bytes())) {
         const std::string command = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
-        std::cout << error_json(command, code, err.text(), BATTSIM_VERSION).dump(2) << "\n";
+        const std::string said = err.text();
+        std::cout << dump_error_json(error_json(command, code, said, BATTSIM_VERSION, err.bytes() > said.size())) << "\n";
         std::cout.flush();
     }
     return code;

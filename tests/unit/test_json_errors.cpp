@@ -52,6 +52,15 @@ TEST_CASE("the error object's message is the last line that is neither a note no
     const nlohmann::json notes = error_json("fit", 5, "battsim fit: note: a\n", "1");
     CHECK(notes["message"] == "battsim fit: note: a");  // nothing else said: the last line
     CHECK(error_json("fit", 70, "", "1")["message"] == "");
+    CHECK(error_json("fit", 70, "", "1")["stderr_truncated"] == false);
+    CHECK(error_json("fit", 70, "x\n", "1", true)["stderr_truncated"] == true);
+}
+
+TEST_CASE("the error object stays valid JSON when a message holds a file name that is not UTF-8", "[exit][json]") {
+    const std::string latin1 = "battsim replay: lat\xe9n.csv: cannot open file\n";
+    const std::string text = battsim::cli::dump_error_json(error_json("replay", 3, latin1, "1"));
+    const nlohmann::json back = nlohmann::json::parse(text);  // throws on invalid UTF-8
+    CHECK_THAT(back["message"].get<std::string>(), Catch::Contains("lat\xef\xbf\xbdn.csv"));
 }
 
 TEST_CASE("the recording stream passes everything on, counts it, keeps the first bytes, and takes threads", "[exit][json]") {
