@@ -158,6 +158,8 @@ int run(const BatchArgs& a) {
     const nlohmann::json table = host::make_table(std::move(result.rows), all.size(), digest, shard);
     for (const nlohmann::json& r : table["rows"])
         if (r["status"] != "ok") std::cerr << me << "failed: " << host::failed_row_text(r) << "\n";
+    // Said before the outputs are written: a write that fails is then the last thing said.
+    if (failed > 0) std::cerr << me << failed << " of " << items.size() << " logs failed\n";
     for (const std::string& r : result.removed) std::cerr << me << r << "\n";
     // What replay would say of each log (a truncated file, a config for another pack than the
     // log's: every row "ok" all the same), the first few in full: a 4S config on a 6S fleet
@@ -193,7 +195,6 @@ int run(const BatchArgs& a) {
                   << " without golden, " << c.failed << " not replayed (tolerance " << a.tolerance << " relative)\n";
         regressed = !c.ok();
     }
-    if (failed > 0) std::cerr << me << failed << " of " << items.size() << " logs failed\n";
     if (!result.unwritten.empty() || unwritten) return kExitOutputError;
     return failed > 0 || regressed ? kExitFailure : kExitOk;
 }

@@ -155,10 +155,9 @@ int main(int argc, char** argv) {
     std::cerr.flush();
     std::cout.rdbuf(cout_buf);
     std::cerr.rdbuf(cerr_buf);
-    if (writes_error_object(code, out.bytes())) {
-        const std::string command = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
-        const std::string said = err.text();
-        std::cout << dump_error_json(error_json(command, code, said, BATTSIM_VERSION, err.bytes() > said.size())) << "\n";
+    const std::string command = command_word(args);
+    if (writes_error_object(command, code, out.bytes())) {
+        std::cout << dump_error_json(error_json(command, code, err.text(), BATTSIM_VERSION, err.truncated())) << "\n";
         std::cout.flush();
     }
     return code;
