@@ -76,6 +76,9 @@ private:
     std::string text_;
 };
 
+// batch and merge print a table whose exit 1 is a finding, and take --format json.
+inline bool table_command(const std::string& command) { return command == "batch" || command == "merge"; }
+
 // The command: the first word that is not an option ("" for none).
 inline std::string command_word(const std::vector<std::string>& args) {
     for (size_t i = 1; i < args.size(); ++i) {
@@ -89,7 +92,7 @@ inline std::string command_word(const std::vector<std::string>& args) {
 // merge's --format json (before a "--", after which every word is an argument).
 inline bool json_requested(const std::vector<std::string>& args) {
     const std::string command = command_word(args);
-    const bool batch = command == "batch" || command == "merge";
+    const bool batch = table_command(command);
     for (size_t i = 1; i < args.size(); ++i) {
         const std::string& a = args[i];
         if (a == "--") return false;
@@ -100,7 +103,7 @@ inline bool json_requested(const std::vector<std::string>& args) {
 }
 
 inline bool writes_error_object(const std::string& command, int exit_code, size_t stdout_bytes) {
-    const bool finding = exit_code == kExitFailure && (command == "batch" || command == "merge");
+    const bool finding = exit_code == kExitFailure && table_command(command);
     return exit_code != kExitOk && !finding && stdout_bytes == 0;
 }
 
